@@ -1,0 +1,31 @@
+# Every dependency comes from Debian 12 packages (see .ci/run for the package list).
+find_package(OpenSceneGraph 3.6 REQUIRED COMPONENTS osgDB osgUtil osgGA osgViewer osgText)
+add_library(osgbtf::osg INTERFACE IMPORTED)
+set_target_properties(osgbtf::osg PROPERTIES
+  INTERFACE_INCLUDE_DIRECTORIES "${OPENSCENEGRAPH_INCLUDE_DIRS}"
+  INTERFACE_LINK_LIBRARIES "${OPENSCENEGRAPH_LIBRARIES}")
+
+set(OpenGL_GL_PREFERENCE GLVND)
+find_package(OpenGL REQUIRED COMPONENTS OpenGL EGL)
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(OSMesa REQUIRED IMPORTED_TARGET osmesa)
+# libzip's CMake config names tools Debian packages separately; pkg-config works.
+pkg_check_modules(LIBZIP REQUIRED IMPORTED_TARGET libzip>=1.7)
+find_package(glm CONFIG REQUIRED)
+find_package(Imath CONFIG REQUIRED)
+find_package(OpenEXR CONFIG REQUIRED)
+find_package(OpenImageIO CONFIG REQUIRED)
+# OpenImageIO 2.4.7's target lists /usr/include/opencv4, absent without libopencv-dev.
+foreach(prop INTERFACE_INCLUDE_DIRECTORIES INTERFACE_SYSTEM_INCLUDE_DIRECTORIES)
+  get_target_property(dirs OpenImageIO::OpenImageIO ${prop})
+  if(dirs)
+    list(FILTER dirs EXCLUDE REGEX opencv)
+    set_target_properties(OpenImageIO::OpenImageIO PROPERTIES ${prop} "${dirs}")
+  endif()
+endforeach()
+find_package(Eigen3 3.4 CONFIG REQUIRED)
+find_package(Ceres CONFIG REQUIRED)
+find_package(TBB CONFIG REQUIRED)
+find_package(CLI11 CONFIG REQUIRED)
+find_package(nlohmann_json 3 CONFIG REQUIRED)
+find_package(GTest CONFIG REQUIRED)

@@ -1,0 +1,94 @@
+// osgBTF: a measured BTF in memory: texels x views x lights x RGB.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Imath/half.h>
+
+#include "core/Directions.h"
+
+namespace osgBTF {
+
+enum class Storage { Float, Half };
+
+/** Upper bound for any single allocation of measured data, checked before allocating. The default
+ *  is 3/4 of physical memory; the OSGBTF_MEMORY_LIMIT environment variable (bytes, or with a
+ *  K/M/G suffix) and the tools' --memory-limit option override it. */
+std::uint64_t memoryLimit();
+void setMemoryLimit(std::uint64_t bytes);
+/** Throws Error("<what>: needs N bytes, more than the memory limit of M bytes ...") if
+ *  bytes > memoryLimit(). */
+void checkMemory(std::uint64_t bytes, const std::string& what);
+std::string formatBytes(std::uint64_t bytes);
+/** Parses "123", "4K", "16G", "1.5GiB" as bytes; throws Error on anything else. */
+std::uint64_t parseBytes(const std::string& text);
+
+/** Texel x = column (along +X), y = row counted from the bottom (+Y up, OSG's origin).
+ *  Memory layout: image-major, [view][light][y][x][rgb]; one (view, light) image is contiguous so
+ *  loaders fill it in one piece and per-view methods read it directly. */
+class MeasuredBtf {
+public:
+    MeasuredBtf() = default;
+    /** Allocates zero-filled storage after checking memoryLimit(). */
+    MeasuredBtf(int width, int height, DirectionSet views, DirectionSet lights,
+                Storage storage = Storage::Float);
+
+    static std::uint64_t bytesNeeded(int width, int height, std::size_t views, std::size_t lights,
+                                     Storage storage);
+
+    int width() const { return _width; }
+    int height() const { return _height; }
+    std::size_t texelCount() const { return std::size_t(_width) * _height; }
+    const DirectionSet& views() const { return _views; }
+    const DirectionSet& lights() const { return _lights; }
+    std::size_t viewCount() const { return _views.size(); }
+    std::size_t lightCount() const { return _lights.size(); }
+    Storage storage() const { return _storage; }
+    std::uint64_t memoryBytes() const;
+    bool empty() const { return _width == 0; }
+
+    /** Index of one RGB triple in the flat storage. */
+    std::size_t index(std::size_t view, std::size_t light, std::size_t texel) const {
+        return ((view * _lights.size() + light) * texelCount() + texel) * 3;
+    }
+
+    float value(std::size_t view, std::size_t light, std::size_t texel, int channel) const {
+        const std::size_t i = index(view, light, texel) + channel;
+        return _storage == Storage::Float ? _float[i] : float(_half[i]);
+    }
+    void setValue(std::size_t view, std::size_t light, std::size_t texel, int channel, float v) {
+        const std::size_t i = index(view, light, texel) + channel;
+        if (_storage == Storage::Float)
+            _float[i] = v;
+        else
+            _half[i] = Imath::half(v);
+    }
+
+    /** One (view, light) image, width*height*3 floats, rows bottom-up. */
+    std::vector<float> image(std::size_t view, std::size_t light) const;
+    void setImage(std::size_t view, std::size_t light, const float* rgb);
+
+    /** One texel's apparent BRDF: views*lights*3 floats, [view][light][rgb]. */
+    std::vector<float> abrdf(std::size_t texel) const;
+    void abrdf(std::size_t texel, float* out) const;
+
+    /** Direct access for the storage kind in use (nullptr for the other one). */
+    float* floatData() { return _float.empty() ? nullptr : _float.data(); }
+    const float* floatData() const { return _float.empty() ? nullptr : _float.data(); }
+    Imath::half* halfData() { return _half.empty() ? nullptr : _half.data(); }
+    const Imath::half* halfData() const { return _half.empty() ? nullptr : _half.data(); }
+
+    /** Human-readable origin, e.g. the file it was loaded from. */
+    std::string source;
+
+private:
+    int _width = 0, _height = 0;
+    DirectionSet _views, _lights;
+    Storage _storage = Storage::Float;
+    std::vector<float> _float;
+    std::vector<Imath::half> _half;
+};
+
+}  // namespace osgBTF

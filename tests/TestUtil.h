@@ -1,0 +1,35 @@
+// Helpers shared by the unit tests: scratch folders and running the tools.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace osgBTF::test {
+
+/** A fresh folder under the system temp dir, removed with its contents on destruction. */
+class TempDir {
+public:
+    TempDir();
+    ~TempDir();
+    const std::filesystem::path& path() const { return _path; }
+    std::string file(const std::string& name) const { return (_path / name).string(); }
+
+private:
+    std::filesystem::path _path;
+};
+
+struct CommandResult {
+    int exitCode = -1;
+    std::string output;  ///< stdout and stderr together
+};
+
+/** Runs a shell command line and captures its output. */
+CommandResult runCommand(const std::string& commandLine);
+
+/** Quotes a path for the shell. */
+std::string shellQuote(const std::string& text);
+
+void writeTextFile(const std::string& path, const std::string& content);
+std::string readTextFile(const std::string& path);
+
+}  // namespace osgBTF::test
