@@ -24,8 +24,9 @@ float wrapDegrees(float phi) {
 }
 
 float angleBetweenDegrees(const Direction& a, const Direction& b) {
-    const float c = glm::dot(a.toVector(), b.toVector());
-    return glm::degrees(std::acos(std::clamp(c, -1.0f, 1.0f)));
+    // In double: acos near 1 amplifies float rounding to ~0.02 degrees.
+    const glm::dvec3 u(a.toVector()), v(b.toVector());
+    return glm::degrees(2.0 * std::asin(std::min(1.0, glm::length(u - v) / 2.0)));
 }
 
 struct Ring {
@@ -38,7 +39,8 @@ DirectionSet fromRings(const std::string& name, std::initializer_list<Ring> ring
     std::vector<Direction> directions;
     for (const Ring& ring : rings)
         for (int i = 0; i < ring.count; ++i)
-            directions.push_back({ring.theta, wrapDegrees(ring.firstPhi + 360.0f * i / ring.count)});
+            directions.push_back(
+                {ring.theta, wrapDegrees(ring.firstPhi + 360.0f * i / ring.count)});
     return DirectionSet(name, std::move(directions));
 }
 
@@ -95,7 +97,8 @@ DirectionSet DirectionSet::readFile(const std::string& path) {
         Direction d;
         std::string rest;
         if (!(fields >> d.theta >> d.phi) || (fields >> rest))
-            fail(path, "line " + std::to_string(lineNumber) + ": expected \"theta phi\" in degrees");
+            fail(path,
+                 "line " + std::to_string(lineNumber) + ": expected \"theta phi\" in degrees");
         if (!std::isfinite(d.theta) || !std::isfinite(d.phi) || d.theta < 0 || d.theta > 90)
             fail(path, "line " + std::to_string(lineNumber) + ": theta must be in [0, 90] degrees");
         d.phi = wrapDegrees(d.phi);
@@ -137,7 +140,8 @@ DirectionSet DirectionSet::deserialize(const std::string& text) {
         char comma = 0;
         std::istringstream pair(item);
         if (!(pair >> d.theta >> comma >> d.phi) || comma != ',')
-            throw Error("malformed direction set '" + item + "' in \"" + text.substr(0, 40) + "...\"");
+            throw Error("malformed direction set '" + item + "' in \"" + text.substr(0, 40) +
+                        "...\"");
         directions.push_back(d);
     }
     return DirectionSet(name, std::move(directions));

@@ -1,6 +1,70 @@
-#include <CLI/CLI.hpp>
+// btf: inspect, generate and (later) fit and compare measured BTFs. `btf --help` and
+// `btf <command> --help` document every option.
+#include <unistd.h>
+#include <cstdio>
+#include <iostream>
+
+#include "core/Error.h"
+#include "core/MeasuredBtf.h"
+#include "core/Progress.h"
+#include "tools/btf/Commands.h"
+
+namespace osgBTF::tool {
+
+LoadOptions CommonOptions::loadOptions() const {
+    LoadOptions options;
+    options.storage = storage == "half" ? Storage::Half : Storage::Float;
+    options.curve = decode == "srgb"      ? LoadOptions::DecodeCurve::Srgb
+                    : decode == "gamma22" ? LoadOptions::DecodeCurve::Gamma22
+                                          : LoadOptions::DecodeCurve::Linear;
+    return options;
+}
+
+void addLoadOptions(CLI::App& command, CommonOptions& common) {
+    command.add_option("--storage", common.storage, "Sample storage in memory: float or half")
+        ->check(CLI::IsMember({"float", "half"}))
+        ->capture_default_str();
+    command
+        .add_option("--decode", common.decode,
+                    "Decode curve for 8/16-bit images: linear (the Bonn data are linear per "
+                    "Sattler 2003), srgb or gamma22")
+        ->check(CLI::IsMember({"linear", "srgb", "gamma22"}))
+        ->capture_default_str();
+}
+
+}  // namespace osgBTF::tool
+
 int main(int argc, char** argv) {
-    CLI::App app{"btf: inspect, generate and fit measured BTFs"};
-    CLI11_PARSE(app, argc, argv);
+    using namespace osgBTF;
+    CLI::App app{
+        "btf: measured Bidirectional Texture Functions for OpenSceneGraph.\n"
+        "Reads UBO2003/ATRIUM zips or folders, UBO2014 .btf files; writes the built-in sample."};
+    app.require_subcommand(1);
+    tool::CommonOptions common;
+    bool progress = isatty(STDERR_FILENO);
+    app.add_option("--memory-limit", common.memoryLimit,
+                   "Largest allowed allocation of measured data, e.g. 8G (default: 3/4 of RAM or "
+                   "$OSGBTF_MEMORY_LIMIT)");
+    app.add_flag("--progress,!--no-progress", progress,
+                 "Show progress bars on stderr (default: when stderr is a terminal)");
+    const std::vector<tool::Runner> runners{tool::addInfoCommand(app, common),
+                                            tool::addSampleCommand(app, common),
+                                            tool::addContactSheetCommand(app, common)};
+    try {
+        app.parse(argc, argv);
+        Progress::setEnabled(progress);
+        if (!common.memoryLimit.empty()) setMemoryLimit(parseBytes(common.memoryLimit));
+        const auto subcommands = app.get_subcommands({});
+        for (std::size_t i = 0; i < subcommands.size(); ++i)
+            if (subcommands[i]->parsed()) runners.at(i)();
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    } catch (const Error& e) {
+        std::cerr << "btf: error: " << e.what() << "\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "btf: unexpected error: " << e.what() << "\n";
+        return 2;
+    }
     return 0;
 }

@@ -1,0 +1,34 @@
+// osgBTF: how far a model is from the measured data.
+//
+// Per-texel error (seed 001 section 4.1): for texel x, the mean over all measured (view, light)
+// pairs of the length of the RGB difference |BTF(x, v, l) - M(x, v, l)|, with 8-bit data scaled to
+// [0, 1] (the loaders already do). Reported as average, minimum and maximum over texels. RMSE is
+// over every channel value; PSNR uses a peak of 1 (the 8-bit white level), so it stays comparable
+// between materials; for HDR data it is still defined but values above 1 make it pessimistic.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "core/MeasuredBtf.h"
+
+namespace osgBTF {
+
+struct ErrorSummary {
+    double average = 0, minimum = 0, maximum = 0;  ///< of the per-texel error
+    double rmse = 0;
+    double psnr = 0;                  ///< dB, +infinity for identical data
+    std::vector<float> perTexel;      ///< width*height, rows bottom-up (for error maps)
+    std::size_t nonFiniteValues = 0;  ///< NaN/Inf produced by the model; counted as errors
+};
+
+/** Fills a texel's ABRDF ([view][light][rgb], the layout of MeasuredBtf::abrdf). */
+using AbrdfEvaluator = std::function<void(std::size_t texel, float* abrdfOut)>;
+
+/** Compares a model, evaluated texel by texel (in parallel), with the measured data. The model
+ *  must be evaluated at the measured directions of `measured`. */
+ErrorSummary computeError(const MeasuredBtf& measured, const AbrdfEvaluator& model);
+/** Compares two BTFs of the same size and direction sets; throws Error otherwise. */
+ErrorSummary computeError(const MeasuredBtf& measured, const MeasuredBtf& model);
+
+}  // namespace osgBTF

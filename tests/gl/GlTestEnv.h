@@ -1,0 +1,38 @@
+// Shared set-up of the OpenGL tests. The same sources build osgBTF_gl_tests (EGL) and
+// osgBTF_osmesa_tests (OSMesa, compile definition OSGBTF_GL_TEST_OSMESA).
+#pragma once
+
+#include "core/headless/HeadlessRenderer.h"
+
+#include <osg/StateSet>
+#include <osg/Texture2D>
+#include <osg/Texture3D>
+
+#include <string>
+#include <vector>
+
+namespace osgBTF::test {
+
+/** The back end this executable tests. */
+HeadlessBackend glTestBackend();
+
+/** One renderer (one context) per test process, created on first use, destroyed by the gtest
+ *  environment before main returns (llvmpipe leaks JIT memory per context; headless.md 8). */
+HeadlessRenderer& sharedRenderer();
+
+/** True when GL_RENDERER names llvmpipe (float filter weights; GPUs use 8-bit fixed point). */
+bool isLlvmpipe();
+
+/** A state set with a GLSL program from the given sources (vertex source may be empty). */
+osg::ref_ptr<osg::StateSet> programStateSet(const std::string& vertex, const std::string& fragment);
+
+/** Pass-through vertex shader for the full-screen quad: `out vec2 uv` = texture coordinate 0. */
+extern const char* const kQuadVertexShader;
+
+/** RGBA32F 2D texture, W x H, rows bottom-up, NEAREST, CLAMP_TO_EDGE, no power-of-two resize. */
+osg::ref_ptr<osg::Texture2D> floatTexture2D(int width, int height, const std::vector<float>& rgba);
+
+/** Pixel (x, y) channel c of a GL_RGBA/GL_FLOAT image as OSG gives it (bottom-up rows). */
+float pixel(const osg::Image& image, int x, int y, int channel);
+
+}  // namespace osgBTF::test

@@ -1,0 +1,62 @@
+// The `btf` tool end to end: what a user types, on files the test makes.
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "tests/TestUtil.h"
+
+using namespace osgBTF::test;
+
+namespace {
+CommandResult btf(const std::string& arguments) {
+    return runCommand(std::string(OSGBTF_BTF_TOOL) + " --no-progress " + arguments);
+}
+}  // namespace
+
+TEST(BtfTool, MissingInputIsAClearErrorWithNonZeroExit) {
+    const CommandResult r = btf("info /nonexistent/x.zip");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("btf: error: /nonexistent/x.zip: "), std::string::npos) << r.output;
+}
+
+TEST(BtfTool, UnknownOptionShowsUsage) {
+    const CommandResult r = btf("info --bogus x.zip");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--bogus"), std::string::npos) << r.output;
+}
+
+TEST(BtfTool, HelpDocumentsEveryCommand) {
+    const CommandResult r = btf("--help");
+    EXPECT_EQ(r.exitCode, 0);
+    for (const char* command : {"info", "sample", "contact-sheet"})
+        EXPECT_NE(r.output.find(command), std::string::npos) << command;
+}
+
+TEST(BtfTool, SampleInfoAndContactSheetEndToEnd) {
+    TempDir dir;
+    const std::string zip = dir.file("s.zip"), sheet = dir.file("sheet.png");
+    CommandResult r = btf("sample --size 16 --format png -o " + shellQuote(zip));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    ASSERT_TRUE(std::filesystem::exists(zip));
+    r = btf("info --json " + shellQuote(zip));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("\"width\": 16"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("\"count\": 81"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("\"nan_count\": 0"), std::string::npos) << r.output;
+    r = btf("contact-sheet " + shellQuote(zip) + " -o " + shellQuote(sheet) +
+            " --views '0,0;60,90' --lights '0,0;45,0;75,180'");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    // 3 columns and 2 rows of 16-pixel cells with 2-pixel gaps.
+    r = runCommand("oiiotool --info " + shellQuote(sheet));
+    EXPECT_NE(r.output.find("56 x   38"), std::string::npos) << r.output;
+}
+
+TEST(BtfTool, MemoryLimitRefusesALoadCleanly) {
+    TempDir dir;
+    const std::string zip = dir.file("s.zip");
+    ASSERT_EQ(btf("sample --size 8 --format png -o " + shellQuote(zip)).exitCode, 0);
+    const CommandResult r = btf("--memory-limit 1K info " + shellQuote(zip));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("more than the memory limit of 1.0 KiB"), std::string::npos)
+        << r.output;
+}

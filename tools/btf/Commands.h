@@ -1,0 +1,29 @@
+// The `btf` tool: one file per subcommand, registered from main.cpp.
+#pragma once
+
+#include <functional>
+
+#include <CLI/CLI.hpp>
+
+#include "loaders/LoadOptions.h"
+
+namespace osgBTF::tool {
+
+/** Options every subcommand that reads a measured BTF shares. */
+struct CommonOptions {
+    std::string memoryLimit;
+    std::string storage = "float";
+    std::string decode = "linear";
+    LoadOptions loadOptions() const;
+};
+
+/** Each adds its subcommand and returns what runs it (after the global options are applied). */
+using Runner = std::function<void()>;
+Runner addInfoCommand(CLI::App& app, CommonOptions& common);
+Runner addSampleCommand(CLI::App& app, CommonOptions& common);
+Runner addContactSheetCommand(CLI::App& app, CommonOptions& common);
+
+/** Adds --storage, --decode to a subcommand that loads measured data. */
+void addLoadOptions(CLI::App& command, CommonOptions& common);
+
+}  // namespace osgBTF::tool

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs osgBTF's Debian 12 dependencies and builds it into build/ (Release with debug info).
+# Usage: bash tools/setup.sh [extra cmake arguments]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config clang-format
+  libopenscenegraph-dev openscenegraph          # OSG 3.6.5 libraries, osgviewer, osgconv
+  libopenexr-dev openexr libopenimageio-dev openimageio-tools   # float images, exrheader, oiiotool
+  libglm-dev libeigen3-dev libceres-dev libtbb-dev libzip-dev zip unzip
+  libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
+  libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)
+  xvfb xauth
+)
+SUDO=""
+if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
+missing=()
+for p in "${PACKAGES[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "== installing ${#missing[@]} Debian packages: ${missing[*]}"
+  $SUDO apt-get update
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@"
+cmake --build build -j "$(nproc)"
