@@ -1,0 +1,325 @@
+#include "core/FittedMaterialFile.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include <Imath/half.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputPart.h>
+#include <OpenEXR/ImfIntAttribute.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfMultiPartOutputFile.h>
+#include <OpenEXR/ImfOutputPart.h>
+#include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfVersion.h>
+
+#include "core/Error.h"
+#include "core/FloatImage.h"
+#include "core/MeasuredBtf.h"
+
+namespace fs = std::filesystem;
+
+namespace osgBTF {
+
+namespace {
+
+const char* const kMethodAttribute = "osgBTF.method";
+const char* const kVersionAttribute = "osgBTF.version";
+const char* const kViewsAttribute = "osgBTF.views";
+const char* const kLightsAttribute = "osgBTF.lights";
+const char* const kDepthAttribute = "osgBTF.depth";
+const std::string kParamPrefix = "osgBTF.param.";
+
+std::vector<std::string> channelNames(const std::string& texture, int channels) {
+    std::vector<std::string> bases;
+    switch (channels) {
+        case 1:
+            bases = {"Y"};
+            break;
+        case 2:
+            bases = {"R", "G"};
+            break;
+        case 3:
+            bases = {"R", "G", "B"};
+            break;
+        case 4:
+            bases = {"R", "G", "B", "A"};
+            break;
+        default:
+            for (int c = 0; c < channels; ++c) bases.push_back("c" + std::to_string(c));
+    }
+    for (std::string& base : bases) base = texture + "." + base;
+    return bases;
+}
+
+/** File row (top-down over all slices) of texture row y (bottom-up) in slice z. */
+std::size_t fileRow(const MaterialTexture& t, int z, int y) {
+    return std::size_t(z) * std::size_t(t.height) + std::size_t(t.height - 1 - y);
+}
+
+std::string joinNames(const std::vector<std::string>& names) {
+    std::string text;
+    for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+    return text;
+}
+
+void validate(const FittedMaterial& material, const std::string& path) {
+    if (material.method.empty()) fail(path, "fitted material has no method name");
+    if (material.textures.empty())
+        fail(path, "fitted material '" + material.method + "' has no textures");
+    for (const auto& [key, value] : material.parameters)
+        if (key.empty()) fail(path, "fitted material has a parameter with an empty name");
+    std::set<std::string> names;
+    for (const MaterialTexture& t : material.textures) {
+        const std::string what = "texture '" + t.name + "'";
+        if (t.name.empty()) fail(path, "a texture has an empty name");
+        if (!names.insert(t.name).second) fail(path, "two textures are called '" + t.name + "'");
+        if (t.width <= 0 || t.height <= 0 || t.depth <= 0 || t.channels <= 0)
+            fail(path, what + " has size " + std::to_string(t.width) + "x" +
+                           std::to_string(t.height) + "x" + std::to_string(t.depth) + " with " +
+                           std::to_string(t.channels) + " channels");
+        if (std::int64_t(t.height) * t.depth > INT32_MAX / 2)
+            fail(path, what + " is too tall for an EXR file");
+        if (t.data.size() != t.valueCount())
+            fail(path, what + " has " + std::to_string(t.data.size()) + " values, " +
+                           std::to_string(t.valueCount()) + " expected");
+        if (t.kind == MaterialTexture::Half) {
+            const std::size_t overflow =
+                std::size_t(std::count_if(t.data.begin(), t.data.end(), [](float v) {
+                    return std::isfinite(v) && std::abs(v) > 65504.0f;
+                }));
+            if (overflow)
+                fail(path, what + " is stored as half but " + std::to_string(overflow) +
+                               " values exceed the half range (65504)");
+        }
+    }
+}
+
+Imf::Header partHeader(const FittedMaterial& material, const MaterialTexture& t,
+                       const Imath::Box2i& displayWindow) {
+    const Imath::Box2i dataWindow({0, 0}, {t.width - 1, t.height * t.depth - 1});
+    Imf::Header header(displayWindow, dataWindow);
+    header.setName(t.name);
+    header.setType(Imf::SCANLINEIMAGE);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    const Imf::PixelType type = t.kind == MaterialTexture::Half ? Imf::HALF : Imf::FLOAT;
+    for (const std::string& name : channelNames(t.name, t.channels))
+        header.channels().insert(name, Imf::Channel(type));
+    header.insert(kMethodAttribute, Imf::StringAttribute(material.method));
+    header.insert(kVersionAttribute, Imf::IntAttribute(kFittedMaterialVersion));
+    header.insert(kViewsAttribute, Imf::StringAttribute(material.views.serialize()));
+    header.insert(kLightsAttribute, Imf::StringAttribute(material.lights.serialize()));
+    header.insert(kDepthAttribute, Imf::IntAttribute(t.depth));
+    for (const auto& [key, value] : material.parameters)
+        header.insert(kParamPrefix + key, Imf::StringAttribute(value));
+    return header;
+}
+
+void writeTexture(Imf::MultiPartOutputFile& file, int part, const MaterialTexture& t) {
+    const std::size_t rowValues = std::size_t(t.width) * std::size_t(t.channels);
+    std::vector<float> rows(t.data.size());
+    for (int z = 0; z < t.depth; ++z)
+        for (int y = 0; y < t.height; ++y)
+            std::copy_n(
+                t.data.begin() + std::ptrdiff_t((std::size_t(z) * t.height + y) * rowValues),
+                rowValues, rows.begin() + std::ptrdiff_t(fileRow(t, z, y) * rowValues));
+    // OpenEXR converts on read but not on write: half channels need half slices.
+    const bool half = t.kind == MaterialTexture::Half;
+    std::vector<Imath::half> halves;
+    if (half) halves.assign(rows.begin(), rows.end());
+    const std::size_t valueSize = half ? sizeof(Imath::half) : sizeof(float);
+    const char* base = half ? (const char*)halves.data() : (const char*)rows.data();
+    const std::size_t xStride = valueSize * std::size_t(t.channels);
+    const std::vector<std::string> names = channelNames(t.name, t.channels);
+    Imf::FrameBuffer frameBuffer;
+    for (std::size_t c = 0; c < names.size(); ++c)
+        frameBuffer.insert(names[c],
+                           Imf::Slice(half ? Imf::HALF : Imf::FLOAT, (char*)(base + c * valueSize),
+                                      xStride, xStride * std::size_t(t.width)));
+    Imf::OutputPart output(file, part);
+    output.setFrameBuffer(frameBuffer);
+    output.writePixels(t.height * t.depth);
+}
+
+MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::string& path) {
+    const Imf::Header& header = file.header(part);
+    if (!header.hasName()) fail(path, "part " + std::to_string(part) + " has no name");
+    MaterialTexture t;
+    t.name = header.name();
+    const std::string what = "texture '" + t.name + "'";
+    if (header.hasType() && Imf::isDeepData(header.type()))
+        fail(path, what + " holds deep data, which fitted materials never use");
+
+    const Imath::Box2i dw = header.dataWindow();
+    const std::int64_t width = std::int64_t(dw.max.x) - dw.min.x + 1;
+    const std::int64_t rows = std::int64_t(dw.max.y) - dw.min.y + 1;
+    if (width <= 0 || rows <= 0) fail(path, what + " has an empty data window");
+    const auto* depth = header.findTypedAttribute<Imf::IntAttribute>(kDepthAttribute);
+    t.depth = depth ? depth->value() : 1;
+    if (t.depth <= 0 || rows % t.depth != 0)
+        fail(path, what + " has " + std::to_string(rows) + " rows, not a multiple of its depth " +
+                       std::to_string(t.depth));
+    t.width = int(width);
+    t.height = int(rows / t.depth);
+
+    std::vector<std::string> found;
+    std::set<Imf::PixelType> types;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+        found.push_back(it.name());
+        types.insert(it.channel().type);
+        if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
+            fail(path, what + ": channel '" + it.name() + "' is subsampled");
+    }
+    t.channels = int(found.size());
+    std::vector<std::string> expected = channelNames(t.name, t.channels);
+    std::vector<std::string> sortedExpected = expected;
+    std::sort(sortedExpected.begin(), sortedExpected.end());
+    std::sort(found.begin(), found.end());
+    if (found.empty() || found != sortedExpected)
+        fail(path, what + " has unexpected channels (" + joinNames(found) + "); expected " +
+                       joinNames(expected));
+    if (types.size() != 1 || *types.begin() == Imf::UINT)
+        fail(path, what + " must have only half or only float channels");
+    t.kind = *types.begin() == Imf::HALF ? MaterialTexture::Half : MaterialTexture::Float;
+
+    checkMemory(std::uint64_t(t.valueCount()) * 8, path + ": " + what);
+    std::vector<float> fileRows(t.valueCount());
+    const std::size_t xStride = sizeof(float) * std::size_t(t.channels);
+    Imf::FrameBuffer frameBuffer;
+    for (std::size_t c = 0; c < expected.size(); ++c)
+        frameBuffer.insert(expected[c], Imf::Slice::Make(Imf::FLOAT, fileRows.data() + c, dw,
+                                                         xStride, xStride * std::size_t(t.width)));
+    Imf::InputPart input(file, part);
+    input.setFrameBuffer(frameBuffer);
+    input.readPixels(dw.min.y, dw.max.y);
+
+    t.data.resize(t.valueCount());
+    const std::size_t rowValues = std::size_t(t.width) * std::size_t(t.channels);
+    for (int z = 0; z < t.depth; ++z)
+        for (int y = 0; y < t.height; ++y)
+            std::copy_n(
+                fileRows.begin() + std::ptrdiff_t(fileRow(t, z, y) * rowValues), rowValues,
+                t.data.begin() + std::ptrdiff_t((std::size_t(z) * t.height + y) * rowValues));
+    return t;
+}
+
+DirectionSet readDirections(const Imf::Header& header, const char* attribute,
+                            const std::string& path) {
+    const auto* text = header.findTypedAttribute<Imf::StringAttribute>(attribute);
+    if (!text) return {};
+    try {
+        return DirectionSet::deserialize(text->value());
+    } catch (const Error& e) {
+        fail(path, std::string(attribute) + ": " + e.what());
+    }
+}
+
+FittedMaterial readMaterial(const std::string& path) {
+    Imf::MultiPartInputFile file(path.c_str());
+    const Imf::Header& header = file.header(0);
+    const auto* method = header.findTypedAttribute<Imf::StringAttribute>(kMethodAttribute);
+    if (!method) fail(path, "not an osgBTF fitted-material file (no osgBTF.method attribute)");
+    const auto* version = header.findTypedAttribute<Imf::IntAttribute>(kVersionAttribute);
+    if (!version) fail(path, "fitted-material file without an osgBTF.version attribute");
+    if (version->value() != kFittedMaterialVersion)
+        fail(path, "fitted-material container version " + std::to_string(version->value()) +
+                       " is not supported (this build reads version " +
+                       std::to_string(kFittedMaterialVersion) + ")");
+
+    FittedMaterial material;
+    material.source = path;
+    material.method = method->value();
+    if (material.method.empty()) fail(path, "the osgBTF.method attribute is empty");
+    for (auto it = header.begin(); it != header.end(); ++it) {
+        const std::string name = it.name();
+        if (name.compare(0, kParamPrefix.size(), kParamPrefix) != 0) continue;
+        const auto* value = dynamic_cast<const Imf::StringAttribute*>(&it.attribute());
+        if (!value) fail(path, "attribute " + name + " is not a string");
+        material.parameters[name.substr(kParamPrefix.size())] = value->value();
+    }
+    material.views = readDirections(header, kViewsAttribute, path);
+    material.lights = readDirections(header, kLightsAttribute, path);
+    for (int part = 0; part < file.parts(); ++part)
+        material.textures.push_back(readTexture(file, part, path));
+    return material;
+}
+
+}  // namespace
+
+const MaterialTexture* FittedMaterial::findTexture(const std::string& name) const {
+    for (const MaterialTexture& t : textures)
+        if (t.name == name) return &t;
+    return nullptr;
+}
+
+const MaterialTexture& FittedMaterial::texture(const std::string& name) const {
+    if (const MaterialTexture* t = findTexture(name)) return *t;
+    std::vector<std::string> names;
+    for (const MaterialTexture& t : textures) names.push_back(t.name);
+    fail(source, "fitted material '" + method + "' has no texture '" + name +
+                     "' (textures: " + (names.empty() ? "none" : joinNames(names)) + ")");
+}
+
+const std::string& FittedMaterial::parameter(const std::string& key) const {
+    auto it = parameters.find(key);
+    if (it == parameters.end())
+        fail(source, "fitted material '" + method + "' has no parameter '" + key + "'");
+    return it->second;
+}
+
+void saveFittedMaterial(const FittedMaterial& material, const std::string& path) {
+    validate(material, path);
+    int maxWidth = 1, maxRows = 1;
+    for (const MaterialTexture& t : material.textures) {
+        maxWidth = std::max(maxWidth, t.width);
+        maxRows = std::max(maxRows, t.height * t.depth);
+    }
+    // OpenEXR requires every part to share one display window.
+    const Imath::Box2i displayWindow({0, 0}, {maxWidth - 1, maxRows - 1});
+    std::vector<Imf::Header> headers;
+    for (const MaterialTexture& t : material.textures)
+        headers.push_back(partHeader(material, t, displayWindow));
+
+    writeFileAtomically(path, [&](const std::string& temporaryPath) {
+        try {
+            Imf::MultiPartOutputFile file(temporaryPath.c_str(), headers.data(),
+                                          int(headers.size()));
+            for (std::size_t i = 0; i < material.textures.size(); ++i)
+                writeTexture(file, int(i), material.textures[i]);
+        } catch (const Error&) {
+            throw;
+        } catch (const std::exception& e) {
+            fail(path, std::string("OpenEXR: ") + e.what());
+        }
+    });
+}
+
+FittedMaterial loadFittedMaterial(const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) fail(path, "no such file");
+    if (fs::is_directory(path, ec)) fail(path, "is a folder, not a fitted-material file");
+    if (fs::file_size(path, ec) == 0 && !ec) fail(path, "file is empty");
+    {
+        std::ifstream in(path, std::ios::binary);
+        char magic[4] = {};
+        if (!in.read(magic, 4) || !Imf::isImfMagic(magic))
+            fail(path, "not an OpenEXR file (wrong magic number), so not a fitted-material file");
+    }
+    try {
+        return readMaterial(path);
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        fail(path, std::string("OpenEXR: ") + e.what());
+    }
+}
+
+}  // namespace osgBTF

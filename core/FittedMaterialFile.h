@@ -1,0 +1,83 @@
+// osgBTF: the one-file-per-fitted-material container shared by every compression method.
+//
+// File format (container version 1): an OpenEXR multi-part file, ZIP-compressed (lossless).
+//   - one part per texture; part name = texture name;
+//   - channels "<texture>.Y" (1 channel), "<texture>.R/.G" (2), "<texture>.R/.G/.B" (3),
+//     "<texture>.R/.G/.B/.A" (4), "<texture>.c0" .. "<texture>.c<N-1>" (5 or more), all HALF or
+//     all FLOAT; prefixed so that exrheader/oiiotool list every part's channels distinctly;
+//   - the part's data window is width x (height * depth): a 3D texture stores its slices one
+//     below the other, slice 0 at the top; each slice is stored upright (top row first, as EXR
+//     viewers expect), so a file opened in a viewer looks like the texture;
+//   - every part carries the same string attributes "osgBTF.method", "osgBTF.views",
+//     "osgBTF.lights" (DirectionSet::serialize()) and "osgBTF.param.<key>", the int attribute
+//     "osgBTF.version" (= 1), and its own int attribute "osgBTF.depth".
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/Directions.h"
+
+namespace osgBTF {
+
+/** Version written into "osgBTF.version"; loadFittedMaterial refuses any other. */
+constexpr int kFittedMaterialVersion = 1;
+
+/** One texture of a fitted material: a 2D image, or a 3D one made of `depth` slices.
+ *
+ *  data layout: [z][y][x][channel], rows BOTTOM-UP within each slice (y = 0 is the bottom row, as
+ *  in osg::Image and MeasuredBtf), so data can be handed to an osg::Image as it is:
+ *  data[((z * height + y) * width + x) * channels + c]. */
+struct MaterialTexture {
+    enum PixelKind { Half, Float };
+
+    std::string name;
+    int width = 0;
+    int height = 0;
+    int depth = 1;
+    int channels = 0;
+    /** Precision in the file. Half data is rounded to half when saved; kept as float in memory. */
+    PixelKind kind = Float;
+    std::vector<float> data;
+
+    std::size_t valueCount() const {
+        return std::size_t(width) * std::size_t(height) * std::size_t(depth) *
+               std::size_t(channels);
+    }
+};
+
+/** Everything a compression method fitted for one material. */
+struct FittedMaterial {
+    /** Method name, e.g. "lpca" (the key the renderers use to pick their shaders). */
+    std::string method;
+    /** Method-specific settings and scalars, as text (e.g. "components" -> "8"). */
+    std::map<std::string, std::string> parameters;
+    DirectionSet views, lights;
+    std::vector<MaterialTexture> textures;
+    /** Where it was loaded from (set by loadFittedMaterial); used in error messages. */
+    std::string source;
+
+    /** The texture called `name`, or nullptr. */
+    const MaterialTexture* findTexture(const std::string& name) const;
+    /** The texture called `name`; throws Error "SOURCE: fitted material 'METHOD' has no texture
+     *  'NAME' (textures: a, b)". */
+    const MaterialTexture& texture(const std::string& name) const;
+    /** The parameter `key`; throws Error naming the missing key. */
+    const std::string& parameter(const std::string& key) const;
+};
+
+/** Writes `material` to `path` (format above) atomically: on any error the Error names the file
+ *  and the problem, and an existing file at `path` is left as it was. Throws Error for an empty
+ *  method, no textures, empty/duplicate texture names, empty parameter keys, data whose size does
+ *  not match width*height*depth*channels, and half textures with finite values beyond 65504. */
+void saveFittedMaterial(const FittedMaterial& material, const std::string& path);
+
+/** Reads a file written by saveFittedMaterial. Float textures come back bit-exact, half ones as
+ *  the half values. Throws Error "PATH: problem" for a missing, empty, corrupt or truncated file,
+ *  a file that is not OpenEXR, "PATH: not an osgBTF fitted-material file (no osgBTF.method
+ *  attribute)", an unsupported "osgBTF.version", or a part whose channels do not follow the
+ *  layout above. */
+FittedMaterial loadFittedMaterial(const std::string& path);
+
+}  // namespace osgBTF
