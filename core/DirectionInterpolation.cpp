@@ -95,6 +95,7 @@ DirectionInterpolator::DirectionInterpolator(const DirectionSet& directions) {
                     "': interpolation needs at least 3 directions, got " +
                     std::to_string(directions.size()));
     for (std::size_t i = 0; i < directions.size(); ++i) {
+        _sampleDirections.push_back(directions.vector(i));
         const glm::dvec3 d = glm::dvec3(directions.vector(i));
         _points.push_back({d.x / (1.0 + d.z), d.y / (1.0 + d.z)});
     }
@@ -168,16 +169,29 @@ DirectionInterpolator::Baked DirectionInterpolator::bake(int resolution) const {
             }
         }
     }
+    // Keep the table exact at the samples: the cell holding a measured direction returns it
+    // alone, so a shader reproduces measured (view, light) pairs as the CPU reference does.
+    for (std::size_t s = 0; s < _sampleDirections.size(); ++s) {
+        const std::size_t o = bakedCell(baked, _sampleDirections[s]) * 3;
+        baked.indices[o] = baked.indices[o + 1] = baked.indices[o + 2] = float(s);
+        baked.weights[o] = 1.0f;
+        baked.weights[o + 1] = baked.weights[o + 2] = 0.0f;
+    }
     return baked;
+}
+
+std::size_t DirectionInterpolator::bakedCell(const Baked& baked, const glm::vec3& direction) {
+    // Float arithmetic in the order the shader uses (shaders/common/directions.glsl).
+    const glm::vec2 p = directionToDisc(direction);
+    const int r = baked.resolution;
+    const int i = std::clamp(int(std::floor((p.x + 1.0f) * 0.5f * float(r))), 0, r - 1);
+    const int j = std::clamp(int(std::floor((p.y + 1.0f) * 0.5f * float(r))), 0, r - 1);
+    return std::size_t(j) * r + i;
 }
 
 InterpolationWeights DirectionInterpolator::lookupBaked(const Baked& baked,
                                                         const glm::vec3& direction) {
-    const glm::vec2 p = directionToDisc(direction);
-    const int r = baked.resolution;
-    const int i = std::clamp(int(std::floor((p.x + 1.0f) * 0.5f * r)), 0, r - 1);
-    const int j = std::clamp(int(std::floor((p.y + 1.0f) * 0.5f * r)), 0, r - 1);
-    const std::size_t o = (std::size_t(j) * r + i) * 3;
+    const std::size_t o = bakedCell(baked, direction) * 3;
     InterpolationWeights w;
     for (int k = 0; k < 3; ++k) {
         w.index[k] = int(baked.indices[o + k]);

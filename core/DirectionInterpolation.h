@@ -40,7 +40,9 @@ public:
 
     /** A baked lookup table for shaders: resolution x resolution cells over the square
      *  [-1, 1]^2 of the disc map, cell (i, j) at p = ((i + 0.5) / R * 2 - 1, (j + 0.5) / R * 2 - 1)
-     *  holding the weights of that cell centre (cells outside the disc hold the horizon's).
+     *  holding the weights of that cell centre (cells outside the disc hold the horizon's),
+     *  except that the cell containing a measured direction holds exactly that direction, so
+     *  lookups stay exact at the samples (resolution must separate them: 64 does for Bonn 81).
      *  indices: RGB floats (integral), weights: RGB floats; row j = bottom-up, as GL textures. */
     struct Baked {
         int resolution = 0;
@@ -51,12 +53,15 @@ public:
 
     /** What a shader does with the baked table: the weights of the nearest cell centre. */
     static InterpolationWeights lookupBaked(const Baked& baked, const glm::vec3& direction);
+    /** Index of the cell lookupBaked reads for this direction. */
+    static std::size_t bakedCell(const Baked& baked, const glm::vec3& direction);
 
     std::size_t directionCount() const { return _points.size(); }
     const std::vector<std::array<int, 3>>& triangles() const { return _triangles; }
     const std::vector<glm::dvec2>& discPoints() const { return _points; }
 
 private:
+    std::vector<glm::vec3> _sampleDirections;
     std::vector<glm::dvec2> _points;
     std::vector<std::array<int, 3>> _triangles;  ///< counter-clockwise
     std::vector<std::array<int, 2>> _hullEdges;

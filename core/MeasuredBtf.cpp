@@ -1,11 +1,11 @@
 #include "core/MeasuredBtf.h"
 
+#include <unistd.h>
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
-#include <unistd.h>
 
 #include "core/Error.h"
 
@@ -35,7 +35,9 @@ std::uint64_t memoryLimit() {
     return g_memoryLimit;
 }
 
-void setMemoryLimit(std::uint64_t bytes) { g_memoryLimit = bytes; }
+void setMemoryLimit(std::uint64_t bytes) {
+    g_memoryLimit = bytes;
+}
 
 std::string formatBytes(std::uint64_t bytes) {
     const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
@@ -81,11 +83,11 @@ void checkMemory(std::uint64_t bytes, const std::string& what) {
                     " (raise it with --memory-limit or OSGBTF_MEMORY_LIMIT)");
 }
 
-std::uint64_t MeasuredBtf::bytesNeeded(int width, int height, std::size_t views,
-                                       std::size_t lights, Storage storage) {
+std::uint64_t MeasuredBtf::bytesNeeded(int width, int height, std::size_t views, std::size_t lights,
+                                       Storage storage) {
     // Computed in long double so absurd header values cannot wrap around before the check.
-    const long double bytes = (long double)width * height * views * lights * 3 *
-                              (storage == Storage::Float ? 4 : 2);
+    const long double bytes =
+        (long double)width * height * views * lights * 3 * (storage == Storage::Float ? 4 : 2);
     return bytes > 1.8e19L ? UINT64_MAX : std::uint64_t(bytes);
 }
 
@@ -98,8 +100,8 @@ MeasuredBtf::MeasuredBtf(int width, int height, DirectionSet views, DirectionSet
       _storage(storage) {
     if (width <= 0 || height <= 0 || _views.size() == 0 || _lights.size() == 0) {
         std::ostringstream what;
-        what << "invalid BTF dimensions " << width << "x" << height << " texels, "
-             << _views.size() << " views, " << _lights.size() << " lights";
+        what << "invalid BTF dimensions " << width << "x" << height << " texels, " << _views.size()
+             << " views, " << _lights.size() << " lights";
         throw Error(what.str());
     }
     std::ostringstream what;

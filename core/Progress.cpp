@@ -8,13 +8,19 @@ namespace {
 std::atomic<bool> g_enabled{false};
 }
 
-void Progress::setEnabled(bool enabled) { g_enabled = enabled; }
-bool Progress::enabled() { return g_enabled; }
+void Progress::setEnabled(bool enabled) {
+    g_enabled = enabled;
+}
+bool Progress::enabled() {
+    return g_enabled;
+}
 
 Progress::Progress(std::string label, std::size_t total)
     : _label(std::move(label)), _total(total), _start(std::chrono::steady_clock::now()) {}
 
-Progress::~Progress() { finish(); }
+Progress::~Progress() {
+    finish();
+}
 
 double Progress::elapsedSeconds() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - _start).count();

@@ -1,0 +1,80 @@
+#include "core/ShaderSource.h"
+
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <osgDB/FileUtils>
+#include <osgDB/Registry>
+
+#include "core/Error.h"
+
+namespace osgBTF {
+
+namespace detail {
+const std::map<std::string, std::string>& embeddedShaders();  // generated EmbeddedShaders.cpp
+}
+
+namespace {
+
+std::string overridePath(const std::string& name) {
+    // Only OSG_FILE_PATH (osgDB's data path list), not the current folder: running a tool from
+    // the source tree must not silently pick up files.
+    return osgDB::findFileInPath("shaders/" + name,
+                                 osgDB::Registry::instance()->getDataFilePathList());
+}
+
+std::string rawSource(const std::string& name) {
+    const std::string path = overridePath(name);
+    if (!path.empty()) {
+        std::ifstream in(path, std::ios::binary);
+        std::ostringstream text;
+        if (!in || !(text << in.rdbuf())) fail(path, "cannot read shader");
+        return text.str();
+    }
+    const auto& embedded = detail::embeddedShaders();
+    const auto it = embedded.find(name);
+    if (it == embedded.end())
+        throw Error("shader '" + name + "': not found (neither on OSG_FILE_PATH as shaders/" +
+                    name + " nor embedded)");
+    return it->second;
+}
+
+std::string resolveIncludes(const std::string& name, int depth) {
+    if (depth > 16) throw Error("shader '" + name + "': #pragma include nested too deeply");
+    std::istringstream in(rawSource(name));
+    std::ostringstream out;
+    std::string line;
+    const std::string directive = "#pragma include";
+    while (std::getline(in, line)) {
+        const auto start = line.find_first_not_of(" \t");
+        if (start != std::string::npos && line.compare(start, directive.size(), directive) == 0) {
+            const auto open = line.find('"'), close = line.rfind('"');
+            if (open == std::string::npos || close <= open)
+                throw Error("shader '" + name + "': malformed line '" + line + "'");
+            out << resolveIncludes(line.substr(open + 1, close - open - 1), depth + 1);
+            continue;
+        }
+        out << line << '\n';
+    }
+    return out.str();
+}
+
+}  // namespace
+
+std::string shaderSource(const std::string& name) {
+    return resolveIncludes(name, 0);
+}
+
+std::string shaderOrigin(const std::string& name) {
+    const std::string path = overridePath(name);
+    return path.empty() ? "embedded:" + name : path;
+}
+
+std::vector<std::string> embeddedShaderNames() {
+    std::vector<std::string> names;
+    for (const auto& entry : detail::embeddedShaders()) names.push_back(entry.first);
+    return names;
+}
+
+}  // namespace osgBTF

@@ -1,0 +1,24 @@
+// osgBTF: GLSL sources, embedded at build time and overridable from disk.
+//
+// shaderSource("laf.frag") returns shaders/laf.frag as built into the library, unless a file
+// "shaders/laf.frag" is found on OSG_FILE_PATH (osgDB's data path), which then wins: edit a shader
+// and rerun without rebuilding (the osgEarth pattern). Lines `#pragma include "common/x.glsl"` are
+// replaced by that file, found the same way, recursively.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace osgBTF {
+
+/** Throws Error "shader 'NAME': not found (neither on OSG_FILE_PATH as shaders/NAME nor
+ *  embedded)" or "FILE: cannot read shader" for an unreadable override. */
+std::string shaderSource(const std::string& name);
+
+/** Where the shader comes from: the override file's path, or "embedded:NAME". */
+std::string shaderOrigin(const std::string& name);
+
+/** Names of all embedded shaders. */
+std::vector<std::string> embeddedShaderNames();
+
+}  // namespace osgBTF

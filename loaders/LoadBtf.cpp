@@ -1,0 +1,52 @@
+#include "loaders/LoadBtf.h"
+
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "core/Error.h"
+#include "loaders/Ubo2003.h"
+#include "loaders/Ubo2014.h"
+
+namespace osgBTF {
+
+MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status status = fs::status(path, ec);
+    if (status.type() == fs::file_type::not_found) fail(path, "no such file");
+    if (ec) fail(path, "cannot open: " + ec.message());
+    std::string extension = fs::path(path).extension().string();
+    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+
+    MeasuredBtf btf;
+    if (status.type() == fs::file_type::directory) {
+        // A folder named like a file is almost certainly a mistake, not a folder of images.
+        if (extension == ".btf" || extension == ".zip")
+            fail(path, "cannot open: " + std::string(std::strerror(EISDIR)));
+        btf = loadUbo2003(path, options);
+    } else {
+        std::ifstream in(path, std::ios::binary);
+        if (!in) fail(path, "cannot open: " + std::string(std::strerror(errno)));
+        char magic[4] = {};
+        in.read(magic, 4);
+        const std::streamsize got = in.gcount();
+        if (got == 0) fail(path, "file is empty");
+        in.close();
+        const bool zipMagic = got == 4 && std::memcmp(magic, "PK\x03\x04", 4) == 0;
+        if (extension == ".zip" || (extension != ".btf" && zipMagic))
+            btf = loadUbo2003(path, options);
+        else if (extension == ".btf" || magic[0] == '!')
+            btf = loadUbo2014(path, options);
+        else
+            fail(path,
+                 "unknown file type (expected a UBO2003 .zip, a UBO2014 .btf or a folder "
+                 "of UBO2003 images)");
+    }
+    btf.source = path;
+    return btf;
+}
+
+}  // namespace osgBTF

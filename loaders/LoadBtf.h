@@ -1,0 +1,17 @@
+// osgBTF: one entry point for every measured-BTF file osgBTF reads.
+#pragma once
+
+#include <string>
+
+#include "core/MeasuredBtf.h"
+#include "loaders/LoadOptions.h"
+
+namespace osgBTF {
+
+/** Loads a UBO2003/ATRIUM zip (".zip"), a UBO2014 file (".btf") or a folder of UBO2003-named
+ *  images; files with another extension are recognised by their first bytes. Sets
+ *  MeasuredBtf::source to path. Throws osgBTF::Error("<path>: <problem>"), e.g. "no such file",
+ *  "file is empty", "cannot open: Permission denied". */
+MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options = {});
+
+}  // namespace osgBTF

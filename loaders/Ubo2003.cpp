@@ -1,0 +1,559 @@
+#include "loaders/Ubo2003.h"
+
+#include <unistd.h>
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <random>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <vector>
+
+#include <Imath/half.h>
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+#include <zip.h>
+
+#include "core/Error.h"
+#include "core/Progress.h"
+
+namespace osgBTF {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string lower(std::string text) {
+    for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return text;
+}
+
+std::string basenameOf(const std::string& memberPath) {
+    const auto slash = memberPath.find_last_of("/\\");
+    return slash == std::string::npos ? memberPath : memberPath.substr(slash + 1);
+}
+
+/** Entries that archivers add and that never hold BTF data. */
+bool isJunk(const std::string& memberPath) {
+    if (memberPath.empty() || memberPath.back() == '/' || memberPath.back() == '\\') return true;
+    if (memberPath.rfind("__MACOSX/", 0) == 0 || memberPath.find("/__MACOSX/") != std::string::npos)
+        return true;
+    return basenameOf(memberPath).rfind("._", 0) == 0;
+}
+
+/** A name that carries the direction tokens but not in the accepted form, e.g. a ".txt" or a
+ *  "_small.jpg" variant: silently skipping it could hide a damaged archive, so it is an error. */
+bool looksLikeBtfName(const std::string& basename) {
+    static const std::regex tokens(R"(tl\d{3} pl\d{3} tv\d{3} pv\d{3})", std::regex::icase);
+    return std::regex_search(basename, tokens);
+}
+
+/** OIIO's plugin name for an image extension (creating a reader from a file name that does not
+ *  exist fails in OIIO 2.4). */
+std::string oiioFormat(const std::string& extension) {
+    if (extension == "jpg" || extension == "jpeg") return "jpeg";
+    if (extension == "exr") return "openexr";
+    return extension;
+}
+
+struct Member {
+    std::string name;  ///< path inside the archive or relative to the folder
+    std::uint64_t zipIndex = 0;
+    fs::path file;  ///< folder sources only
+    Ubo2003Name parsed;
+    int light = -1, view = -1;
+};
+
+/** The images of a zip archive or of a folder; reading is serial (libzip is not thread-safe on
+ *  one archive), decoding happens elsewhere. */
+class Source {
+public:
+    explicit Source(const std::string& path) : _path(path) {
+        std::error_code ec;
+        if (fs::is_directory(path, ec))
+            listFolder();
+        else
+            openZip();
+    }
+    ~Source() {
+        if (_zip) zip_discard(_zip);
+    }
+    Source(const Source&) = delete;
+    Source& operator=(const Source&) = delete;
+
+    /** Every entry name with its zip index, junk already removed. */
+    const std::vector<std::pair<std::string, std::uint64_t>>& names() const { return _names; }
+
+    std::vector<unsigned char> read(const Member& member) const {
+        return _zip ? readZip(member) : readFile(member);
+    }
+
+private:
+    void openZip() {
+        int code = 0;
+        _zip = zip_open(_path.c_str(), ZIP_RDONLY, &code);
+        if (!_zip) {
+            zip_error_t error;
+            zip_error_init_with_code(&error, code);
+            const std::string text = zip_error_strerror(&error);
+            zip_error_fini(&error);
+            const char* hint = code == ZIP_ER_NOZIP || code == ZIP_ER_INCONS
+                                   ? " (a truncated download or not a zip archive?)"
+                                   : "";
+            fail(_path, "cannot open zip archive: " + text + hint);
+        }
+        const zip_int64_t count = zip_get_num_entries(_zip, 0);
+        for (zip_int64_t i = 0; i < count; ++i) {
+            const char* name = zip_get_name(_zip, zip_uint64_t(i), ZIP_FL_ENC_GUESS);
+            if (!name)
+                fail(_path, "cannot read the name of entry " + std::to_string(i) + ": " +
+                                zip_strerror(_zip));
+            if (!isJunk(name)) _names.emplace_back(name, zip_uint64_t(i));
+        }
+    }
+
+    void listFolder() {
+        std::error_code ec;
+        fs::recursive_directory_iterator it(_path, ec), end;
+        if (ec) fail(_path, "cannot list folder: " + ec.message());
+        for (; it != end; it.increment(ec)) {
+            if (ec) fail(_path, "cannot list folder: " + ec.message());
+            if (!it->is_regular_file(ec)) continue;
+            const std::string relative = fs::relative(it->path(), _path, ec).generic_string();
+            if (!isJunk(relative)) _names.emplace_back(relative, 0);
+        }
+        if (ec) fail(_path, "cannot list folder: " + ec.message());
+        // Directory iteration order is arbitrary; sorting makes "first" errors reproducible.
+        std::sort(_names.begin(), _names.end());
+    }
+
+    std::vector<unsigned char> readZip(const Member& member) const {
+        zip_stat_t stat;
+        zip_stat_init(&stat);
+        if (zip_stat_index(_zip, member.zipIndex, 0, &stat) != 0 || !(stat.valid & ZIP_STAT_SIZE))
+            fail(_path,
+                 "member '" + member.name + "': cannot read its size: " + zip_strerror(_zip));
+        zip_file_t* file = zip_fopen_index(_zip, member.zipIndex, 0);
+        if (!file) fail(_path, "member '" + member.name + "': " + zip_strerror(_zip));
+        std::vector<unsigned char> bytes(stat.size);
+        zip_uint64_t done = 0;
+        while (done < stat.size) {
+            const zip_int64_t n = zip_fread(file, bytes.data() + done, stat.size - done);
+            if (n <= 0) {
+                const std::string text = n < 0 ? zip_file_strerror(file) : "unexpected end of data";
+                zip_fclose(file);
+                fail(_path, "member '" + member.name + "': " + text);
+            }
+            done += zip_uint64_t(n);
+        }
+        // zip_fclose reports a CRC mismatch only now, after the last byte was read.
+        const int closeError = zip_fclose(file);
+        if (closeError != 0) {
+            zip_error_t error;
+            zip_error_init_with_code(&error, closeError);
+            const std::string text = zip_error_strerror(&error);
+            zip_error_fini(&error);
+            fail(_path, "member '" + member.name + "': " + text);
+        }
+        return bytes;
+    }
+
+    std::vector<unsigned char> readFile(const Member& member) const {
+        const fs::path file = fs::path(_path) / member.name;
+        std::ifstream in(file, std::ios::binary);
+        if (!in) fail(file.string(), std::string("cannot open: ") + std::strerror(errno));
+        std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
+                                         std::istreambuf_iterator<char>());
+        if (in.bad()) fail(file.string(), "read error");
+        return bytes;
+    }
+
+    std::string _path;
+    zip_t* _zip = nullptr;
+    std::vector<std::pair<std::string, std::uint64_t>> _names;
+};
+
+/** Integer image values to linear radiance. */
+class Curve {
+public:
+    explicit Curve(LoadOptions::DecodeCurve curve) : _curve(curve) {
+        for (int i = 0; i < 256; ++i) {
+            _lut8[i] = apply(float(i) / 255.0f);
+            _lut8Half[i] = Imath::half(_lut8[i]);
+        }
+    }
+    float byte(unsigned char v) const { return _lut8[v]; }
+    Imath::half byteHalf(unsigned char v) const { return _lut8Half[v]; }
+    float apply(float v) const {
+        switch (_curve) {
+            case LoadOptions::DecodeCurve::Srgb:
+                return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+            case LoadOptions::DecodeCurve::Gamma22:
+                return std::pow(std::max(v, 0.0f), 2.2f);
+            case LoadOptions::DecodeCurve::Linear:
+                break;
+        }
+        return v;
+    }
+
+private:
+    LoadOptions::DecodeCurve _curve;
+    float _lut8[256];
+    Imath::half _lut8Half[256];
+};
+
+/** Where one decoded image goes: width*height*3 values, rows bottom-up, in either storage. */
+struct Target {
+    float* f = nullptr;
+    Imath::half* h = nullptr;
+};
+
+struct DecodeScratch {
+    std::vector<unsigned char> bytes8;
+    std::vector<float> floats;
+    std::vector<float> image;  ///< the first image, decoded before the BTF exists
+};
+
+/** Converts rows of decoded pixels into target, flipping them to bottom-up; src holds `channels`
+ *  values per pixel (1 = gray, replicated). */
+template <typename In, typename Convert>
+void storeRows(const In* src, int width, int height, int channels, Target target, Convert convert) {
+    const std::size_t rowValues = std::size_t(width) * 3;
+    for (int y = 0; y < height; ++y) {
+        const In* in = src + std::size_t(y) * width * channels;
+        const std::size_t out = std::size_t(height - 1 - y) * rowValues;
+        // RGB rows map value for value; this flat loop is the hot path of every JPEG load.
+        if (channels == 3 && target.f) {
+            float* dst = target.f + out;
+            for (std::size_t i = 0; i < rowValues; ++i) dst[i] = float(convert(in[i]));
+        } else if (channels == 3) {
+            Imath::half* dst = target.h + out;
+            for (std::size_t i = 0; i < rowValues; ++i) dst[i] = Imath::half(convert(in[i]));
+        } else if (target.f) {
+            float* dst = target.f + out;
+            for (int x = 0; x < width; ++x, in += channels, dst += 3)
+                for (int c = 0; c < 3; ++c) dst[c] = float(convert(in[channels == 3 ? c : 0]));
+        } else {
+            Imath::half* dst = target.h + out;
+            for (int x = 0; x < width; ++x, in += channels, dst += 3)
+                for (int c = 0; c < 3; ++c)
+                    dst[c] = Imath::half(convert(in[channels == 3 ? c : 0]));
+        }
+    }
+}
+
+/** OIIO messages name the file it was given and may span lines; name the member instead. */
+std::string tidyMessage(std::string text, const std::string& fakeName, const Member& member) {
+    if (text.empty()) return "unknown error";
+    for (std::size_t at; (at = text.find(fakeName)) != std::string::npos;)
+        text.replace(at, fakeName.size(), basenameOf(member.name));
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    for (std::size_t at; (at = text.find('\n')) != std::string::npos;) text.replace(at, 1, "; ");
+    return text;
+}
+
+/** Decodes an image (the bytes of a file) into bottom-up RGB. destination receives the decoded
+ *  size and returns where to write; it throws when the size is wrong, before pixels are decoded. */
+void decodeImage(const std::string& archive, const Member& member,
+                 const std::vector<unsigned char>& bytes, bool useProxy, const Curve& curve,
+                 DecodeScratch& scratch, const std::function<Target(int, int)>& destination) {
+    const std::string where = "member '" + member.name + "'";
+    OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
+    std::string tempFile;
+    struct TempRemover {
+        std::string* path;
+        ~TempRemover() {
+            std::error_code ignored;
+            if (!path->empty()) fs::remove(*path, ignored);
+        }
+    } remover{&tempFile};
+    OIIO::ImageSpec config;
+    // Keep colour values of PNGs with alpha as stored instead of premultiplying them.
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    std::unique_ptr<OIIO::ImageInput> input;
+    const std::string fakeName = "image." + member.parsed.extension;
+    if (useProxy) {
+        // ImageInput::open(name, config, proxy) looks for the file on disk in OIIO 2.4; creating
+        // the reader by format name and attaching the proxy does not.
+        input = OIIO::ImageInput::create(oiioFormat(member.parsed.extension));
+        OIIO::ImageSpec opened;
+        if (input && !(input->set_ioproxy(&proxy) && input->open(fakeName, opened, config)))
+            fail(archive, where + ": not a decodable image: " +
+                              tidyMessage(input->geterror(), fakeName, member));
+    } else {
+        static std::atomic<unsigned> counter{0};
+        tempFile = (fs::temp_directory_path() /
+                    ("osgbtf-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) +
+                     "." + member.parsed.extension))
+                       .string();
+        {
+            std::ofstream out(tempFile, std::ios::binary);
+            out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+            if (!out) fail(archive, where + ": cannot write temporary file " + tempFile);
+        }
+        input = OIIO::ImageInput::open(tempFile, &config);
+    }
+    if (!input)
+        fail(archive,
+             where + ": not a decodable image: " +
+                 tidyMessage(OIIO::geterror(), tempFile.empty() ? fakeName : tempFile, member));
+    input->threads(1);  // parallelism comes from decoding many images at once
+    const OIIO::ImageSpec& spec = input->spec();
+    if (spec.nchannels < 1 || spec.width <= 0 || spec.height <= 0 || spec.depth > 1)
+        fail(archive, where + ": unsupported image layout");
+    const int orientation = spec.get_int_attribute("Orientation", 1);
+    const bool swapsAxes = orientation >= 5 && orientation <= 8;
+    const int width = swapsAxes ? spec.height : spec.width;
+    const int height = swapsAxes ? spec.width : spec.height;
+    const Target target = destination(width, height);
+
+    const int storedW = spec.width, storedH = spec.height;
+    const int channels = std::min(spec.nchannels, 3);
+    const std::size_t pixels = std::size_t(storedW) * storedH;
+    const bool is8bit = spec.format == OIIO::TypeDesc::UINT8;
+    const bool isFloat = spec.format.is_floating_point();
+    bool ok;
+    if (is8bit && orientation == 1) {
+        scratch.bytes8.resize(pixels * channels);
+        ok = input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, scratch.bytes8.data());
+        if (ok && target.f)
+            storeRows(scratch.bytes8.data(), storedW, storedH, channels, target,
+                      [&](unsigned char v) { return curve.byte(v); });
+        else if (ok)
+            storeRows(scratch.bytes8.data(), storedW, storedH, channels, target,
+                      [&](unsigned char v) { return curve.byteHalf(v); });
+    } else {
+        scratch.floats.resize(pixels * channels);
+        ok = input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, scratch.floats.data());
+        if (ok && !isFloat)
+            for (float& v : scratch.floats) v = curve.apply(v);
+        if (ok && orientation != 1) {
+            // Rare (EXIF-rotated files): let OIIO turn the image upright first.
+            OIIO::ImageSpec stored(storedW, storedH, channels, OIIO::TypeDesc::FLOAT);
+            stored.attribute("Orientation", orientation);
+            OIIO::ImageBuf src(stored, scratch.floats.data());
+            OIIO::ImageBuf upright = OIIO::ImageBufAlgo::reorient(src, 1);
+            if (upright.has_error() || upright.spec().width != width)
+                fail(archive, where + ": cannot apply the image orientation " +
+                                  std::to_string(orientation) + ": " + upright.geterror());
+            std::vector<float> pixelsUpright(pixels * channels);
+            if (!upright.get_pixels(OIIO::ROI(0, width, 0, height, 0, 1, 0, channels),
+                                    OIIO::TypeDesc::FLOAT, pixelsUpright.data()))
+                fail(archive, where + ": cannot apply the image orientation");
+            scratch.floats.swap(pixelsUpright);
+        }
+        if (ok)
+            storeRows(scratch.floats.data(), width, height, channels, target,
+                      [](float v) { return v; });
+    }
+    if (!ok)
+        fail(archive,
+             where + ": corrupt image: " +
+                 tidyMessage(input->geterror(), tempFile.empty() ? fakeName : tempFile, member));
+}
+
+DirectionSet buildSet(const std::set<std::pair<int, int>>& found, const std::string& name) {
+    const DirectionSet bonn = DirectionSet::bonn81();
+    std::set<std::pair<int, int>> bonnSet;
+    for (const Direction& d : bonn.directions())
+        bonnSet.emplace(int(std::lround(d.theta)), int(std::lround(d.phi)));
+    if (found == bonnSet) return bonn;
+    std::vector<Direction> directions;
+    for (const auto& [theta, phi] : found) directions.push_back({float(theta), float(phi)});
+    return DirectionSet(name, std::move(directions));
+}
+
+std::string tokens(int lt, int lp, int vt, int vp) {
+    char text[64];
+    std::snprintf(text, sizeof text, "tl%03d pl%03d tv%03d pv%03d", lt, lp, vt, vp);
+    return text;
+}
+
+}  // namespace
+
+bool parseUbo2003Name(const std::string& memberPath, Ubo2003Name& name) {
+    static const std::regex pattern(
+        R"(^(?:(\d{5}) )?tl(\d{3}) pl(\d{3}) tv(\d{3}) pv(\d{3})\.([A-Za-z]+)$)");
+    const std::string base = basenameOf(memberPath);
+    std::smatch m;
+    if (!std::regex_match(base, m, pattern)) return false;
+    const std::string ext = lower(m[6].str());
+    if (ext != "jpg" && ext != "jpeg" && ext != "png" && ext != "hdr" && ext != "exr") return false;
+    name.index = m[1].matched ? std::stoi(m[1].str()) : -1;
+    name.lightTheta = std::stoi(m[2].str());
+    name.lightPhi = std::stoi(m[3].str());
+    name.viewTheta = std::stoi(m[4].str());
+    name.viewPhi = std::stoi(m[5].str());
+    name.extension = ext;
+    return true;
+}
+
+MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options) {
+    Source source(path);
+
+    std::vector<Member> members;
+    for (const auto& [name, zipIndex] : source.names()) {
+        Member member;
+        member.name = name;
+        member.zipIndex = zipIndex;
+        if (!parseUbo2003Name(name, member.parsed)) {
+            if (looksLikeBtfName(basenameOf(name)))
+                fail(path, "member '" + name +
+                               "' looks like a BTF image but its name is not "
+                               "'[NNNNN ]tlTTT plPPP tvTTT pvPPP.<jpg|jpeg|png|hdr|exr>'");
+            continue;
+        }
+        const Ubo2003Name& p = member.parsed;
+        for (auto [what, value, limit] :
+             {std::tuple{"light theta", p.lightTheta, 90},
+              std::tuple{"view theta", p.viewTheta, 90}, std::tuple{"light phi", p.lightPhi, 359},
+              std::tuple{"view phi", p.viewPhi, 359}})
+            if (value > limit)
+                fail(path, "member '" + name + "': " + what + " " + std::to_string(value) +
+                               " is outside [0, " + std::to_string(limit) + "] degrees");
+        members.push_back(std::move(member));
+    }
+    if (members.empty())
+        fail(path, "no BTF images (tlTTT plPPP tvTTT pvPPP.jpg) found among " +
+                       std::to_string(source.names().size()) + " entries");
+
+    std::set<std::pair<int, int>> lightSet, viewSet;
+    for (const Member& m : members) {
+        lightSet.emplace(m.parsed.lightTheta, m.parsed.lightPhi);
+        viewSet.emplace(m.parsed.viewTheta, m.parsed.viewPhi);
+    }
+    DirectionSet lights = buildSet(lightSet, "ubo2003-lights");
+    DirectionSet views = buildSet(viewSet, "ubo2003-views");
+    std::map<std::pair<int, int>, int> lightIndex, viewIndex;
+    for (std::size_t i = 0; i < lights.size(); ++i)
+        lightIndex[{int(std::lround(lights[i].theta)), int(std::lround(lights[i].phi))}] = int(i);
+    for (std::size_t i = 0; i < views.size(); ++i)
+        viewIndex[{int(std::lround(views[i].theta)), int(std::lround(views[i].phi))}] = int(i);
+
+    const std::size_t nL = lights.size(), nV = views.size();
+    std::vector<int> grid(nL * nV, -1);
+    for (std::size_t i = 0; i < members.size(); ++i) {
+        Member& m = members[i];
+        m.light = lightIndex.at({m.parsed.lightTheta, m.parsed.lightPhi});
+        m.view = viewIndex.at({m.parsed.viewTheta, m.parsed.viewPhi});
+        int& slot = grid[std::size_t(m.light) * nV + m.view];
+        if (slot >= 0)
+            fail(path, "members '" + members[slot].name + "' and '" + m.name +
+                           "' hold the same image (" +
+                           tokens(m.parsed.lightTheta, m.parsed.lightPhi, m.parsed.viewTheta,
+                                  m.parsed.viewPhi) +
+                           ")");
+        slot = int(i);
+    }
+    const std::size_t missing = std::size_t(std::count(grid.begin(), grid.end(), -1));
+    if (missing > 0) {
+        const std::size_t first =
+            std::size_t(std::find(grid.begin(), grid.end(), -1) - grid.begin());
+        const Direction& l = lights[first / nV];
+        const Direction& v = views[first % nV];
+        fail(path, std::to_string(missing) + " of " + std::to_string(nL * nV) +
+                       " (light, view) images are missing, e.g. '" +
+                       tokens(int(std::lround(l.theta)), int(std::lround(l.phi)),
+                              int(std::lround(v.theta)), int(std::lround(v.phi))) +
+                       "' (found " + std::to_string(nL) + " light and " + std::to_string(nV) +
+                       " view directions)");
+    }
+
+    // Formats whose reader cannot decode from memory go through a temporary file.
+    std::map<std::string, bool> proxyOk;
+    for (const Member& m : members)
+        if (!proxyOk.count(m.parsed.extension)) {
+            auto probe = OIIO::ImageInput::create(oiioFormat(m.parsed.extension));
+            proxyOk[m.parsed.extension] = probe && probe->supports("ioproxy");
+        }
+
+    const Curve curve(options.curve);
+    DecodeScratch firstScratch;
+    const Member& firstMember = members[grid[0]];
+    int width = 0, height = 0;
+    decodeImage(path, firstMember, source.read(firstMember), proxyOk[firstMember.parsed.extension],
+                curve, firstScratch, [&](int w, int h) {
+                    width = w;
+                    height = h;
+                    firstScratch.image.resize(std::size_t(w) * h * 3);
+                    return Target{firstScratch.image.data(), nullptr};
+                });
+
+    std::ostringstream what;
+    what << path << ": BTF of " << width << "x" << height << " texels x " << nV << " views x " << nL
+         << " lights";
+    checkMemory(MeasuredBtf::bytesNeeded(width, height, nV, nL, options.storage), what.str());
+    MeasuredBtf btf(width, height, views, lights, options.storage);
+    btf.source = path;
+    btf.setImage(firstMember.view, firstMember.light, firstScratch.image.data());
+
+    // Archive order keeps zip reads sequential.
+    std::vector<const Member*> order;
+    for (const Member& m : members)
+        if (&m != &firstMember) order.push_back(&m);
+    std::sort(order.begin(), order.end(),
+              [](const Member* a, const Member* b) { return a->zipIndex < b->zipIndex; });
+
+    Progress progress(options.progressLabel.empty()
+                          ? "loading " + fs::path(path).filename().string()
+                          : options.progressLabel,
+                      members.size());
+    progress.advance();
+    tbb::enumerable_thread_specific<DecodeScratch> scratches;
+    struct Job {
+        const Member* member;
+        std::vector<unsigned char> bytes;
+    };
+    std::size_t next = 0;
+    const std::size_t tokensInFlight = std::size_t(tbb::this_task_arena::max_concurrency()) * 4;
+    tbb::parallel_pipeline(
+        tokensInFlight,
+        tbb::make_filter<void, std::shared_ptr<Job>>(
+            tbb::filter_mode::serial_in_order,
+            [&](tbb::flow_control& control) -> std::shared_ptr<Job> {
+                if (next == order.size()) {
+                    control.stop();
+                    return nullptr;
+                }
+                auto job = std::make_shared<Job>();
+                job->member = order[next++];
+                job->bytes = source.read(*job->member);
+                return job;
+            }) &
+            tbb::make_filter<std::shared_ptr<Job>, void>(
+                tbb::filter_mode::parallel, [&](const std::shared_ptr<Job>& job) {
+                    const Member& m = *job->member;
+                    DecodeScratch& scratch = scratches.local();
+                    decodeImage(path, m, job->bytes, proxyOk.at(m.parsed.extension), curve, scratch,
+                                [&](int w, int h) {
+                                    if (w != width || h != height)
+                                        fail(path, "member '" + m.name + "' is " +
+                                                       std::to_string(w) + "x" + std::to_string(h) +
+                                                       " pixels but '" + firstMember.name +
+                                                       "' is " + std::to_string(width) + "x" +
+                                                       std::to_string(height));
+                                    // Straight into the BTF: each image is a disjoint block.
+                                    const std::size_t at = btf.index(m.view, m.light, 0);
+                                    return btf.floatData() ? Target{btf.floatData() + at, nullptr}
+                                                           : Target{nullptr, btf.halfData() + at};
+                                });
+                    progress.advance();
+                }));
+    progress.finish();
+    return btf;
+}
+
+}  // namespace osgBTF

@@ -1,0 +1,189 @@
+#include "materials/Material.h"
+
+#include <algorithm>
+#include <mutex>
+#include <sstream>
+
+#include <osg/Shader>
+
+#include "core/Error.h"
+#include "core/ShaderSource.h"
+
+namespace osgBTF {
+
+// ---- FitOptions ------------------------------------------------------------------------------
+
+FitOptions FitOptions::parse(const std::string& text) {
+    std::string normalised = text;
+    std::replace(normalised.begin(), normalised.end(), ',', ' ');
+    std::istringstream in(normalised);
+    std::string item;
+    FitOptions options;
+    while (in >> item) {
+        const auto eq = item.find('=');
+        if (eq == std::string::npos || eq == 0)
+            throw Error("option '" + item + "': expected KEY=VALUE");
+        options.set(item.substr(0, eq), item.substr(eq + 1));
+    }
+    return options;
+}
+
+int FitOptions::getInt(const std::string& key, int fallback) const {
+    const auto it = _values.find(key);
+    if (it == _values.end()) return fallback;
+    std::size_t used = 0;
+    try {
+        const int value = std::stoi(it->second, &used);
+        if (used == it->second.size()) return value;
+    } catch (const std::exception&) {
+    }
+    throw Error("option " + key + ": '" + it->second + "' is not an integer");
+}
+
+double FitOptions::getDouble(const std::string& key, double fallback) const {
+    const auto it = _values.find(key);
+    if (it == _values.end()) return fallback;
+    std::size_t used = 0;
+    try {
+        const double value = std::stod(it->second, &used);
+        if (used == it->second.size()) return value;
+    } catch (const std::exception&) {
+    }
+    throw Error("option " + key + ": '" + it->second + "' is not a number");
+}
+
+std::string FitOptions::getString(const std::string& key, const std::string& fallback) const {
+    const auto it = _values.find(key);
+    return it == _values.end() ? fallback : it->second;
+}
+
+// ---- Material --------------------------------------------------------------------------------
+
+Material::Material(const Material& other, const osg::CopyOp& copyop)
+    : osg::Object(other, copyop),
+      fitInfo(other.fitInfo),
+      _width(other._width),
+      _height(other._height),
+      _views(other._views),
+      _lights(other._lights) {}
+
+void Material::evaluateMeasured(std::size_t texel, float* abrdf) const {
+    const int x = int(texel % std::size_t(_width)), y = int(texel / std::size_t(_width));
+    for (std::size_t v = 0; v < _views.size(); ++v) {
+        const glm::vec3 view = _views.vector(v);
+        for (std::size_t l = 0; l < _lights.size(); ++l) {
+            const glm::vec3 value = evaluate(x, y, view, _lights.vector(l));
+            *abrdf++ = value.r;
+            *abrdf++ = value.g;
+            *abrdf++ = value.b;
+        }
+    }
+}
+
+void Material::setGeometry(int width, int height, DirectionSet views, DirectionSet lights) {
+    _width = width;
+    _height = height;
+    _views = std::move(views);
+    _lights = std::move(lights);
+}
+
+void Material::readCommon(const FittedMaterial& file) {
+    if (file.method != methodName())
+        fail(file.source, "is a '" + file.method + "' material, not '" + methodName() + "'");
+    try {
+        _width = std::stoi(file.parameter("width"));
+        _height = std::stoi(file.parameter("height"));
+    } catch (const std::invalid_argument&) {
+        fail(file.source, "width/height parameters are not integers");
+    }
+    if (_width <= 0 || _height <= 0) fail(file.source, "invalid texel size");
+    _views = file.views;
+    _lights = file.lights;
+    for (const auto& [key, value] : file.parameters)
+        if (key.rfind("fit.", 0) == 0) fitInfo[key.substr(4)] = value;
+}
+
+FittedMaterial Material::writeCommon() const {
+    FittedMaterial file;
+    file.method = methodName();
+    file.views = _views;
+    file.lights = _lights;
+    file.parameters["width"] = std::to_string(_width);
+    file.parameters["height"] = std::to_string(_height);
+    for (const auto& [key, value] : fitInfo) file.parameters["fit." + key] = value;
+    return file;
+}
+
+// ---- registry --------------------------------------------------------------------------------
+
+namespace {
+std::map<std::string, MethodInfo>& registry() {
+    static std::map<std::string, MethodInfo> methods;
+    return methods;
+}
+}  // namespace
+
+bool registerMethod(MethodInfo info) {
+    const std::string name = info.name;
+    registry()[name] = std::move(info);
+    return true;
+}
+
+std::vector<std::string> methodNames() {
+    std::vector<std::string> names;
+    for (const auto& entry : registry()) names.push_back(entry.first);
+    return names;
+}
+
+const MethodInfo& findMethod(const std::string& name) {
+    const auto it = registry().find(name);
+    if (it == registry().end()) {
+        std::string known;
+        for (const auto& n : methodNames()) known += (known.empty() ? "" : ", ") + n;
+        throw Error("unknown method '" + name + "' (known: " + known + ")");
+    }
+    return it->second;
+}
+
+void saveMaterial(const Material& material, const std::string& path) {
+    saveFittedMaterial(material.toFittedMaterial(), path);
+}
+
+osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file) {
+    const auto it = registry().find(file.method);
+    if (it == registry().end())
+        fail(
+            file.source, "unknown method '" + file.method + "' (this osgBTF knows: " + [] {
+                std::string known;
+                for (const auto& n : methodNames()) known += (known.empty() ? "" : ", ") + n;
+                return known;
+            }() + ")");
+    return it->second.load(file);
+}
+
+osg::ref_ptr<Material> loadMaterial(const std::string& path) {
+    return materialFromFile(loadFittedMaterial(path));
+}
+
+osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
+    static std::mutex mutex;
+    static std::map<std::string, osg::ref_ptr<osg::Program>> programs;
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& program = programs[method];
+    if (!program) {
+        osg::ref_ptr<osg::Program> created = new osg::Program;
+        created->setName("osgBTF_" + method);
+        const std::string vert = "common/btf.vert", frag = method + ".frag";
+        osg::ref_ptr<osg::Shader> vs = new osg::Shader(osg::Shader::VERTEX, shaderSource(vert));
+        vs->setName(shaderOrigin(vert));
+        osg::ref_ptr<osg::Shader> fs = new osg::Shader(osg::Shader::FRAGMENT, shaderSource(frag));
+        fs->setName(shaderOrigin(frag));
+        created->addShader(vs);
+        created->addShader(fs);
+        created->addBindAttribLocation("osgBTF_tangent", 6);
+        program = created;
+    }
+    return program;
+}
+
+}  // namespace osgBTF

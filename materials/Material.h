@@ -1,0 +1,124 @@
+// osgBTF: what every compression method provides, and the registry that lists them.
+//
+// A method (materials/<name>/) fits a Material from a MeasuredBtf. The Material evaluates itself
+// on the CPU with the same math as its shader (the reference for tests and error metrics), saves
+// itself as a FittedMaterial file, accounts for its memory, and builds the OSG state that renders
+// it: float textures and uniforms in a StateSet, with one osg::Program shared per method.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <osg/Object>
+#include <osg/Program>
+#include <osg/StateSet>
+
+#include "core/FittedMaterialFile.h"
+#include "core/MeasuredBtf.h"
+
+namespace osgBTF {
+
+/** Storage per texel as seed 001 Table 2 counts it: values and bytes, derived from the model's
+ *  actual arrays (per-texel arrays count fully; shared tables are divided by the texel count). */
+struct MemoryFootprint {
+    double valuesPerTexel = 0;
+    double bytesPerTexel = 0;
+    std::uint64_t totalBytes = 0;
+};
+
+/** Method settings from the command line or a plugin option string: "lobes=2 clusters=32". */
+class FitOptions {
+public:
+    FitOptions() = default;
+    explicit FitOptions(std::map<std::string, std::string> values) : _values(std::move(values)) {}
+    /** Parses "key=value key=value" (spaces or commas between pairs). Throws Error. */
+    static FitOptions parse(const std::string& text);
+
+    void set(const std::string& key, const std::string& value) { _values[key] = value; }
+    bool has(const std::string& key) const { return _values.count(key) != 0; }
+    /** Typed access; throws Error "option KEY: 'VALUE' is not an integer" etc. */
+    int getInt(const std::string& key, int fallback) const;
+    double getDouble(const std::string& key, double fallback) const;
+    std::string getString(const std::string& key, const std::string& fallback) const;
+    const std::map<std::string, std::string>& values() const { return _values; }
+
+private:
+    std::map<std::string, std::string> _values;
+};
+
+class Material : public osg::Object {
+public:
+    Material() = default;
+    Material(const Material& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+
+    /** Registry name of the method, e.g. "laf". */
+    virtual std::string methodName() const = 0;
+
+    int width() const { return _width; }
+    int height() const { return _height; }
+    std::size_t texelCount() const { return std::size_t(_width) * std::size_t(_height); }
+    const DirectionSet& views() const { return _views; }
+    const DirectionSet& lights() const { return _lights; }
+
+    /** CPU reference, the same math as the fragment shader: the BTF value of texel (x, y) (y
+     *  counted from the bottom) for local view and light directions (unit vectors pointing away
+     *  from the surface; the cosine term is part of the value). */
+    virtual glm::vec3 evaluate(int x, int y, const glm::vec3& view,
+                               const glm::vec3& light) const = 0;
+
+    /** The model at every measured (view, light) pair, in MeasuredBtf::abrdf's layout. The default
+     *  calls evaluate() with the measured directions; methods that store per-measured-direction
+     *  data override it to skip interpolation. */
+    virtual void evaluateMeasured(std::size_t texel, float* abrdf) const;
+
+    virtual MemoryFootprint memory() const = 0;
+    virtual FittedMaterial toFittedMaterial() const = 0;
+
+    /** Textures and uniforms of this material plus the method's shared program. */
+    virtual osg::ref_ptr<osg::StateSet> createStateSet() const = 0;
+
+    /** Free-form facts from fitting (time, iterations, error), saved as parameters "fit.*". */
+    std::map<std::string, std::string> fitInfo;
+
+protected:
+    void setGeometry(int width, int height, DirectionSet views, DirectionSet lights);
+    /** Copies width/height/directions/fit info from a file, checking the method name. */
+    void readCommon(const FittedMaterial& file);
+    /** A FittedMaterial with method, directions, size and fit info filled in. */
+    FittedMaterial writeCommon() const;
+
+    int _width = 0, _height = 0;
+    DirectionSet _views, _lights;
+};
+
+/** A compression method: how to fit it and how to read its files. */
+struct MethodInfo {
+    std::string name;         ///< "laf"
+    std::string description;  ///< one line for --help
+    /** Option name -> "meaning (default X)". */
+    std::vector<std::pair<std::string, std::string>> options;
+    std::function<osg::ref_ptr<Material>(const MeasuredBtf&, const FitOptions&)> fit;
+    std::function<osg::ref_ptr<Material>(const FittedMaterial&)> load;
+};
+
+/** Adds a method; each method's .cpp calls it from a static initialiser. Returns true. */
+bool registerMethod(MethodInfo info);
+/** Throws Error "unknown method 'X' (known: laf, slaf, ...)". */
+const MethodInfo& findMethod(const std::string& name);
+std::vector<std::string> methodNames();
+
+/** Saves through the fitted-material container (atomic). */
+void saveMaterial(const Material& material, const std::string& path);
+/** Loads any registered method's file; throws Error naming the file and the problem. */
+osg::ref_ptr<Material> loadMaterial(const std::string& path);
+osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file);
+
+/** The method's shared program: shaders/common/btf.vert + shaders/<method>.frag. Compiled by
+ *  OSG at first use; built once per process and method. Throws Error if a source is missing. */
+osg::ref_ptr<osg::Program> methodProgram(const std::string& method);
+
+}  // namespace osgBTF

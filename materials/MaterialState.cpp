@@ -1,0 +1,107 @@
+#include "materials/MaterialState.h"
+
+#include <osg/Uniform>
+
+#include "core/Error.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+namespace {
+
+GLenum pixelFormat(int channels) {
+    switch (channels) {
+        case 1:
+            return GL_RED;
+        case 2:
+            return GL_RG;
+        case 3:
+            return GL_RGB;
+        case 4:
+            return GL_RGBA;
+    }
+    throw Error("textures need 1 to 4 channels, got " + std::to_string(channels));
+}
+
+GLint internalFormat(int channels, bool half) {
+    static const GLint f32[] = {GL_R32F, GL_RG32F, GL_RGB32F_ARB, GL_RGBA32F_ARB};
+    static const GLint f16[] = {GL_R16F, GL_RG16F, GL_RGB16F_ARB, GL_RGBA16F_ARB};
+    pixelFormat(channels);
+    return half ? f16[channels - 1] : f32[channels - 1];
+}
+
+osg::ref_ptr<osg::Image> sliceImage(const MaterialTexture& t, int z, int depthForImage) {
+    osg::ref_ptr<osg::Image> image = new osg::Image;
+    const GLint internal = internalFormat(t.channels, t.kind == MaterialTexture::Half);
+    image->allocateImage(t.width, t.height, depthForImage, pixelFormat(t.channels), GL_FLOAT);
+    image->setInternalTextureFormat(internal);
+    const std::size_t count = std::size_t(t.width) * t.height * depthForImage * t.channels;
+    const float* src = t.data.data() + std::size_t(z) * t.width * t.height * t.channels;
+    std::copy(src, src + count, reinterpret_cast<float*>(image->data()));
+    return image;
+}
+
+void configure(osg::Texture& texture, GLint internal, bool linear) {
+    texture.setInternalFormat(internal);
+    texture.setSourceType(GL_FLOAT);
+    texture.setResizeNonPowerOfTwoHint(false);
+    texture.setUseHardwareMipMapGeneration(false);
+    const auto filter = linear ? osg::Texture::LINEAR : osg::Texture::NEAREST;
+    texture.setFilter(osg::Texture::MIN_FILTER, filter);
+    texture.setFilter(osg::Texture::MAG_FILTER, filter);
+    texture.setWrap(osg::Texture::WRAP_S, osg::Texture::CLAMP_TO_EDGE);
+    texture.setWrap(osg::Texture::WRAP_T, osg::Texture::CLAMP_TO_EDGE);
+    texture.setWrap(osg::Texture::WRAP_R, osg::Texture::CLAMP_TO_EDGE);
+}
+
+}  // namespace
+
+osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t) {
+    const GLint internal = internalFormat(t.channels, t.kind == MaterialTexture::Half);
+    if (t.data.size() != t.valueCount())
+        throw Error("texture '" + t.name + "': data size does not match its dimensions");
+    if (t.depth == 1) {
+        osg::ref_ptr<osg::Texture2D> texture = new osg::Texture2D(sliceImage(t, 0, 1));
+        configure(*texture, internal, false);
+        texture->setName(t.name);
+        return texture;
+    }
+    osg::ref_ptr<osg::Texture2DArray> array = new osg::Texture2DArray;
+    array->setTextureSize(t.width, t.height, t.depth);
+    for (int z = 0; z < t.depth; ++z) array->setImage(z, sliceImage(t, z, 1));
+    configure(*array, internal, false);
+    array->setName(t.name);
+    return array;
+}
+
+osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& t, bool linear) {
+    const GLint internal = internalFormat(t.channels, t.kind == MaterialTexture::Half);
+    osg::ref_ptr<osg::Texture3D> texture = new osg::Texture3D(sliceImage(t, 0, t.depth));
+    configure(*texture, internal, linear);
+    texture->setName(t.name);
+    return texture;
+}
+
+void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::string& sampler,
+                int unit) {
+    stateSet.setTextureAttribute(unit, texture, osg::StateAttribute::ON);
+    stateSet.addUniform(new osg::Uniform(sampler.c_str(), unit));
+}
+
+void addDirectionTable(osg::StateSet& stateSet, const DirectionInterpolator::Baked& baked,
+                       const std::string& prefix, int unitIndices, int unitWeights) {
+    MaterialTexture indices{prefix + "Indices",     baked.resolution, baked.resolution, 1, 3,
+                            MaterialTexture::Float, baked.indices};
+    MaterialTexture weights{prefix + "Weights",     baked.resolution, baked.resolution, 1, 3,
+                            MaterialTexture::Float, baked.weights};
+    addTexture(stateSet, createFloatTexture(indices).get(), prefix + "Indices", unitIndices);
+    addTexture(stateSet, createFloatTexture(weights).get(), prefix + "Weights", unitWeights);
+}
+
+void addCommonState(osg::StateSet& stateSet, const std::string& method, int width, int height) {
+    stateSet.setAttributeAndModes(methodProgram(method).get(), osg::StateAttribute::ON);
+    stateSet.addUniform(new osg::Uniform("osgBTF_size", width, height));
+    stateSet.addUniform(new osg::Uniform("osgBTF_textureScale", 1.0f));
+}
+
+}  // namespace osgBTF

@@ -1,0 +1,38 @@
+// osgBTF: building blocks of every method's StateSet (float textures, direction tables).
+#pragma once
+
+#include <string>
+
+#include <osg/StateSet>
+#include <osg/Texture2D>
+#include <osg/Texture2DArray>
+#include <osg/Texture3D>
+
+#include "core/DirectionInterpolation.h"
+#include "core/FittedMaterialFile.h"
+
+namespace osgBTF {
+
+/** Resolution of the baked direction-interpolation tables. Odd, so the pole and the phi = 0
+ *  axis (where Bonn samples lie) fall on cell centres, not on cell edges. */
+constexpr int kDirectionTableResolution = 65;
+
+/** NEAREST-filtered, clamped float texture of 1-4 channels (GL_R32F ... GL_RGBA32F, or the 16F
+ *  formats for half data), NPOT resize off (float data would be normalised otherwise). For a
+ *  texture with depth > 1 a Texture2DArray, one layer per slice. */
+osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& texture);
+osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& texture, bool linear);
+
+/** Two textures for a direction set's baked interpolation (indices, weights), bound to
+ *  uniforms "<prefix>Indices" and "<prefix>Weights" on the given units. */
+void addDirectionTable(osg::StateSet& stateSet, const DirectionInterpolator::Baked& baked,
+                       const std::string& prefix, int unitIndices, int unitWeights);
+
+/** A sampler uniform + texture on a unit. */
+void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::string& sampler,
+                int unit);
+
+/** The uniforms every material sets: osgBTF_size and osgBTF_textureScale (= 1), and the program. */
+void addCommonState(osg::StateSet& stateSet, const std::string& method, int width, int height);
+
+}  // namespace osgBTF

@@ -1,0 +1,36 @@
+// osgBTF method "lambert": the plain lit texture, the baseline every BTF method must beat.
+//
+//   BTF(x, v, l) ~ rho(x) * l_z        (rho RGB; l_z = cos theta_l, the foreshortening)
+//
+// Fit: per texel and channel, least squares over all measured (v, l):
+//   rho = sum(BTF * l_z) / sum(l_z^2).
+// Memory: 3 values (RGB) per texel, stored as half: 3 values, 6 bytes.
+#pragma once
+
+#include <vector>
+
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+class LambertMaterial : public Material {
+public:
+    LambertMaterial() = default;
+    LambertMaterial(const LambertMaterial& other,
+                    const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    META_Object(osgBTF, LambertMaterial)
+
+        static osg::ref_ptr<LambertMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+    static osg::ref_ptr<LambertMaterial> fromFile(const FittedMaterial& file);
+
+    std::string methodName() const override { return "lambert"; }
+    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+    MemoryFootprint memory() const override;
+    FittedMaterial toFittedMaterial() const override;
+    osg::ref_ptr<osg::StateSet> createStateSet() const override;
+
+    /** RGB per texel, rows bottom-up. */
+    std::vector<float> albedo;
+};
+
+}  // namespace osgBTF

@@ -1,0 +1,49 @@
+// Shared fragment stage: builds the local frame, loops over the lights, and calls the method's
+// btfEvaluate(texel, view, light). Included by shaders/<method>.frag after its #version line.
+
+in vec2 btfTexCoord;
+in vec3 btfEyePosition;
+in vec3 btfEyeNormal;
+in vec4 btfEyeTangent;
+
+const int osgBTF_maxLights = 8;
+uniform int osgBTF_lightCount = 0;
+// Eye space; w = 0: directional (xyz points toward the light), w = 1: point light position.
+uniform vec4 osgBTF_lightPosition[osgBTF_maxLights];
+uniform vec3 osgBTF_lightColor[osgBTF_maxLights];
+uniform ivec2 osgBTF_size;  // texels of the material
+
+/** The method's BTF value for one texel and local unit directions (view, light: away from the
+ *  surface, z > 0). Measured values include the cosine term: nothing multiplies by n.l again. */
+vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light);
+
+ivec2 btfTexel(vec2 uv) {
+    // Nearest texel with wrap-around tiling; texelFetch keeps the GPU equal to the CPU reference.
+    vec2 f = fract(uv);
+    return clamp(ivec2(floor(f * vec2(osgBTF_size))), ivec2(0), osgBTF_size - ivec2(1));
+}
+
+void main() {
+    vec3 n = normalize(btfEyeNormal);
+    vec3 t = btfEyeTangent.xyz - n * dot(n, btfEyeTangent.xyz);
+    if (dot(t, t) < 1e-12) {
+        // No tangent attribute: any frame around the normal (anisotropy is then arbitrary).
+        t = abs(n.x) < 0.9 ? cross(vec3(1.0, 0.0, 0.0), n) : cross(vec3(0.0, 1.0, 0.0), n);
+    }
+    t = normalize(t);
+    vec3 b = cross(n, t) * (btfEyeTangent.w < 0.0 ? -1.0 : 1.0);
+    // Orthographic projections have gl_ProjectionMatrix[3][3] == 1: the eye looks along -Z.
+    vec3 toEye = gl_ProjectionMatrix[3][3] == 1.0 ? vec3(0.0, 0.0, 1.0) : normalize(-btfEyePosition);
+    vec3 view = vec3(dot(toEye, t), dot(toEye, b), dot(toEye, n));
+    ivec2 texel = btfTexel(btfTexCoord);
+    vec3 color = vec3(0.0);
+    if (view.z > 0.0) {
+        for (int i = 0; i < osgBTF_lightCount && i < osgBTF_maxLights; ++i) {
+            vec4 p = osgBTF_lightPosition[i];
+            vec3 toLight = normalize(p.w == 0.0 ? p.xyz : p.xyz - btfEyePosition);
+            vec3 light = vec3(dot(toLight, t), dot(toLight, b), dot(toLight, n));
+            if (light.z > 0.0) color += osgBTF_lightColor[i] * btfEvaluate(texel, view, light);
+        }
+    }
+    gl_FragColor = vec4(color, 1.0);
+}

@@ -1,0 +1,102 @@
+#include "tests/gl/MaterialGpuCheck.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <glm/geometric.hpp>
+#include <osg/Uniform>
+
+#include "tests/gl/GlTestEnv.h"
+
+namespace osgBTF::test {
+
+GpuCpuComparison compareGpuWithCpu(const Material& material, const glm::vec3& viewIn,
+                                   const glm::vec3& lightIn) {
+    const glm::vec3 view = glm::normalize(viewIn), light = glm::normalize(lightIn);
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+
+    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
+    osg::ref_ptr<osg::Vec4Array> tangents =
+        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
+    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
+    quad->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(quad.get());
+    geode->setStateSet(stateSet.get());
+
+    // Orthographic camera looking at the patch centre from direction `view`.
+    const osg::Vec3d centre(0.5, 0.5, 0.0), v(view.x, view.y, view.z);
+    const osg::Vec3d up = std::abs(view.z) > 0.999 ? osg::Vec3d(0, 1, 0) : osg::Vec3d(0, 0, 1);
+    CameraSetup camera;
+    camera.view = osg::Matrixd::lookAt(centre + v * 2.0, centre, up);
+    // Extent of the patch and of one texel step in view space.
+    double lo[2] = {1e9, 1e9}, hi[2] = {-1e9, -1e9};
+    for (double x : {0.0, 1.0})
+        for (double y : {0.0, 1.0}) {
+            const osg::Vec3d p = osg::Vec3d(x, y, 0) * camera.view;
+            for (int a = 0; a < 2; ++a) {
+                lo[a] = std::min(lo[a], p[a]);
+                hi[a] = std::max(hi[a], p[a]);
+            }
+        }
+    const osg::Vec3d stepS =
+        osg::Matrixd::transform3x3(osg::Vec3d(1.0 / material.width(), 0, 0), camera.view);
+    const osg::Vec3d stepT =
+        osg::Matrixd::transform3x3(osg::Vec3d(0, 1.0 / material.height(), 0), camera.view);
+    const double texelOnScreen = std::min(osg::Vec2d(stepS.x(), stepS.y()).length(),
+                                          osg::Vec2d(stepT.x(), stepT.y()).length());
+    const double pixelSize = texelOnScreen / 4.0;  // ~4 pixels per texel along its shortest side
+    camera.width = std::clamp(int(std::ceil((hi[0] - lo[0]) / pixelSize)), 8, 2048);
+    camera.height = std::clamp(int(std::ceil((hi[1] - lo[1]) / pixelSize)), 8, 2048);
+    camera.projection = osg::Matrixd::ortho(lo[0], hi[0], lo[1], hi[1], 0.1, 10.0);
+
+    const osg::Vec3d eyeLight =
+        osg::Matrixd::transform3x3(osg::Vec3d(light.x, light.y, light.z), camera.view);
+    stateSet->addUniform(new osg::Uniform("osgBTF_lightCount", 1));
+    osg::ref_ptr<osg::Uniform> position =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
+    position->setElement(0, osg::Vec4(eyeLight, 0.0f));
+    stateSet->addUniform(position.get());
+    osg::ref_ptr<osg::Uniform> color =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", 8);
+    color->setElement(0, osg::Vec3(1, 1, 1));
+    stateSet->addUniform(color.get());
+
+    osg::ref_ptr<osg::Image> image = sharedRenderer().render(geode.get(), camera);
+
+    GpuCpuComparison result;
+    const osg::Matrixd inverseView = osg::Matrixd::inverse(camera.view);
+    for (int j = 0; j < camera.height; ++j) {
+        for (int i = 0; i < camera.width; ++i) {
+            const double ex = lo[0] + (i + 0.5) / camera.width * (hi[0] - lo[0]);
+            const double ey = lo[1] + (j + 0.5) / camera.height * (hi[1] - lo[1]);
+            // The eye ray through this pixel, in patch coordinates, hits z = 0 at (s, t).
+            const osg::Vec3d origin = osg::Vec3d(ex, ey, 0) * inverseView;
+            const double along = origin.z() / v.z();
+            const double s = origin.x() - v.x() * along, t = origin.y() - v.y() * along;
+            const double fs = s * material.width(), ft = t * material.height();
+            if (s <= 0 || s >= 1 || t <= 0 || t >= 1) continue;
+            const double edge = 0.2;  // skip pixels whose centre is near a texel edge
+            if (fs - std::floor(fs) < edge || std::ceil(fs) - fs < edge ||
+                ft - std::floor(ft) < edge || std::ceil(ft) - ft < edge)
+                continue;
+            const int tx = int(fs), ty = int(ft);
+            const glm::vec3 expected = material.evaluate(tx, ty, view, light);
+            for (int c = 0; c < 3; ++c) {
+                const double d = std::abs(double(pixel(*image, i, j, c)) - expected[c]);
+                if (!(d <= result.maxAbsDifference)) {
+                    result.maxAbsDifference = std::isnan(d) ? 1e30 : d;
+                    std::ostringstream where;
+                    where << "texel (" << tx << ", " << ty << ") channel " << c << ": GPU "
+                          << pixel(*image, i, j, c) << " CPU " << expected[c];
+                    result.worst = where.str();
+                }
+            }
+            ++result.pixelsCompared;
+        }
+    }
+    return result;
+}
+
+}  // namespace osgBTF::test
