@@ -36,6 +36,7 @@ const char* const kVersionAttribute = "osgBTF.version";
 const char* const kViewsAttribute = "osgBTF.views";
 const char* const kLightsAttribute = "osgBTF.lights";
 const char* const kDepthAttribute = "osgBTF.depth";
+const char* const kStorageAttribute = "osgBTF.storage";
 const std::string kParamPrefix = "osgBTF.param.";
 
 std::vector<std::string> channelNames(const std::string& texture, int channels) {
@@ -91,6 +92,15 @@ void validate(const FittedMaterial& material, const std::string& path) {
         if (t.data.size() != t.valueCount())
             fail(path, what + " has " + std::to_string(t.data.size()) + " values, " +
                            std::to_string(t.valueCount()) + " expected");
+        if (t.kind == MaterialTexture::UNorm8) {
+            const auto bad = std::find_if(t.data.begin(), t.data.end(), [](float v) {
+                return !(v >= 0.0f && v <= 1.0f) ||
+                       std::abs(v * 255.0f - std::round(v * 255.0f)) > 1e-3f;
+            });
+            if (bad != t.data.end())
+                fail(path, what + " is stored as 8-bit but holds " + std::to_string(*bad) +
+                               ", not a multiple of 1/255 in [0, 1]");
+        }
         if (t.kind == MaterialTexture::Half) {
             const std::size_t overflow =
                 std::size_t(std::count_if(t.data.begin(), t.data.end(), [](float v) {
@@ -110,9 +120,11 @@ Imf::Header partHeader(const FittedMaterial& material, const MaterialTexture& t,
     header.setName(t.name);
     header.setType(Imf::SCANLINEIMAGE);
     header.compression() = Imf::ZIP_COMPRESSION;
-    const Imf::PixelType type = t.kind == MaterialTexture::Half ? Imf::HALF : Imf::FLOAT;
+    const Imf::PixelType type = t.kind == MaterialTexture::Float ? Imf::FLOAT : Imf::HALF;
     for (const std::string& name : channelNames(t.name, t.channels))
         header.channels().insert(name, Imf::Channel(type));
+    if (t.kind == MaterialTexture::UNorm8)
+        header.insert(kStorageAttribute, Imf::StringAttribute("unorm8"));
     header.insert(kMethodAttribute, Imf::StringAttribute(material.method));
     header.insert(kVersionAttribute, Imf::IntAttribute(kFittedMaterialVersion));
     header.insert(kViewsAttribute, Imf::StringAttribute(material.views.serialize()));
@@ -132,7 +144,9 @@ void writeTexture(Imf::MultiPartOutputFile& file, int part, const MaterialTextur
                 t.data.begin() + std::ptrdiff_t((std::size_t(z) * t.height + y) * rowValues),
                 rowValues, rows.begin() + std::ptrdiff_t(fileRow(t, z, y) * rowValues));
     // OpenEXR converts on read but not on write: half channels need half slices.
-    const bool half = t.kind == MaterialTexture::Half;
+    const bool half = t.kind != MaterialTexture::Float;
+    if (t.kind == MaterialTexture::UNorm8)
+        for (float& v : rows) v = std::round(v * 255.0f);  // integers are exact in half
     std::vector<Imath::half> halves;
     if (half) halves.assign(rows.begin(), rows.end());
     const std::size_t valueSize = half ? sizeof(Imath::half) : sizeof(float);
@@ -189,6 +203,11 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
     if (types.size() != 1 || *types.begin() == Imf::UINT)
         fail(path, what + " must have only half or only float channels");
     t.kind = *types.begin() == Imf::HALF ? MaterialTexture::Half : MaterialTexture::Float;
+    if (const auto* storage = header.findTypedAttribute<Imf::StringAttribute>(kStorageAttribute)) {
+        if (storage->value() != "unorm8" || t.kind != MaterialTexture::Half)
+            fail(path, what + " has an unknown osgBTF.storage '" + storage->value() + "'");
+        t.kind = MaterialTexture::UNorm8;
+    }
 
     checkMemory(std::uint64_t(t.valueCount()) * 8, path + ": " + what);
     std::vector<float> fileRows(t.valueCount());
@@ -208,6 +227,12 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
             std::copy_n(
                 fileRows.begin() + std::ptrdiff_t(fileRow(t, z, y) * rowValues), rowValues,
                 t.data.begin() + std::ptrdiff_t((std::size_t(z) * t.height + y) * rowValues));
+    if (t.kind == MaterialTexture::UNorm8)
+        for (float& v : t.data) {
+            if (!(v >= 0.0f && v <= 255.0f) || v != std::round(v))
+                fail(path, what + " is 8-bit but holds " + std::to_string(v));
+            v /= 255.0f;
+        }
     return t;
 }
 

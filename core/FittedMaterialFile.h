@@ -30,14 +30,17 @@ constexpr int kFittedMaterialVersion = 1;
  *  in osg::Image and MeasuredBtf), so data can be handed to an osg::Image as it is:
  *  data[((z * height + y) * width + x) * channels + c]. */
 struct MaterialTexture {
-    enum PixelKind { Half, Float };
+    enum PixelKind { Half, Float, UNorm8 };
 
     std::string name;
     int width = 0;
     int height = 0;
     int depth = 1;
     int channels = 0;
-    /** Precision in the file. Half data is rounded to half when saved; kept as float in memory. */
+    /** Precision in the file (and on the GPU). Half data is rounded to half when saved; kept as
+     *  float in memory. UNorm8 data (8-bit fixed point, as seed 001 stores colours) must be
+     *  multiples of 1/255 in [0, 1]; the file holds the integers 0..255 in half channels (exact)
+     *  with the part attribute osgBTF.storage = "unorm8", and GPUs get GL_RGBA8-style textures. */
     PixelKind kind = Float;
     std::vector<float> data;
 

@@ -19,8 +19,6 @@
 
 #include <Imath/half.h>
 #include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_pipeline.h>
@@ -255,6 +253,53 @@ void storeRows(const In* src, int width, int height, int channels, Target target
     }
 }
 
+/** The upright image of pixels stored with an EXIF orientation (2..8), done here rather than with
+ *  ImageBufAlgo::reorient because OIIO 2.4 swaps orientations 5 and 7. Orientation 5 is what OIIO
+ *  reports for Radiance "+X M -Y N" files (ATRIUM_HDR): each stored scanline is an image column. */
+std::vector<float> upright(const std::vector<float>& stored, int sw, int sh, int channels,
+                           int orientation) {
+    const bool swaps = orientation >= 5;
+    const int w = swaps ? sh : sw, h = swaps ? sw : sh;
+    std::vector<float> out(stored.size());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            int sx = x, sy = y;
+            switch (orientation) {
+                case 2:
+                    sx = sw - 1 - x;
+                    break;
+                case 3:
+                    sx = sw - 1 - x;
+                    sy = sh - 1 - y;
+                    break;
+                case 4:
+                    sy = sh - 1 - y;
+                    break;
+                case 5:
+                    sx = y;
+                    sy = x;
+                    break;
+                case 6:
+                    sx = y;
+                    sy = sh - 1 - x;
+                    break;
+                case 7:
+                    sx = sw - 1 - y;
+                    sy = sh - 1 - x;
+                    break;
+                case 8:
+                    sx = sw - 1 - y;
+                    sy = x;
+                    break;
+                default:
+                    break;
+            }
+            std::copy_n(stored.data() + (std::size_t(sy) * sw + sx) * channels, channels,
+                        out.data() + (std::size_t(y) * w + x) * channels);
+        }
+    return out;
+}
+
 /** OIIO messages name the file it was given and may span lines; name the member instead. */
 std::string tidyMessage(std::string text, const std::string& fakeName, const Member& member) {
     if (text.empty()) return "unknown error";
@@ -314,7 +359,8 @@ void decodeImage(const std::string& archive, const Member& member,
     const OIIO::ImageSpec& spec = input->spec();
     if (spec.nchannels < 1 || spec.width <= 0 || spec.height <= 0 || spec.depth > 1)
         fail(archive, where + ": unsupported image layout");
-    const int orientation = spec.get_int_attribute("Orientation", 1);
+    int orientation = spec.get_int_attribute("Orientation", 1);
+    if (orientation < 1 || orientation > 8) orientation = 1;
     const bool swapsAxes = orientation >= 5 && orientation <= 8;
     const int width = swapsAxes ? spec.height : spec.width;
     const int height = swapsAxes ? spec.width : spec.height;
@@ -340,21 +386,8 @@ void decodeImage(const std::string& archive, const Member& member,
         ok = input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, scratch.floats.data());
         if (ok && !isFloat)
             for (float& v : scratch.floats) v = curve.apply(v);
-        if (ok && orientation != 1) {
-            // Rare (EXIF-rotated files): let OIIO turn the image upright first.
-            OIIO::ImageSpec stored(storedW, storedH, channels, OIIO::TypeDesc::FLOAT);
-            stored.attribute("Orientation", orientation);
-            OIIO::ImageBuf src(stored, scratch.floats.data());
-            OIIO::ImageBuf upright = OIIO::ImageBufAlgo::reorient(src, 1);
-            if (upright.has_error() || upright.spec().width != width)
-                fail(archive, where + ": cannot apply the image orientation " +
-                                  std::to_string(orientation) + ": " + upright.geterror());
-            std::vector<float> pixelsUpright(pixels * channels);
-            if (!upright.get_pixels(OIIO::ROI(0, width, 0, height, 0, 1, 0, channels),
-                                    OIIO::TypeDesc::FLOAT, pixelsUpright.data()))
-                fail(archive, where + ": cannot apply the image orientation");
-            scratch.floats.swap(pixelsUpright);
-        }
+        if (ok && orientation != 1)
+            scratch.floats = upright(scratch.floats, storedW, storedH, channels, orientation);
         if (ok)
             storeRows(scratch.floats.data(), width, height, channels, target,
                       [](float v) { return v; });

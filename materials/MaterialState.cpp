@@ -1,5 +1,8 @@
 #include "materials/MaterialState.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <osg/Uniform>
 
 #include "core/Error.h"
@@ -30,20 +33,33 @@ GLint internalFormat(int channels, bool half) {
     return half ? f16[channels - 1] : f32[channels - 1];
 }
 
+GLint internalFormat(const MaterialTexture& t) {
+    static const GLint u8[] = {GL_R8, GL_RG8, GL_RGB8, GL_RGBA8};
+    if (t.kind == MaterialTexture::UNorm8) return u8[t.channels - 1];
+    return internalFormat(t.channels, t.kind == MaterialTexture::Half);
+}
+
 osg::ref_ptr<osg::Image> sliceImage(const MaterialTexture& t, int z, int depthForImage) {
     osg::ref_ptr<osg::Image> image = new osg::Image;
-    const GLint internal = internalFormat(t.channels, t.kind == MaterialTexture::Half);
-    image->allocateImage(t.width, t.height, depthForImage, pixelFormat(t.channels), GL_FLOAT);
-    image->setInternalTextureFormat(internal);
+    const bool bytes = t.kind == MaterialTexture::UNorm8;
+    image->allocateImage(t.width, t.height, depthForImage, pixelFormat(t.channels),
+                         bytes ? GL_UNSIGNED_BYTE : GL_FLOAT);
+    image->setInternalTextureFormat(internalFormat(t));
     const std::size_t count = std::size_t(t.width) * t.height * depthForImage * t.channels;
     const float* src = t.data.data() + std::size_t(z) * t.width * t.height * t.channels;
-    std::copy(src, src + count, reinterpret_cast<float*>(image->data()));
+    if (bytes) {
+        unsigned char* dst = image->data();
+        for (std::size_t i = 0; i < count; ++i)
+            dst[i] = (unsigned char)std::lround(std::clamp(src[i], 0.0f, 1.0f) * 255.0f);
+    } else {
+        std::copy(src, src + count, reinterpret_cast<float*>(image->data()));
+    }
     return image;
 }
 
-void configure(osg::Texture& texture, GLint internal, bool linear) {
-    texture.setInternalFormat(internal);
-    texture.setSourceType(GL_FLOAT);
+void configure(osg::Texture& texture, const MaterialTexture& t, bool linear) {
+    texture.setInternalFormat(internalFormat(t));
+    texture.setSourceType(t.kind == MaterialTexture::UNorm8 ? GL_UNSIGNED_BYTE : GL_FLOAT);
     texture.setResizeNonPowerOfTwoHint(false);
     texture.setUseHardwareMipMapGeneration(false);
     const auto filter = linear ? osg::Texture::LINEAR : osg::Texture::NEAREST;
@@ -57,27 +73,25 @@ void configure(osg::Texture& texture, GLint internal, bool linear) {
 }  // namespace
 
 osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t) {
-    const GLint internal = internalFormat(t.channels, t.kind == MaterialTexture::Half);
     if (t.data.size() != t.valueCount())
         throw Error("texture '" + t.name + "': data size does not match its dimensions");
     if (t.depth == 1) {
         osg::ref_ptr<osg::Texture2D> texture = new osg::Texture2D(sliceImage(t, 0, 1));
-        configure(*texture, internal, false);
+        configure(*texture, t, false);
         texture->setName(t.name);
         return texture;
     }
     osg::ref_ptr<osg::Texture2DArray> array = new osg::Texture2DArray;
     array->setTextureSize(t.width, t.height, t.depth);
     for (int z = 0; z < t.depth; ++z) array->setImage(z, sliceImage(t, z, 1));
-    configure(*array, internal, false);
+    configure(*array, t, false);
     array->setName(t.name);
     return array;
 }
 
 osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& t, bool linear) {
-    const GLint internal = internalFormat(t.channels, t.kind == MaterialTexture::Half);
     osg::ref_ptr<osg::Texture3D> texture = new osg::Texture3D(sliceImage(t, 0, t.depth));
-    configure(*texture, internal, linear);
+    configure(*texture, t, linear);
     texture->setName(t.name);
     return texture;
 }
