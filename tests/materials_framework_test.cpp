@@ -1,3 +1,5 @@
+#include <filesystem>
+
 #include <gtest/gtest.h>
 
 #include "core/Error.h"
@@ -85,4 +87,33 @@ TEST(Lambert, SaveLoadRoundTripIsExact) {
     EXPECT_TRUE(back->views() == m->views());
     const auto info = test::runCommand("oiiotool --info " + test::shellQuote(dir.file("l.exr")));
     EXPECT_EQ(info.exitCode, 0) << info.output;
+}
+
+TEST(FittedMaterialUNorm8, RefusesValuesThatAreNotEightBit) {
+    test::TempDir dir;
+    FittedMaterial file;
+    file.method = "lambert";
+    file.textures.push_back({"a", 2, 1, 1, 1, MaterialTexture::UNorm8, {0.5f, 1.0f}});
+    try {
+        saveFittedMaterial(file, dir.file("m.exr"));
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("texture 'a' is stored as 8-bit but holds 0.5"),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("m.exr")));
+}
+
+TEST(FittedMaterialUNorm8, RoundTripIsExact) {
+    test::TempDir dir;
+    FittedMaterial file;
+    file.method = "lambert";
+    std::vector<float> values;
+    for (int k = 0; k < 256; ++k) values.push_back(float(k) / 255.0f);
+    file.textures.push_back({"a", 16, 16, 1, 1, MaterialTexture::UNorm8, values});
+    saveFittedMaterial(file, dir.file("m.exr"));
+    const FittedMaterial back = loadFittedMaterial(dir.file("m.exr"));
+    EXPECT_EQ(back.texture("a").kind, MaterialTexture::UNorm8);
+    EXPECT_EQ(back.texture("a").data, values);
 }

@@ -60,3 +60,35 @@ TEST(BtfTool, MemoryLimitRefusesALoadCleanly) {
     EXPECT_NE(r.output.find("more than the memory limit of 1.0 KiB"), std::string::npos)
         << r.output;
 }
+
+TEST(BtfTool, FitUnknownMethodOrOptionIsAClearError) {
+    TempDir dir;
+    const std::string zip = dir.file("s.zip");
+    ASSERT_EQ(btf("sample --size 8 --format png -o " + shellQuote(zip)).exitCode, 0);
+    CommandResult r =
+        btf("fit " + shellQuote(zip) + " -m nope -o " + shellQuote(dir.file("x.exr")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("unknown method 'nope' (known: "), std::string::npos) << r.output;
+    r = btf("fit " + shellQuote(zip) + " -m lambert --set bogus=1 -o " +
+            shellQuote(dir.file("x.exr")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("method lambert has no option 'bogus'"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.exr")));
+}
+
+TEST(BtfTool, FitThenEvalMatchesTheCpuReference) {
+    TempDir dir;
+    const std::string zip = dir.file("s.zip"), fitted = dir.file("l.exr");
+    ASSERT_EQ(btf("sample --size 8 --format png -o " + shellQuote(zip)).exitCode, 0);
+    CommandResult r = btf("fit " + shellQuote(zip) + " -m lambert -o " + shellQuote(fitted));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("per-texel error (seed 001 sec. 4.1): avg "), std::string::npos);
+    EXPECT_NE(r.output.find("3.00 values, 6.00 bytes per texel"), std::string::npos) << r.output;
+    r = btf("eval " + shellQuote(fitted) + " --view 45,0 --light 60,90 -o " +
+            shellQuote(dir.file("gpu.exr")));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("largest GPU-CPU difference 0"), std::string::npos) << r.output;
+    r = btf("eval " + shellQuote(fitted) + " --view 95,0 -o " + shellQuote(dir.file("bad.exr")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("--view: theta 95"), std::string::npos) << r.output;
+}

@@ -12,6 +12,9 @@ uniform int osgBTF_lightCount = 0;
 uniform vec4 osgBTF_lightPosition[osgBTF_maxLights];
 uniform vec3 osgBTF_lightColor[osgBTF_maxLights];
 uniform ivec2 osgBTF_size;  // texels of the material
+// w = 1: shade every fragment as seen from this local view direction (a rectified image, like a
+// measured BTF image: `btf eval`); w = 0: the real eye direction.
+uniform vec4 osgBTF_fixedView = vec4(0.0);
 
 /** The method's BTF value for one texel and local unit directions (view, light: away from the
  *  surface, z > 0). Measured values include the cosine term: nothing multiplies by n.l again. */
@@ -35,6 +38,7 @@ void main() {
     // Orthographic projections have gl_ProjectionMatrix[3][3] == 1: the eye looks along -Z.
     vec3 toEye = gl_ProjectionMatrix[3][3] == 1.0 ? vec3(0.0, 0.0, 1.0) : normalize(-btfEyePosition);
     vec3 view = vec3(dot(toEye, t), dot(toEye, b), dot(toEye, n));
+    if (osgBTF_fixedView.w > 0.5) view = normalize(osgBTF_fixedView.xyz);
     ivec2 texel = btfTexel(btfTexCoord);
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {

@@ -47,9 +47,10 @@ int main(int argc, char** argv) {
                    "$OSGBTF_MEMORY_LIMIT)");
     app.add_flag("--progress,!--no-progress", progress,
                  "Show progress bars on stderr (default: when stderr is a terminal)");
-    const std::vector<tool::Runner> runners{tool::addInfoCommand(app, common),
-                                            tool::addSampleCommand(app, common),
-                                            tool::addContactSheetCommand(app, common)};
+    const std::vector<tool::Runner> runners{
+        tool::addInfoCommand(app, common), tool::addSampleCommand(app, common),
+        tool::addContactSheetCommand(app, common), tool::addFitCommand(app, common),
+        tool::addEvalCommand(app, common)};
     try {
         app.parse(argc, argv);
         Progress::setEnabled(progress);

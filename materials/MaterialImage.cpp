@@ -1,0 +1,74 @@
+#include "materials/MaterialImage.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <osg/Uniform>
+
+#include "core/Error.h"
+
+namespace osgBTF {
+
+FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,
+                               const glm::vec3& view, const glm::vec3& light) {
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+    stateSet->addUniform(
+        new osg::Uniform("osgBTF_fixedView", osg::Vec4(view.x, view.y, view.z, 1)));
+    stateSet->addUniform(new osg::Uniform("osgBTF_lightCount", 1));
+    // The camera's view matrix is the identity, so eye space is the patch's local frame.
+    osg::ref_ptr<osg::Uniform> position =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
+    position->setElement(0, osg::Vec4(light.x, light.y, light.z, 0.0f));
+    stateSet->addUniform(position.get());
+    osg::ref_ptr<osg::Uniform> color =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", 8);
+    color->setElement(0, osg::Vec3(1, 1, 1));
+    stateSet->addUniform(color.get());
+
+    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
+    osg::ref_ptr<osg::Vec4Array> tangents =
+        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
+    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
+    quad->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(quad.get());
+    geode->setStateSet(stateSet.get());
+
+    const int w = material.width(), h = material.height();
+    osg::ref_ptr<osg::Image> image = renderer.render(geode.get(), orthoUnitSquare(w, h));
+    FloatImage out(w, h, 3);
+    out.channelNames = {"R", "G", "B"};
+    const float* rgba = reinterpret_cast<const float*>(image->data());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                out.at(x, h - 1 - y, c) = rgba[(std::size_t(y) * w + x) * 4 + c];
+    return out;
+}
+
+FloatImage evaluateMaterialImage(const Material& material, const glm::vec3& view,
+                                 const glm::vec3& light) {
+    const int w = material.width(), h = material.height();
+    FloatImage out(w, h, 3);
+    out.channelNames = {"R", "G", "B"};
+    if (light.z <= 0.0f || view.z <= 0.0f) return out;  // as the shader: below the horizon is dark
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const glm::vec3 value = material.evaluate(x, y, view, light);
+            for (int c = 0; c < 3; ++c) out.at(x, h - 1 - y, c) = value[c];
+        }
+    return out;
+}
+
+double maxAbsDifference(const FloatImage& a, const FloatImage& b) {
+    if (a.width != b.width || a.height != b.height || a.channels != b.channels)
+        throw Error("cannot compare images of different sizes");
+    double worst = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+        const double d = std::abs(double(a.pixels[i]) - double(b.pixels[i]));
+        worst = std::isnan(d) ? INFINITY : std::max(worst, d);
+    }
+    return worst;
+}
+
+}  // namespace osgBTF

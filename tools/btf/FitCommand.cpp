@@ -1,0 +1,102 @@
+// btf fit INPUT --method NAME -o OUT: compress a measured BTF with one method, report the error.
+#include <chrono>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+
+#include "core/Error.h"
+#include "core/ErrorMetrics.h"
+#include "core/Progress.h"
+#include "loaders/LoadBtf.h"
+#include "materials/Material.h"
+#include "tools/btf/Commands.h"
+
+namespace osgBTF::tool {
+
+namespace {
+
+std::string methodHelp() {
+    std::string text = "Compression method:";
+    for (const std::string& name : methodNames()) {
+        const MethodInfo& info = findMethod(name);
+        text += "\n  " + name + ": " + info.description;
+        for (const auto& [option, doc] : info.options) text += "\n      " + option + "=  " + doc;
+    }
+    return text;
+}
+
+}  // namespace
+
+void printErrorSummary(const ErrorSummary& e) {
+    std::cout << std::setprecision(5) << "per-texel error (seed 001 sec. 4.1): avg " << e.average
+              << "  min " << e.minimum << "  max " << e.maximum << "\n"
+              << "RMSE " << e.rmse << "  PSNR " << std::setprecision(4) << e.psnr << " dB";
+    if (e.nonFiniteValues) std::cout << "  (" << e.nonFiniteValues << " NaN/Inf values!)";
+    std::cout << "\n";
+}
+
+Runner addFitCommand(CLI::App& app, CommonOptions& common) {
+    auto* command = app.add_subcommand("fit",
+                                       "Fit a compression method to a measured BTF and "
+                                       "save the fitted material (multi-part OpenEXR)");
+    struct Options {
+        std::string input, output, method;
+        std::vector<std::string> settings;
+        int lobes = 0, components = 0, clusters = 0;
+    };
+    auto options = std::make_shared<Options>();
+    command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
+    command->add_option("-o,--output", options->output, "Fitted material file (.exr)")->required();
+    command->add_option("-m,--method", options->method, methodHelp())->required();
+    command->add_option("--lobes", options->lobes, "Shortcut for --set lobes=N (laf, slaf, rf)");
+    command->add_option("--components", options->components,
+                        "Shortcut for --set components=C (pca, lpca, lpca-revised)");
+    command->add_option("--clusters", options->clusters,
+                        "Shortcut for --set clusters=K (lpca, lpca-revised)");
+    command->add_option("--set", options->settings,
+                        "Method option KEY=VALUE (repeatable; see --method above)");
+    addLoadOptions(*command, common);
+    return [&common, options] {
+        const MethodInfo& method = findMethod(options->method);
+        FitOptions fit;
+        for (const std::string& setting : options->settings) {
+            const FitOptions parsed = FitOptions::parse(setting);
+            for (const auto& [key, value] : parsed.values()) fit.set(key, value);
+        }
+        if (options->lobes) fit.set("lobes", std::to_string(options->lobes));
+        if (options->components) fit.set("components", std::to_string(options->components));
+        if (options->clusters) fit.set("clusters", std::to_string(options->clusters));
+        for (const auto& [key, value] : fit.values()) {
+            bool known = false;
+            for (const auto& option : method.options) known |= option.first == key;
+            if (!known)
+                throw Error("method " + method.name + " has no option '" + key +
+                            "' (see btf fit --help)");
+        }
+
+        const auto start = std::chrono::steady_clock::now();
+        const MeasuredBtf btf = loadMeasuredBtf(options->input, common.loadOptions());
+        const auto loaded = std::chrono::steady_clock::now();
+        osg::ref_ptr<Material> material = method.fit(btf, fit);
+        const double fitSeconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - loaded).count();
+        material->fitInfo["seconds"] = std::to_string(fitSeconds);
+        material->fitInfo["source"] = options->input;
+        saveMaterial(*material, options->output);
+
+        const ErrorSummary error = computeError(
+            btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); });
+        const MemoryFootprint memory = material->memory();
+        const double loadSeconds = std::chrono::duration<double>(loaded - start).count();
+        std::cout << std::fixed << std::setprecision(2) << "fitted " << method.name << " to "
+                  << options->input << " (" << btf.width() << "x" << btf.height() << " texels, "
+                  << btf.viewCount() << "x" << btf.lightCount() << " directions)\n"
+                  << "time: load " << loadSeconds << " s, fit " << fitSeconds << " s\n"
+                  << "memory: " << memory.valuesPerTexel << " values, " << memory.bytesPerTexel
+                  << " bytes per texel, " << formatBytes(memory.totalBytes) << " in all\n";
+        printErrorSummary(error);
+        std::cout << "wrote " << options->output << "\n";
+    };
+}
+
+}  // namespace osgBTF::tool
