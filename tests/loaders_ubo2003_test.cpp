@@ -433,37 +433,49 @@ TEST(Ubo2003Loader, TopRowOfImageFileIsTopRowOfBtf) {
     }
 }
 
-TEST(Ubo2003Loader, HdrWithXMajorResolutionLineIsReoriented) {
+TEST(Ubo2003Loader, HdrResolutionLineOrientationIsApplied) {
     // ATRIUM_HDR members carry "+X M -Y N" (formats.md 1.2): each stored scanline is an image
-    // column. OIIO reports that as orientation 5 (transposed); the loader turns it upright.
-    TempDir dir;
-    const std::string folder = dir.file("atrium");
-    fs::create_directory(folder);
-    const std::string file = folder + "/tl000 pl000 tv000 pv000.hdr";
-    std::vector<float> stored(4 * 2 * 3);
-    for (int i = 0; i < 8; ++i)
-        for (int c = 0; c < 3; ++c) stored[std::size_t(i) * 3 + c] = 0.25f * float(i + 1);
-    {
-        auto out = OIIO::ImageOutput::create(file);
-        ASSERT_TRUE(out);
-        ASSERT_TRUE(out->open(file, OIIO::ImageSpec(4, 2, 3, OIIO::TypeDesc::FLOAT)));
-        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, stored.data()));
-        ASSERT_TRUE(out->close());
+    // column, left to right, its pixels top to bottom. OIIO reports it as orientation 5.
+    // "-Y N -X M" (orientation 2) stores rows top to bottom, each right to left.
+    struct Case {
+        const char* resolution;
+        int width, height;
+        std::function<int(int, int)> storedIndex;  ///< upright (x, y from top) -> stored pixel
+    };
+    const Case cases[] = {
+        {"+X 2 -Y 4", 2, 4, [](int x, int y) { return x * 4 + y; }},
+        {"-Y 2 -X 4", 4, 2, [](int x, int y) { return y * 4 + (3 - x); }},
+    };
+    for (const Case& test : cases) {
+        SCOPED_TRACE(test.resolution);
+        TempDir dir;
+        const std::string folder = dir.file("atrium");
+        fs::create_directory(folder);
+        const std::string file = folder + "/tl000 pl000 tv000 pv000.hdr";
+        std::vector<float> stored(4 * 2 * 3);
+        for (int i = 0; i < 8; ++i)
+            for (int c = 0; c < 3; ++c) stored[std::size_t(i) * 3 + c] = 0.25f * float(i + 1);
+        {
+            auto out = OIIO::ImageOutput::create(file);
+            ASSERT_TRUE(out);
+            ASSERT_TRUE(out->open(file, OIIO::ImageSpec(4, 2, 3, OIIO::TypeDesc::FLOAT)));
+            ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, stored.data()));
+            ASSERT_TRUE(out->close());
+        }
+        std::string bytes = osgBTF::test::readTextFile(file);
+        const auto at = bytes.find("-Y 2 +X 4");
+        ASSERT_NE(at, std::string::npos);
+        bytes.replace(at, 9, test.resolution);
+        osgBTF::test::writeTextFile(file, bytes);
+        const MeasuredBtf btf = loadUbo2003(folder);
+        ASSERT_EQ(btf.width(), test.width);
+        ASSERT_EQ(btf.height(), test.height);
+        for (int y = 0; y < test.height; ++y)
+            for (int x = 0; x < test.width; ++x)
+                EXPECT_NEAR(btf.value(0, 0, std::size_t(test.height - 1 - y) * test.width + x, 0),
+                            0.25f * float(test.storedIndex(x, y) + 1), 1e-6f)
+                    << "x " << x << " y " << y;
     }
-    std::string bytes = osgBTF::test::readTextFile(file);
-    const auto at = bytes.find("-Y 2 +X 4");
-    ASSERT_NE(at, std::string::npos);
-    bytes.replace(at, 9, "+X 2 -Y 4");
-    osgBTF::test::writeTextFile(file, bytes);
-    const MeasuredBtf btf = loadUbo2003(folder);
-    ASSERT_EQ(btf.width(), 2);
-    ASSERT_EQ(btf.height(), 4);
-    // Upright pixel (x, y from the top) is stored pixel (y, x); MeasuredBtf rows are bottom-up.
-    for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 2; ++x)
-            EXPECT_NEAR(btf.value(0, 0, std::size_t(3 - y) * 2 + x, 0),
-                        0.25f * float(x * 4 + y + 1), 1e-6f)
-                << "x " << x << " y " << y;
 }
 
 TEST(Ubo2003Loader, NamingVariantsInZipsMadeByZipTool) {
