@@ -1,0 +1,53 @@
+// osgBTF: small linear-algebra building blocks shared by the linear-basis methods (PCA, LPCA).
+//
+// Eigen's decompositions are expensive to compile (SelfAdjointEigenSolver ~9 s per translation
+// unit), so they live in LowRank.cpp only, behind this non-template API. Matrices are plain
+// column-major arrays: element (r, c) of a rows x cols matrix is data[c * rows + r].
+//
+// Truncated SVD through the Gram matrix: for A (m x n) with n <= m, A^T A = V S^2 V^T, so the top
+// singular values and right vectors come from the eigen decomposition of the small n x n Gram
+// matrix, and U = A V S^-1. The Gram matrix is accumulated in float by Eigen's GEMM (fast, and its
+// rounding ~1e-7 ||A||^2 is far below the truncation error of any useful rank), then decomposed
+// in double. When m < n the roles of rows and columns are swapped.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace osgBTF {
+
+/** Eigen decomposition of a symmetric matrix, eigenvalues in DESCENDING order. */
+struct SymmetricEigen {
+    int size = 0;
+    std::vector<double> values;   ///< size
+    std::vector<double> vectors;  ///< size x size, column-major, column i belongs to values[i]
+};
+
+/** Decomposes the symmetric n x n matrix (column-major; only its lower triangle is read). */
+SymmetricEigen symmetricEigen(const double* matrix, int n);
+
+/** The best rank-`rank` approximation of a matrix A ~ U diag(S) V^T (Eckart-Young). */
+struct TruncatedSvd {
+    std::size_t rows = 0, cols = 0;
+    int rank = 0;
+    std::vector<float> u;                ///< rows x rank, column-major, orthonormal columns
+    std::vector<float> v;                ///< cols x rank, column-major, orthonormal columns
+    std::vector<double> singularValues;  ///< ALL min(rows, cols) of them, descending
+    /** sum of the squared singular values beyond `rank`: the squared Frobenius error of the best
+     *  rank-`rank` approximation. */
+    double residualSquared() const;
+};
+
+/** Truncated SVD of the column-major rows x cols matrix through its Gram matrix (see above).
+ *  1 <= rank <= min(rows, cols). Columns of U (or V) for singular values that are zero up to
+ *  rounding (relative 1e-6 of the largest) are set to zero rather than made up. Single-threaded:
+ *  callers parallelise over independent matrices. Throws Error on invalid sizes. */
+TruncatedSvd truncatedSvd(const float* matrix, std::size_t rows, std::size_t cols, int rank);
+
+/** Least squares X = argmin ||B - A X|| for A (rows x n, n small) and B (rows x m), column-major,
+ *  through the normal equations (A^T A) X = A^T B, with a tiny ridge (1e-10 of the trace) so that
+ *  zero columns of A get zero coefficients instead of a failure. Returns X (n x m, column-major).
+ *  Accurate when A's columns are well conditioned (e.g. near-orthogonal bases). */
+std::vector<float> leastSquares(const float* a, std::size_t rows, int n, const float* b, int m);
+
+}  // namespace osgBTF
