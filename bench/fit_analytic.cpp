@@ -1,0 +1,125 @@
+// Benchmark: fit time, error and memory of a method on the built-in sample, and optionally the
+// time of one rendering pass at 1024 x 1024 (headless).
+// Usage: bench_fit_analytic [--method laf] [--size 64] [--options "lobes=2"] [--gpu]
+//                           [--frames 20] [--lights 1] [--save FILE]
+//   Works for any registered method (laf, slaf, rf, ...). Prints one Markdown-ready line per
+//   figure.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+
+#include <osg/Uniform>
+
+#include "core/Error.h"
+#include "core/ErrorMetrics.h"
+#include "core/Progress.h"
+#include "core/SampleBtf.h"
+#include "core/headless/HeadlessRenderer.h"
+#include "materials/Material.h"
+
+namespace {
+
+void timeGpuPass(const osgBTF::Material& material, int frames, int lights) {
+    osgBTF::HeadlessRenderer renderer;
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+    osg::ref_ptr<osg::Geode> quad = osgBTF::createFullScreenQuad(stateSet.get());
+    auto* geometry = quad->getDrawable(0)->asGeometry();
+    osg::ref_ptr<osg::Vec4Array> tangents =
+        new osg::Vec4Array(geometry->getVertexArray()->getNumElements());
+    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
+    geometry->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
+    stateSet->addUniform(new osg::Uniform("osgBTF_lightCount", lights));
+    osg::ref_ptr<osg::Uniform> position =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
+    osg::ref_ptr<osg::Uniform> colour =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", 8);
+    for (int i = 0; i < 8; ++i) {
+        position->setElement(i, osg::Vec4(0.3f * float(i % 3) - 0.3f, 0.2f, 0.9f, 0.0f));
+        colour->setElement(i, osg::Vec3(1, 1, 1));
+    }
+    stateSet->addUniform(position.get());
+    stateSet->addUniform(colour.get());
+    // Texture tiled 16 times so every pixel fetches different texels, as on a real model.
+    stateSet->getOrCreateUniform("osgBTF_textureScale", osg::Uniform::FLOAT)->set(16.0f);
+    renderer.setScene(quad.get());
+    renderer.setCamera(osgBTF::orthoUnitSquare(1024, 1024));
+    const osgBTF::PassTiming t = renderer.timePasses(frames);
+    std::printf("| gpu pass 1024x1024 (%s, %d light%s) | wall %.2f ms, gpu %.2f ms (%d frames) |\n",
+                renderer.glRenderer().c_str(), lights, lights == 1 ? "" : "s", t.wallMs, t.gpuMs,
+                t.frames);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    std::string method = "laf", options, save;
+    int size = 64, frames = 20, lights = 1;
+    bool gpu = false;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto next = [&]() -> std::string {
+            if (i + 1 >= argc) {
+                std::cerr << a << " needs a value\n";
+                std::exit(2);
+            }
+            return argv[++i];
+        };
+        if (a == "--method")
+            method = next();
+        else if (a == "--size")
+            size = std::atoi(next().c_str());
+        else if (a == "--options")
+            options = next();
+        else if (a == "--save")
+            save = next();
+        else if (a == "--frames")
+            frames = std::atoi(next().c_str());
+        else if (a == "--lights")
+            lights = std::atoi(next().c_str());
+        else if (a == "--gpu")
+            gpu = true;
+        else {
+            std::cerr << "usage: bench_fit_analytic [--method NAME] [--size N] [--options \"k=v\"] "
+                         "[--gpu] [--frames N] [--lights N] [--save FILE]\n";
+            return 2;
+        }
+    }
+    try {
+        osgBTF::Progress::setEnabled(true);
+        osgBTF::SampleOptions sample;
+        sample.width = sample.height = size;
+        auto t0 = std::chrono::steady_clock::now();
+        const osgBTF::MeasuredBtf btf = osgBTF::makeSampleBtf(sample);
+        const double sampleSeconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const osgBTF::MethodInfo& info = osgBTF::findMethod(method);
+        t0 = std::chrono::steady_clock::now();
+        osg::ref_ptr<osgBTF::Material> m = info.fit(btf, osgBTF::FitOptions::parse(options));
+        const double fitSeconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const osgBTF::ErrorSummary e = osgBTF::computeError(
+            btf, [&](std::size_t t, float* out) { m->evaluateMeasured(t, out); });
+        const osgBTF::MemoryFootprint mem = m->memory();
+        std::printf("| method | %s (%s) |\n| sample | %dx%d, Bonn 81x81 (made in %.1f s) |\n",
+                    method.c_str(), options.empty() ? "defaults" : options.c_str(), size, size,
+                    sampleSeconds);
+        std::printf("| fit time | %.1f s (%.2f ms per texel, wall) |\n", fitSeconds,
+                    1000.0 * fitSeconds / double(btf.texelCount()));
+        std::printf("| error avg / min / max | %.4f / %.4f / %.4f |\n", e.average, e.minimum,
+                    e.maximum);
+        std::printf("| rmse / psnr | %.4f / %.2f dB |\n", e.rmse, e.psnr);
+        std::printf("| non-finite values | %zu |\n", e.nonFiniteValues);
+        std::printf("| memory | %.1f values, %.1f bytes per texel |\n", mem.valuesPerTexel,
+                    mem.bytesPerTexel);
+        for (const auto& [key, value] : m->fitInfo)
+            std::printf("| fit.%s | %s |\n", key.c_str(), value.c_str());
+        if (!save.empty()) osgBTF::saveMaterial(*m, save);
+        if (gpu) timeGpuPass(*m, frames, lights);
+    } catch (const osgBTF::Error& e) {
+        std::cerr << "bench_fit_analytic: " << e.what() << "\n";
+        return 1;
+    }
+    return 0;
+}

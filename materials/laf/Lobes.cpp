@@ -1,0 +1,322 @@
+#include "materials/laf/Lobes.h"
+
+#include <algorithm>
+#include <limits>
+#include <memory>
+#include <numeric>
+
+#include <Imath/half.h>
+#include <ceres/ceres.h>
+
+#include "core/Error.h"
+
+namespace osgBTF::lobes {
+
+PairTable makePairTable(const std::vector<glm::vec3>& views, const std::vector<glm::vec3>& lights) {
+    PairTable table;
+    for (std::size_t v = 0; v < views.size(); ++v)
+        for (std::size_t l = 0; l < lights.size(); ++l) {
+            // Products in float first, as the shader forms them, then widened.
+            table.products.emplace_back(views[v].x * lights[l].x, views[v].y * lights[l].y,
+                                        views[v].z * lights[l].z);
+            table.pairView.push_back(int(v));
+        }
+    // About 1000 pairs tell starting points apart as well as all 6561 do, at a sixth of the cost.
+    // A stride coprime with the light count walks through all lights over the views.
+    std::size_t stride = std::max<std::size_t>(1, table.products.size() / 1000);
+    while (stride > 1 && std::gcd(stride, lights.size()) != 1) --stride;
+    for (std::size_t j = 0; j < table.products.size(); j += stride)
+        table.subsample.push_back(int(j));
+    return table;
+}
+
+namespace {
+
+/** r_j = scale_j * model(w_j) - y_j over a list of pairs, with its analytic Jacobian: about 4x
+ *  faster than autodiff Jets here, which decides whether 256x256 texels fit in minutes. */
+class LuminanceCost : public ceres::CostFunction {
+public:
+    LuminanceCost(const PairTable& pairs, const std::vector<int>* subset, const double* target,
+                  const double* scale, int lobes)
+        : _pairs(pairs), _subset(subset), _target(target), _scale(scale), _lobes(lobes) {
+        set_num_residuals(int(subset ? subset->size() : pairs.products.size()));
+        mutable_parameter_block_sizes()->push_back(1 + kValuesPerLobe * lobes);
+    }
+
+    bool Evaluate(double const* const* parameters, double* residuals,
+                  double** jacobians) const override {
+        const double* p = parameters[0];
+        const int n = num_residuals(), cols = 1 + kValuesPerLobe * _lobes;
+        double* jac = jacobians ? jacobians[0] : nullptr;
+        for (int r = 0; r < n; ++r) {
+            const int j = _subset ? (*_subset)[r] : r;
+            const glm::dvec3& w = _pairs.products[j];
+            const double s = _scale ? _scale[j] : 1.0;
+            double sum = p[0];
+            double* row = jac ? jac + std::size_t(r) * cols : nullptr;
+            if (row) row[0] = s;
+            for (int i = 0; i < _lobes; ++i) {
+                const double* c = p + 1 + i * kValuesPerLobe;
+                const double base = c[0] * w.x + c[1] * w.y + c[2] * w.z;
+                double* d = row ? row + 1 + i * kValuesPerLobe : nullptr;
+                if (base > kMinBase) {
+                    const double logBase = std::log(base);
+                    const double value = std::exp(c[3] * logBase);
+                    sum += value;
+                    if (d) {
+                        const double dBase = s * c[3] * value / base;
+                        d[0] = dBase * w.x;
+                        d[1] = dBase * w.y;
+                        d[2] = dBase * w.z;
+                        d[3] = s * value * logBase;
+                    }
+                } else if (d) {
+                    d[0] = d[1] = d[2] = d[3] = 0.0;
+                }
+            }
+            residuals[r] = s * sum - _target[j];
+            // Overflowing or absurd values (C^n explodes for large n): LM rejects the step.
+            if (!(std::abs(residuals[r]) < 1e6)) return false;
+        }
+        return true;
+    }
+
+private:
+    const PairTable& _pairs;
+    const std::vector<int>* _subset;
+    const double* _target;
+    const double* _scale;
+    int _lobes;
+};
+
+struct SolveResult {
+    double cost;
+    int iterations;
+};
+
+SolveResult solve(const PairTable& pairs, const std::vector<int>* subset, const double* target,
+                  const double* scale, int lobes, int maxIterations, std::vector<double>& params,
+                  double maxTarget) {
+    ceres::Problem::Options problemOptions;
+    problemOptions.enable_fast_removal = false;
+    ceres::Problem problem(problemOptions);
+    double* x = params.data();
+    // Ceres refuses starts outside the bounds (a neighbour's `a` may exceed this texel's bound).
+    x[0] = std::clamp(x[0], 0.0, std::max(1.0, 2.0 * maxTarget));
+    for (int i = 0; i < lobes; ++i) {
+        double* c = x + 1 + i * kValuesPerLobe;
+        for (int k = 0; k < 3; ++k) c[k] = std::clamp(c[k], -kMaxCoefficient, kMaxCoefficient);
+        c[3] = std::clamp(c[3], kMinExponent, kMaxExponent);
+    }
+    auto* cost = new LuminanceCost(pairs, subset, target, scale, lobes);
+    problem.AddResidualBlock(cost, nullptr, x);
+    {
+        // A start that cannot be evaluated (a neighbour's sharp lobe overflowing here) is skipped
+        // quietly instead of letting Ceres log an error for it.
+        std::vector<double> probe(cost->num_residuals());
+        const double* blocks[] = {x};
+        if (!cost->Evaluate(blocks, probe.data(), nullptr))
+            return {std::numeric_limits<double>::infinity(), 0};
+    }
+    // Bounds keep every lobe valid (n > 0) and every evaluation finite.
+    problem.SetParameterLowerBound(x, 0, 0.0);
+    problem.SetParameterUpperBound(x, 0, std::max(1.0, 2.0 * maxTarget));
+    for (int i = 0; i < lobes; ++i) {
+        const int o = 1 + i * kValuesPerLobe;
+        for (int k = 0; k < 3; ++k) {
+            problem.SetParameterLowerBound(x, o + k, -kMaxCoefficient);
+            problem.SetParameterUpperBound(x, o + k, kMaxCoefficient);
+        }
+        problem.SetParameterLowerBound(x, o + 3, kMinExponent);
+        problem.SetParameterUpperBound(x, o + 3, kMaxExponent);
+    }
+    ceres::Solver::Options options;
+    options.minimizer_type = ceres::TRUST_REGION;
+    options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+    options.max_num_iterations = maxIterations;
+    options.num_threads = 1;  // parallelism is over texels
+    options.logging_type = ceres::SILENT;
+    options.minimizer_progress_to_stdout = false;
+    options.function_tolerance = 1e-6;
+    options.parameter_tolerance = 1e-9;
+    const std::vector<double> start = params;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    bool finite = std::isfinite(summary.final_cost);
+    for (double v : params) finite = finite && std::isfinite(v);
+    if (!finite) {
+        params = start;
+        return {std::numeric_limits<double>::infinity(), int(summary.iterations.size())};
+    }
+    return {summary.final_cost, int(summary.iterations.size())};
+}
+
+}  // namespace
+
+void scaleLobes(double* lobeParams, int lobes, double factor) {
+    for (int i = 0; i < lobes; ++i) {
+        double* c = lobeParams + i * kValuesPerLobe;
+        const double k = std::pow(factor, 1.0 / c[3]);
+        c[0] *= k;
+        c[1] *= k;
+        c[2] *= k;
+    }
+}
+
+LuminanceFit fitLuminance(const PairTable& pairs, const double* target, const double* scale,
+                          int lobes, int maxIterations, const std::vector<double>* neighbour) {
+    const std::size_t count = pairs.products.size();
+    double mean = 0, minimum = std::numeric_limits<double>::infinity(), maximum = 0, meanZ = 0;
+    for (std::size_t j = 0; j < count; ++j) {
+        const double s = scale ? std::max(scale[j], 1e-6) : 1.0;
+        mean += target[j] / s;
+        minimum = std::min(minimum, target[j] / s);
+        maximum = std::max(maximum, target[j] / s);
+        meanZ += pairs.products[j].z;
+    }
+    mean /= double(count);
+    meanZ /= double(count);
+    minimum = std::max(minimum, 0.0);
+
+    // Starts: an ambient term at the minimum, a diffuse-like lobe (n = 1 along the normal) for most
+    // of the mean, then specular (mirror: C = (-1, -1, 1)) and retro-reflective (C = (1, 1, 1))
+    // lobes with small weight; the second start swaps their sharpness.
+    auto makeStart = [&](double nSpecular, double nRetro, double diffuseShare) {
+        std::vector<double> p(1 + kValuesPerLobe * lobes, 0.0);
+        p[0] = 0.5 * minimum;
+        const double rest = std::max(mean - p[0], 1e-3);
+        for (int i = 0; i < lobes; ++i) {
+            double* c = p.data() + 1 + i * kValuesPerLobe;
+            if (i == 0) {
+                c[0] = c[1] = 0.0;
+                c[2] = std::max(diffuseShare * rest / std::max(meanZ, 1e-3), 1e-3);
+                c[3] = 1.0;
+            } else {
+                const bool mirror = i % 2 == 1;
+                const double n = mirror ? nSpecular : nRetro;
+                const double k = std::pow(std::max(0.2 * rest, 1e-3), 1.0 / n);
+                c[0] = c[1] = mirror ? -k : k;
+                c[2] = k;
+                c[3] = n;
+            }
+        }
+        return p;
+    };
+    std::vector<std::vector<double>> starts = {makeStart(8.0, 2.0, 0.8), makeStart(2.0, 8.0, 0.5)};
+    if (neighbour && neighbour->size() == starts[0].size()) starts.push_back(*neighbour);
+
+    LuminanceFit fit;
+    double best = std::numeric_limits<double>::infinity();
+    const int shortIterations = std::min(maxIterations, 12);
+    for (auto& start : starts) {
+        const SolveResult r =
+            solve(pairs, &pairs.subsample, target, scale, lobes, shortIterations, start, maximum);
+        fit.iterations += r.iterations;
+        if (r.cost < best || fit.params.empty()) {
+            best = r.cost;
+            fit.params = start;
+        }
+    }
+    const SolveResult r =
+        solve(pairs, nullptr, target, scale, lobes, maxIterations, fit.params, maximum);
+    fit.iterations += r.iterations;
+    fit.cost = r.cost;
+    return fit;
+}
+
+int refineLuminance(const PairTable& pairs, const double* target, const double* scale, int lobes,
+                    int maxIterations, std::vector<double>& params) {
+    double maximum = 0;
+    for (std::size_t j = 0; j < pairs.products.size(); ++j)
+        maximum = std::max(maximum, target[j] / (scale ? std::max(scale[j], 1e-6) : 1.0));
+    return solve(pairs, nullptr, target, scale, lobes, maxIterations, params, maximum).iterations;
+}
+
+void nonNegativeLeastSquares2(const double* f, const double* g, const double* y, std::size_t n,
+                              std::size_t strideY, double& alpha, double& beta) {
+    double ff = 0, fg = 0, gg = 0, fy = 0, gy = 0, yy = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+        const double yj = y[j * strideY];
+        ff += f[j] * f[j];
+        fg += f[j] * g[j];
+        gg += g[j] * g[j];
+        fy += f[j] * yj;
+        gy += g[j] * yj;
+        yy += yj * yj;
+    }
+    auto cost = [&](double a, double b) {
+        return a * a * ff + b * b * gg + 2 * a * b * fg - 2 * a * fy - 2 * b * gy;
+    };
+    // Candidates: the interior optimum (if feasible), each variable alone, and zero; the convex
+    // quadratic's constrained minimum is the best feasible one among them.
+    double bestA = 0, bestB = 0, bestCost = 0;
+    auto consider = [&](double a, double b) {
+        if (!(a >= 0 && b >= 0) || !std::isfinite(a) || !std::isfinite(b)) return;
+        const double c = cost(a, b);
+        if (c < bestCost) {
+            bestCost = c;
+            bestA = a;
+            bestB = b;
+        }
+    };
+    const double det = ff * gg - fg * fg;
+    if (det > 1e-12 * std::max(ff * gg, 1e-300))
+        consider((fy * gg - gy * fg) / det, (gy * ff - fy * fg) / det);
+    if (ff > 0) consider(fy / ff, 0);
+    if (gg > 0) consider(0, gy / gg);
+    (void)yy;
+    alpha = bestA;
+    beta = bestB;
+}
+
+void checkOptionNames(const FitOptions& options, const std::string& method,
+                      const std::vector<std::string>& known) {
+    for (const auto& entry : options.values())
+        if (std::find(known.begin(), known.end(), entry.first) == known.end()) {
+            std::string list;
+            for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+            throw Error(method + ": unknown option '" + entry.first + "' (known: " + list + ")");
+        }
+}
+
+int boundedOption(const FitOptions& options, const std::string& method, const std::string& key,
+                  int fallback, int lo, int hi) {
+    const int value = options.getInt(key, fallback);
+    if (value < lo || value > hi)
+        throw Error(method + ": option " + key + " must be between " + std::to_string(lo) +
+                    " and " + std::to_string(hi) + ", got " + std::to_string(value));
+    return value;
+}
+
+float roundHalf(double x) {
+    return float(Imath::half(float(std::clamp(x, -65504.0, 65504.0))));
+}
+
+double texelError(const std::vector<double>& rgb, const std::vector<float>& model) {
+    double sum = 0;
+    for (std::size_t j = 0; j < model.size(); j += 3) {
+        const double dr = rgb[j] - model[j], dg = rgb[j + 1] - model[j + 1],
+                     db = rgb[j + 2] - model[j + 2];
+        sum += std::sqrt(dr * dr + dg * dg + db * db);
+    }
+    return sum / double(model.size() / 3);
+}
+
+MemoryFootprint footprintOf(const FittedMaterial& file, std::size_t texels) {
+    double values = 0, bytes = 0;
+    for (const MaterialTexture& t : file.textures) {
+        const double size = t.kind == MaterialTexture::Float  ? 4.0
+                            : t.kind == MaterialTexture::Half ? 2.0
+                                                              : 1.0;
+        values += double(t.valueCount());
+        bytes += double(t.valueCount()) * size;
+    }
+    MemoryFootprint footprint;
+    footprint.valuesPerTexel = values / double(texels);
+    footprint.bytesPerTexel = bytes / double(texels);
+    footprint.totalBytes = std::uint64_t(bytes);
+    return footprint;
+}
+
+}  // namespace osgBTF::lobes

@@ -1,0 +1,122 @@
+// osgBTF: Lafortune lobes and their per-texel fit, shared by the LAF and SLAF methods.
+//
+// A lobe is s(v, l) = max(Cx vx lx + Cy vy ly + Cz vz lz, 0)^n (seed 001 eq. 3; the text
+// extraction garbles the exponent's placement, we follow Lafortune et al. 1997 where n applies to
+// the whole dot product). The clamp at 0 keeps the power defined for every direction pair (a
+// negative base has no real power), on the CPU and in the shader alike.
+//
+// Fitting (the part seed 001 calls slow and fragile, section 4.4): per texel, the luminance
+//   Y(v, l) ~ t(v) * (a + sum_i s_i(v, l))           (t = 1 for LAF, SLAF's view scale otherwise)
+// is fitted with Ceres' Levenberg-Marquardt over a + 4 k lobe parameters, bounded so every lobe
+// stays valid (n in [kMinExponent, kMaxExponent], |C| <= kMaxCoefficient, a >= 0). The specular
+// albedo's luminance is folded into the lobes (rho_s * s_i(C) = s_i(C * rho_s^(1/n))), which
+// removes the scale ambiguity between rho_s and C that would leave LM's normal equations singular.
+// The RGB colours are then linear given the lobes and are solved in closed form per channel
+// (variable projection): the nonlinear solver never sees them. Several starts (a diffuse-like
+// lobe plus mirror / retro-reflective lobes, and the already fitted left neighbour) are tried on a
+// subsample of the pairs; the best is refined on all pairs.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "materials/Material.h"
+
+namespace osgBTF::lobes {
+
+constexpr double kMinExponent = 0.5;
+constexpr double kMaxExponent = 256.0;
+constexpr double kMaxCoefficient = 64.0;
+/** Bases at or below this count as 0: keeps d/dC = n b^(n-1) finite for n < 1. */
+constexpr double kMinBase = 1e-8;
+constexpr int kMaxLobes = 8;
+constexpr int kValuesPerLobe = 4;  ///< Cx, Cy, Cz, n
+
+/** One lobe's value, in float, with the exact operations the shaders use
+ *  (dot(C.xyz, v * l), then pow), so the CPU reference equals the GPU. */
+inline float lobeValue(const float* lobe, const glm::vec3& v, const glm::vec3& l) {
+    const float base = lobe[0] * (v.x * l.x) + lobe[1] * (v.y * l.y) + lobe[2] * (v.z * l.z);
+    return base > 0.0f ? std::pow(base, lobe[3]) : 0.0f;
+}
+
+/** Sum of `count` lobes stored as consecutive (Cx, Cy, Cz, n). */
+inline float lobeSum(const float* lobes, int count, const glm::vec3& v, const glm::vec3& l) {
+    float sum = 0.0f;
+    for (int i = 0; i < count; ++i) sum += lobeValue(lobes + i * kValuesPerLobe, v, l);
+    return sum;
+}
+
+/** The luminance model's residuals as a template (Ceres autodiff in the tests checks the
+ *  analytic Jacobian the fitter uses against it). params = [a, (Cx, Cy, Cz, n) x lobes]. */
+template <typename T>
+T luminanceModel(const T* params, int lobes, const glm::dvec3& w) {
+    using std::pow;
+    T sum = params[0];
+    for (int i = 0; i < lobes; ++i) {
+        const T* p = params + 1 + i * kValuesPerLobe;
+        const T base = p[0] * w.x + p[1] * w.y + p[2] * w.z;
+        if (base > T(kMinBase)) sum += pow(base, p[3]);
+    }
+    return sum;
+}
+
+/** What the fitter needs to know about the direction pairs, shared by all texels. */
+struct PairTable {
+    std::vector<glm::dvec3> products;  ///< v * l (componentwise) per pair, [view][light]
+    std::vector<int> pairView;         ///< view index of each pair
+    std::vector<int> subsample;        ///< pairs used to compare starting points
+};
+PairTable makePairTable(const std::vector<glm::vec3>& views, const std::vector<glm::vec3>& lights);
+
+struct LuminanceFit {
+    std::vector<double> params;  ///< [a, (Cx, Cy, Cz, n) x lobes]
+    double cost = 0;             ///< 0.5 * sum of squared residuals over all pairs
+    int iterations = 0;          ///< LM iterations spent on this texel, all starts
+};
+
+/** Fits Y_j ~ scale_j * luminanceModel(params, w_j) for one texel. `scale` may be null (1).
+ *  `neighbour`, if not null, is a previous texel's params used as one more start. Never returns
+ *  non-finite params: a start that fails keeps its (finite) starting point. */
+LuminanceFit fitLuminance(const PairTable& pairs, const double* target, const double* scale,
+                          int lobes, int maxIterations, const std::vector<double>* neighbour);
+
+/** Continues LM from `params` on all pairs (SLAF's alternation); returns the iterations spent. */
+int refineLuminance(const PairTable& pairs, const double* target, const double* scale, int lobes,
+                    int maxIterations, std::vector<double>& params);
+
+/** Least squares y ~ alpha f + beta g with alpha, beta >= 0 (the two-variable NNLS, solved by
+ *  checking the unconstrained optimum and both faces). Strided access: element j at [j * stride].
+ */
+void nonNegativeLeastSquares2(const double* f, const double* g, const double* y, std::size_t n,
+                              std::size_t strideY, double& alpha, double& beta);
+
+/** Rounds to the 8-bit fixed point the file and the GPU hold: k / 255, k = 0..255. */
+inline float quantizeUNorm8(double x) {
+    const double c = x > 1.0 ? 1.0 : (x > 0.0 ? x : 0.0);
+    return float(std::round(c * 255.0)) / 255.0f;
+}
+
+/** Scales the lobe sum by `factor` > 0 (C_i *= factor^(1/n_i)), so a colour can be divided by it.
+ */
+void scaleLobes(double* lobeParams, int lobes, double factor);
+
+// ---- small helpers both methods' fitters and models use ---------------------------------------
+
+/** Throws Error "METHOD: unknown option 'KEY' (known: a, b)" for keys not in `known`. */
+void checkOptionNames(const FitOptions& options, const std::string& method,
+                      const std::vector<std::string>& known);
+/** An integer option in [lo, hi]; throws Error "METHOD: option KEY must be between LO and HI,
+ *  got V". */
+int boundedOption(const FitOptions& options, const std::string& method, const std::string& key,
+                  int fallback, int lo, int hi);
+/** Rounds to the nearest half float (clamped to its finite range). */
+float roundHalf(double x);
+/** Seed 001's per-texel error: mean over pairs of |measured - model| (RGB length). */
+double texelError(const std::vector<double>& rgb, const std::vector<float>& model);
+/** Values and bytes per texel of a fitted material's textures, by their storage kinds. */
+MemoryFootprint footprintOf(const FittedMaterial& file, std::size_t texels);
+
+}  // namespace osgBTF::lobes

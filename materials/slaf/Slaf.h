@@ -1,0 +1,65 @@
+// osgBTF method "slaf": scaled Lafortune lobes (Daubert et al. 2001; seed 001 section 3.2).
+//
+//   BTF(x, v, l) ~ T(x, v) * (rho_d(x) + rho_s(x) * sum_{i<k} max(C_i . (v * l), 0)^n_i) * l_z
+//
+// (l_z with option cosine=1, the default, as for LAF: materials/laf/Laf.h explains why.)
+// The LAF term (materials/laf/Laf.h: RGB albedos, scalar luminance lobes, as seed 001 limits SLAF
+// to luminance lobes with a specular albedo) scaled per texel by an RGB table T over the measured
+// view directions, which captures view-dependent masking and parallax that lobes cannot. Between
+// measured views T is blended with the direction interpolation of core/DirectionInterpolation.h
+// (the baked table the shader reads, so CPU == GPU). Values include the cosine term.
+//
+// Storage (seed 001 Table 2: 257 values, 508 bytes per texel at 81 views, k = 2): rho_d, rho_s
+// 8-bit (6 values, 6 bytes), lobes half (8 values, 16 bytes), T half (81 x 3 values, 486 bytes).
+#pragma once
+
+#include <vector>
+
+#include "core/DirectionInterpolation.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+class SlafMaterial : public Material {
+public:
+    SlafMaterial() = default;
+    SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    META_Object(osgBTF, SlafMaterial)
+
+        /** Options: lobes (1..8, default 2), iterations (LM iterations per texel and round, 1..500,
+         *  default 50), rounds (alternations between T and the lobes, 0..10, default 2), cosine (0
+         * or 1, default 1). Throws Error "slaf: ..." for invalid or unknown options and an empty
+         * BTF. */
+        static osg::ref_ptr<SlafMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+    static osg::ref_ptr<SlafMaterial> fromFile(const FittedMaterial& file);
+    /** An unfitted model of the given shape (T = 1, zero colours and lobes). */
+    static osg::ref_ptr<SlafMaterial> create(int width, int height, int lobes,
+                                             const DirectionSet& views, const DirectionSet& lights);
+
+    std::string methodName() const override { return "slaf"; }
+    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+    void evaluateMeasured(std::size_t texel, float* abrdf) const override;
+    MemoryFootprint memory() const override;
+    FittedMaterial toFittedMaterial() const override;
+    osg::ref_ptr<osg::StateSet> createStateSet() const override;
+
+    int lobeCount() const { return _lobes; }
+    bool cosine() const { return _cosine; }
+
+    /** RGB per texel, rows bottom-up, multiples of 1/255 in [0, 1] (8-bit storage). */
+    std::vector<float> rhoD, rhoS;
+    /** [lobe][y][x][Cx, Cy, Cz, n], half-representable values. */
+    std::vector<float> lobes;
+    /** [view][y][x][rgb], half-representable values >= 0. */
+    std::vector<float> scale;
+
+private:
+    /** Bakes the view interpolation table; called once the views are known. */
+    void prepare();
+
+    int _lobes = 0;
+    bool _cosine = true;
+    DirectionInterpolator::Baked _viewTable;
+};
+
+}  // namespace osgBTF
