@@ -1,0 +1,349 @@
+#include "materials/lpca-revised/LpcaRevised.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include <Imath/half.h>
+#include <tbb/parallel_for.h>
+#include <osg/Uniform>
+
+#include "core/Error.h"
+#include "core/Progress.h"
+#include "materials/MaterialState.h"
+#include "materials/lpca-revised/ConcentricMap.h"
+
+namespace osgBTF {
+
+namespace {
+/** GL_MAX_3D_TEXTURE_SIZE guaranteed by GL 3.3 is 256; llvmpipe and desktop GPUs give 2048. */
+constexpr int kMax3DTextureSize = 2048;
+}  // namespace
+
+LpcaRevisedMaterial::LpcaRevisedMaterial(const LpcaRevisedMaterial& other,
+                                         const osg::CopyOp& copyop)
+    : Material(other, copyop),
+      clusterOf(other.clusterOf),
+      weights(other.weights),
+      grid(other.grid),
+      _clusters(other._clusters),
+      _components(other._components),
+      _resolution(other._resolution),
+      _eightBit(other._eightBit),
+      _viewParams(other._viewParams),
+      _lightParams(other._lightParams) {}
+
+// ---- fit: LPCA, then resampling ----------------------------------------------------------------
+
+osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fit(const MeasuredBtf& btf,
+                                                           const FitOptions& options) {
+    static const std::set<std::string> lpcaKeys = {"clusters", "components", "iterations",
+                                                   "training", "seed"};
+    FitOptions lpcaOptions;
+    for (const auto& [key, value] : options.values()) {
+        if (lpcaKeys.count(key))
+            lpcaOptions.set(key, value);
+        else if (key != "resolution" && key != "storage")
+            throw Error("lpca-revised: unknown option '" + key +
+                        "' (known: clusters, components, iterations, training, seed, "
+                        "resolution, storage)");
+    }
+    const int resolution = options.getInt("resolution", 16);
+    const std::string storage = options.getString("storage", "half");
+    if (resolution < 2 || resolution * resolution > kMax3DTextureSize)
+        throw Error("lpca-revised: resolution must be between 2 and 45, got " +
+                    std::to_string(resolution));
+    if (storage != "half" && storage != "unorm8")
+        throw Error("lpca-revised: storage must be 'half' or 'unorm8', got '" + storage + "'");
+    const LpcaSettings settings = LpcaSettings::fromOptions(lpcaOptions);
+    if (settings.clusters * resolution > kMax3DTextureSize ||
+        settings.components * resolution > kMax3DTextureSize)
+        throw Error(
+            "lpca-revised: clusters x resolution and components x resolution must be at "
+            "most " +
+            std::to_string(kMax3DTextureSize) + " (3D texture size), got " +
+            std::to_string(settings.clusters * resolution) + " and " +
+            std::to_string(settings.components * resolution));
+    osg::ref_ptr<LpcaMaterial> lpca = LpcaMaterial::fit(btf, lpcaOptions);
+    return fromLpca(*lpca, resolution, storage == "unorm8");
+}
+
+osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromLpca(const LpcaMaterial& lpca,
+                                                                int resolution, bool eightBit) {
+    const auto start = std::chrono::steady_clock::now();
+    osg::ref_ptr<LpcaRevisedMaterial> m = new LpcaRevisedMaterial;
+    m->setGeometry(lpca.width(), lpca.height(), lpca.views(), lpca.lights());
+    m->fitInfo = lpca.fitInfo;
+    m->_clusters = lpca.clusters();
+    m->_components = lpca.components();
+    m->_resolution = resolution;
+    m->_eightBit = eightBit;
+    const int n = resolution, K = m->_clusters, c = m->_components;
+    const int W = m->gridWidth(), H = m->gridHeight(), D = m->gridDepth();
+
+    // Exact Delaunay weights of every grid direction (texel centres of the parameter square).
+    const DirectionInterpolator viewInterpolator(lpca.views()), lightInterpolator(lpca.lights());
+    std::vector<InterpolationWeights> viewWeights(std::size_t(n) * n),
+        lightWeights(viewWeights.size());
+    for (int jt = 0; jt < n; ++jt)
+        for (int js = 0; js < n; ++js) {
+            const glm::vec3 d(elevatedConcentricMap({(js + 0.5) / n, (jt + 0.5) / n}));
+            viewWeights[std::size_t(jt) * n + js] = viewInterpolator.weights(d);
+            lightWeights[std::size_t(jt) * n + js] = lightInterpolator.weights(d);
+        }
+    m->grid.assign(std::size_t(W) * H * D * 3, 0.0f);
+    const std::size_t lights = lpca.lights().size();
+    {
+        Progress progress("lpca-revised: resampling", std::size_t(D));
+        tbb::parallel_for(0, D, [&](int z) {
+            const InterpolationWeights& wl = lightWeights[std::size_t(z)];  // z = t_l * n + s_l
+            for (int y = 0; y < H; ++y) {
+                const int i = y / n, jtv = y % n;
+                for (int x = 0; x < W; ++x) {
+                    const int k = x / n, jsv = x % n;
+                    const InterpolationWeights& wv = viewWeights[std::size_t(jtv) * n + jsv];
+                    const float* e = lpca.eigenBrdf(k, i);
+                    double sum[3] = {0, 0, 0};
+                    for (int a = 0; a < 3; ++a)
+                        for (int b = 0; b < 3; ++b) {
+                            const double w = double(wv.weight[a]) * wl.weight[b];
+                            if (w == 0) continue;
+                            const float* rgb =
+                                e + (std::size_t(wv.index[a]) * lights + wl.index[b]) * 3;
+                            for (int ch = 0; ch < 3; ++ch) sum[ch] += w * rgb[ch];
+                        }
+                    float* out = m->grid.data() + ((std::size_t(z) * H + y) * W + x) * 3;
+                    for (int ch = 0; ch < 3; ++ch) out[ch] = float(sum[ch]);
+                }
+            }
+            progress.advance();
+        });
+    }
+
+    // Storage precision, and the 8-bit scales folded into the weights.
+    std::vector<double> scale(std::size_t(K) * c, 1.0);
+    if (eightBit) {
+        std::fill(scale.begin(), scale.end(), 0.0);
+        for (std::size_t z = 0; z < std::size_t(D); ++z)
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x)
+                    for (int ch = 0; ch < 3; ++ch) {
+                        double& s = scale[std::size_t(x / n) * c + std::size_t(y / n)];
+                        s = std::max(s, double(std::abs(m->grid[((z * H + y) * W + x) * 3 + ch])));
+                    }
+        for (double& s : scale)
+            if (!(s > 0)) s = 1.0;
+        for (std::size_t z = 0; z < std::size_t(D); ++z)
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x)
+                    for (int ch = 0; ch < 3; ++ch) {
+                        float& v = m->grid[((z * H + y) * W + x) * 3 + ch];
+                        const double s = scale[std::size_t(x / n) * c + std::size_t(y / n)];
+                        v = float(std::lround(std::clamp((v / s + 1.0) * 0.5, 0.0, 1.0) * 255.0)) /
+                            255.0f;
+                    }
+    } else {
+        for (float& v : m->grid) v = float(Imath::half(v));
+    }
+    const int perTexel = m->weightsPerTexel();
+    m->clusterOf = lpca.clusterOf;
+    m->weights.assign(m->texelCount() * std::size_t(perTexel), 0.0f);
+    for (std::size_t t = 0; t < m->texelCount(); ++t) {
+        const int k = lpca.clusterOf[t];
+        double offset = 0;
+        for (int i = 0; i < c; ++i) {
+            const double alpha = lpca.weights[t * c + i];
+            const double s = scale[std::size_t(k) * c + i];
+            m->weights[t * perTexel + i] =
+                float(Imath::half(float(eightBit ? 2 * s * alpha : alpha)));
+            offset -= s * alpha;
+        }
+        if (eightBit) m->weights[t * perTexel + c] = float(Imath::half(float(offset)));
+    }
+    m->finishSetup();
+    std::ostringstream seconds;
+    seconds << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    m->fitInfo["resample_seconds"] = seconds.str();
+    return m;
+}
+
+void LpcaRevisedMaterial::finishSetup() {
+    if (_clusters < 1 || _clusters > 256 || _components < 1 || _resolution < 2)
+        throw Error("lpca-revised: invalid model shape");
+    if (clusterOf.size() != texelCount() ||
+        weights.size() != texelCount() * std::size_t(weightsPerTexel()) ||
+        grid.size() != std::size_t(gridWidth()) * gridHeight() * gridDepth() * 3)
+        throw Error("lpca-revised: array sizes do not match the model's shape");
+    _viewParams.clear();
+    _lightParams.clear();
+    for (std::size_t v = 0; v < _views.size(); ++v)
+        _viewParams.push_back(glm::vec2(elevatedConcentricInverse(glm::dvec3(_views.vector(v)))));
+    for (std::size_t l = 0; l < _lights.size(); ++l)
+        _lightParams.push_back(glm::vec2(elevatedConcentricInverse(glm::dvec3(_lights.vector(l)))));
+}
+
+// ---- CPU evaluator: the shader's arithmetic -----------------------------------------------------
+
+glm::vec3 LpcaRevisedMaterial::trilinear(float x, float y, float z) const {
+    // GL's LINEAR filter with CLAMP_TO_EDGE: texel centres at integer + 0.5.
+    const int size[3] = {gridWidth(), gridHeight(), gridDepth()};
+    const float p[3] = {x - 0.5f, y - 0.5f, z - 0.5f};
+    int i0[3], i1[3];
+    float f[3];
+    for (int a = 0; a < 3; ++a) {
+        const float fl = std::floor(p[a]);
+        f[a] = p[a] - fl;
+        i0[a] = std::clamp(int(fl), 0, size[a] - 1);
+        i1[a] = std::clamp(int(fl) + 1, 0, size[a] - 1);
+    }
+    glm::vec3 sum(0.0f);
+    for (int corner = 0; corner < 8; ++corner) {
+        const int ix = corner & 1 ? i1[0] : i0[0], iy = corner & 2 ? i1[1] : i0[1],
+                  iz = corner & 4 ? i1[2] : i0[2];
+        const float w = (corner & 1 ? f[0] : 1 - f[0]) * (corner & 2 ? f[1] : 1 - f[1]) *
+                        (corner & 4 ? f[2] : 1 - f[2]);
+        const float* rgb = grid.data() + ((std::size_t(iz) * size[1] + iy) * size[0] + ix) * 3;
+        sum += w * glm::vec3(rgb[0], rgb[1], rgb[2]);
+    }
+    return sum;
+}
+
+glm::vec3 LpcaRevisedMaterial::evaluateAt(std::size_t texel, const glm::vec2& sv,
+                                          const glm::vec2& sl) const {
+    const float n = float(_resolution);
+    const int perTexel = weightsPerTexel();
+    const float x = float(clusterOf[texel]) * n + std::clamp(sv.x * n, 0.5f, n - 0.5f);
+    const float yInBlock = std::clamp(sv.y * n, 0.5f, n - 0.5f);
+    const float u = std::clamp(sl.y * n - 0.5f, 0.0f, n - 1.0f);
+    const int slab = std::min(int(std::floor(u)), _resolution - 2);
+    const float w = u - float(slab);
+    const float z1 = float(slab) * n + std::clamp(sl.x * n, 0.5f, n - 0.5f), z2 = z1 + n;
+    glm::vec3 sum(0.0f);
+    for (int i = 0; i < _components; ++i) {
+        const float y = float(i) * n + yInBlock;
+        const glm::vec3 a = trilinear(x, y, z1), b = trilinear(x, y, z2);
+        sum += weights[texel * perTexel + i] * (a + (b - a) * w);
+    }
+    if (_eightBit) sum += glm::vec3(weights[texel * perTexel + _components]);
+    return sum;
+}
+
+glm::vec3 LpcaRevisedMaterial::evaluate(int x, int y, const glm::vec3& view,
+                                        const glm::vec3& light) const {
+    return evaluateAt(std::size_t(y) * _width + x,
+                      glm::vec2(elevatedConcentricInverse(glm::dvec3(view))),
+                      glm::vec2(elevatedConcentricInverse(glm::dvec3(light))));
+}
+
+void LpcaRevisedMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
+    for (std::size_t v = 0; v < _viewParams.size(); ++v)
+        for (std::size_t l = 0; l < _lightParams.size(); ++l) {
+            const glm::vec3 value = evaluateAt(texel, _viewParams[v], _lightParams[l]);
+            *abrdf++ = value.r;
+            *abrdf++ = value.g;
+            *abrdf++ = value.b;
+        }
+}
+
+MemoryFootprint LpcaRevisedMaterial::memory() const {
+    const double texels = double(texelCount());
+    const std::uint64_t bytes = std::uint64_t(clusterOf.size()) +
+                                std::uint64_t(weights.size()) * 2 +
+                                std::uint64_t(grid.size()) * (_eightBit ? 1 : 2);
+    return {double(clusterOf.size() + weights.size() + grid.size()) / texels,
+            double(bytes) / texels, bytes};
+}
+
+// ---- file ------------------------------------------------------------------------------------
+
+FittedMaterial LpcaRevisedMaterial::toFittedMaterial() const {
+    FittedMaterial file = writeCommon();
+    file.parameters["clusters"] = std::to_string(_clusters);
+    file.parameters["components"] = std::to_string(_components);
+    file.parameters["resolution"] = std::to_string(_resolution);
+    file.parameters["storage"] = _eightBit ? "unorm8" : "half";
+    file.textures.push_back(lpcaClusterTexture(_width, _height, clusterOf));
+    file.textures.push_back(lpcaWeightTexture(_width, _height, weightsPerTexel(), weights));
+    file.textures.push_back({"grid", gridWidth(), gridHeight(), gridDepth(), 3,
+                             _eightBit ? MaterialTexture::UNorm8 : MaterialTexture::Half, grid});
+    return file;
+}
+
+osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromFile(const FittedMaterial& file) {
+    osg::ref_ptr<LpcaRevisedMaterial> m = new LpcaRevisedMaterial;
+    m->readCommon(file);
+    try {
+        m->_clusters = std::stoi(file.parameter("clusters"));
+        m->_components = std::stoi(file.parameter("components"));
+        m->_resolution = std::stoi(file.parameter("resolution"));
+    } catch (const std::invalid_argument&) {
+        fail(file.source, "clusters/components/resolution parameters are not integers");
+    }
+    const std::string& storage = file.parameter("storage");
+    if (storage != "half" && storage != "unorm8")
+        fail(file.source, "unknown storage '" + storage + "'");
+    m->_eightBit = storage == "unorm8";
+    if (m->_clusters < 1 || m->_clusters > 256 || m->_components < 1 || m->_resolution < 2)
+        fail(file.source, "invalid clusters/components/resolution");
+    const MaterialTexture& g = file.texture("grid");
+    if (g.width != m->gridWidth() || g.height != m->gridHeight() || g.depth != m->gridDepth() ||
+        g.channels != 3)
+        fail(file.source, "texture 'grid' does not match clusters, components and resolution");
+    m->clusterOf = lpcaClusterFromTexture(file, m->_clusters);
+    m->weights = lpcaWeightsFromTexture(file, m->weightsPerTexel());
+    m->grid = g.data;
+    try {
+        m->finishSetup();
+    } catch (const Error& error) {
+        fail(file.source, error.what());
+    }
+    return m;
+}
+
+// ---- GPU -------------------------------------------------------------------------------------
+
+osg::ref_ptr<osg::StateSet> LpcaRevisedMaterial::createStateSet() const {
+    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
+    addCommonState(*stateSet, methodName(), _width, _height);
+    addTexture(*stateSet, createFloatTexture(lpcaClusterTexture(_width, _height, clusterOf)).get(),
+               "lpcaRevisedCluster", 0);
+    addTexture(
+        *stateSet,
+        createTextureArray(lpcaWeightTexture(_width, _height, weightsPerTexel(), weights)).get(),
+        "lpcaRevisedWeights", 1);
+    addTexture(
+        *stateSet,
+        createFloatTexture3D({"grid", gridWidth(), gridHeight(), gridDepth(), 3,
+                              _eightBit ? MaterialTexture::UNorm8 : MaterialTexture::Half, grid},
+                             true)
+            .get(),
+        "lpcaRevisedGrid", 2);
+    stateSet->addUniform(new osg::Uniform("lpcaRevisedComponents", _components));
+    stateSet->addUniform(new osg::Uniform("lpcaRevisedResolution", _resolution));
+    stateSet->addUniform(new osg::Uniform("lpcaRevisedOffset", _eightBit ? 1 : 0));
+    return stateSet;
+}
+
+namespace {
+const bool registered = registerMethod(
+    {"lpca-revised",
+     "revised local PCA (Schneider 2004): LPCA Eigen-BRDFs resampled over the elevated "
+     "concentric map into one filtered 3D texture, 2 fetches + 1 lerp per component",
+     {{"clusters", "number of clusters k, 1..256 (default 32)"},
+      {"components", "Eigen-BRDFs per cluster c (default 8)"},
+      {"iterations", "maximum Lloyd iterations of the clustering (default 20)"},
+      {"training", "texels sampled to train the clusters, 0 = all (default 4096)"},
+      {"seed", "random seed of the training sample (default 1)"},
+      {"resolution", "grid samples per direction parameter, 2..45 (default 16)"},
+      {"storage", "grid precision: half or unorm8 (scales folded into the weights; default half)"}},
+     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+         return LpcaRevisedMaterial::fit(btf, o);
+     },
+     [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+         return LpcaRevisedMaterial::fromFile(f);
+     }});
+}  // namespace
+
+}  // namespace osgBTF

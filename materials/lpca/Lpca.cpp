@@ -1,0 +1,270 @@
+// LPCA model: CPU evaluator, memory accounting, file I/O, StateSet and registration. The fit is in
+// LpcaFit.cpp (the only translation unit that instantiates Eigen's eigensolver).
+#include "materials/lpca/Lpca.h"
+
+#include <cmath>
+
+#include <osg/Texture2D>
+#include <osg/Texture2DArray>
+#include <osg/Uniform>
+
+#include "core/Error.h"
+#include "materials/MaterialState.h"
+
+namespace osgBTF {
+
+LpcaMaterial::LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop)
+    : Material(other, copyop),
+      clusterOf(other.clusterOf),
+      weights(other.weights),
+      eigenBrdfs(other.eigenBrdfs),
+      _clusters(other._clusters),
+      _components(other._components),
+      _viewTable(other._viewTable),
+      _lightTable(other._lightTable) {}
+
+osg::ref_ptr<LpcaMaterial> LpcaMaterial::ofShape(int width, int height, const DirectionSet& views,
+                                                 const DirectionSet& lights, int clusters,
+                                                 int components) {
+    osg::ref_ptr<LpcaMaterial> m = new LpcaMaterial;
+    m->setGeometry(width, height, views, lights);
+    m->clusterOf.assign(m->texelCount(), 0);
+    m->weights.assign(m->texelCount() * std::size_t(components), 0.0f);
+    m->eigenBrdfs.assign(std::size_t(clusters) * components * m->eigenBrdfSize(), 0.0f);
+    m->finishSetup(clusters, components);
+    return m;
+}
+
+void LpcaMaterial::finishSetup(int clusters, int components) {
+    if (clusters < 1 || clusters > 256 || components < 1)
+        throw Error("lpca: invalid model shape (" + std::to_string(clusters) + " clusters, " +
+                    std::to_string(components) + " components)");
+    _clusters = clusters;
+    _components = components;
+    if (clusterOf.size() != texelCount() ||
+        weights.size() != texelCount() * std::size_t(components) ||
+        eigenBrdfs.size() != std::size_t(clusters) * components * eigenBrdfSize())
+        throw Error("lpca: array sizes do not match the model's shape");
+    _viewTable = DirectionInterpolator(_views).bake(kDirectionTableResolution);
+    _lightTable = DirectionInterpolator(_lights).bake(kDirectionTableResolution);
+}
+
+glm::vec3 LpcaMaterial::evaluate(int x, int y, const glm::vec3& view,
+                                 const glm::vec3& light) const {
+    // The shader's arithmetic, in its order: per component the 3x3 interpolated Eigen-BRDF value,
+    // then the weighted sum (lpca.frag).
+    const std::size_t t = std::size_t(y) * _width + x;
+    const InterpolationWeights wv = DirectionInterpolator::lookupBaked(_viewTable, view);
+    const InterpolationWeights wl = DirectionInterpolator::lookupBaked(_lightTable, light);
+    const int k = clusterOf[t];
+    const std::size_t lights = _lights.size();
+    glm::vec3 sum(0.0f);
+    for (int i = 0; i < _components; ++i) {
+        const float* e = eigenBrdf(k, i);
+        glm::vec3 value(0.0f);
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) {
+                const float* rgb = e + (std::size_t(wv.index[a]) * lights + wl.index[b]) * 3;
+                value += (wv.weight[a] * wl.weight[b]) * glm::vec3(rgb[0], rgb[1], rgb[2]);
+            }
+        sum += weights[t * _components + i] * value;
+    }
+    return sum;
+}
+
+void LpcaMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
+    const std::size_t n = eigenBrdfSize();
+    std::fill(abrdf, abrdf + n, 0.0f);
+    const int k = clusterOf[texel];
+    for (int i = 0; i < _components; ++i) {
+        const float w = weights[texel * _components + i];
+        const float* e = eigenBrdf(k, i);
+        for (std::size_t j = 0; j < n; ++j) abrdf[j] += w * e[j];
+    }
+}
+
+MemoryFootprint LpcaMaterial::memory() const {
+    // Seed 001 Table 2 counts: per texel the cluster index (8-bit) and c weights (half); per
+    // cluster c Eigen-BRDFs of V*L*3 half values, shared by all texels.
+    const double texels = double(texelCount());
+    const double perTexelValues = double(clusterOf.size() + weights.size()) / texels;
+    const double sharedValues = double(eigenBrdfs.size()) / texels;
+    const std::uint64_t bytes = std::uint64_t(clusterOf.size()) * 1 +
+                                std::uint64_t(weights.size()) * 2 +
+                                std::uint64_t(eigenBrdfs.size()) * 2;
+    return {perTexelValues + sharedValues, double(bytes) / texels, bytes};
+}
+
+// ---- textures shared with lpca-revised ----------------------------------------------------------
+
+osg::ref_ptr<osg::Texture> createTextureArray(const MaterialTexture& t) {
+    if (t.depth > 1) return createFloatTexture(t);
+    osg::ref_ptr<osg::Texture> single = createFloatTexture(t);
+    osg::Texture2D* texture2D = static_cast<osg::Texture2D*>(single.get());
+    osg::ref_ptr<osg::Texture2DArray> array = new osg::Texture2DArray;
+    array->setTextureSize(t.width, t.height, 1);
+    array->setImage(0, texture2D->getImage());
+    array->setInternalFormat(texture2D->getInternalFormat());
+    array->setSourceType(texture2D->getSourceType());
+    array->setResizeNonPowerOfTwoHint(false);
+    array->setUseHardwareMipMapGeneration(false);
+    for (auto f : {osg::Texture::MIN_FILTER, osg::Texture::MAG_FILTER})
+        array->setFilter(f, osg::Texture::NEAREST);
+    for (auto w : {osg::Texture::WRAP_S, osg::Texture::WRAP_T, osg::Texture::WRAP_R})
+        array->setWrap(w, osg::Texture::CLAMP_TO_EDGE);
+    array->setName(t.name);
+    return array;
+}
+
+MaterialTexture lpcaClusterTexture(int width, int height,
+                                   const std::vector<std::uint8_t>& clusterOf) {
+    MaterialTexture t{"cluster", width, height, 1, 1, MaterialTexture::UNorm8, {}};
+    t.data.resize(clusterOf.size());
+    for (std::size_t i = 0; i < clusterOf.size(); ++i) t.data[i] = clusterOf[i] / 255.0f;
+    return t;
+}
+
+MaterialTexture lpcaWeightTexture(int width, int height, int components,
+                                  const std::vector<float>& weights) {
+    const int layers = (components + 3) / 4;
+    const std::size_t texels = std::size_t(width) * height;
+    MaterialTexture t{"weights", width, height, layers, 4, MaterialTexture::Half, {}};
+    t.data.assign(t.valueCount(), 0.0f);
+    for (std::size_t x = 0; x < texels; ++x)
+        for (int i = 0; i < components; ++i)
+            t.data[(std::size_t(i / 4) * texels + x) * 4 + i % 4] = weights[x * components + i];
+    return t;
+}
+
+std::vector<std::uint8_t> lpcaClusterFromTexture(const FittedMaterial& file, int clusters) {
+    const MaterialTexture& t = file.texture("cluster");
+    if (t.channels != 1 || t.depth != 1 || t.kind != MaterialTexture::UNorm8)
+        fail(file.source, "texture 'cluster' must be one 8-bit channel");
+    std::vector<std::uint8_t> clusterOf(t.data.size());
+    for (std::size_t i = 0; i < t.data.size(); ++i) {
+        const long k = std::lround(t.data[i] * 255.0f);
+        if (k < 0 || k >= clusters)
+            fail(file.source, "cluster index " + std::to_string(k) + " out of range (" +
+                                  std::to_string(clusters) + " clusters)");
+        clusterOf[i] = std::uint8_t(k);
+    }
+    return clusterOf;
+}
+
+std::vector<float> lpcaWeightsFromTexture(const FittedMaterial& file, int components) {
+    const MaterialTexture& t = file.texture("weights");
+    if (t.channels != 4 || t.depth != (components + 3) / 4)
+        fail(file.source, "texture 'weights' must have " + std::to_string((components + 3) / 4) +
+                              " RGBA layers for " + std::to_string(components) + " components");
+    const std::size_t texels = std::size_t(t.width) * t.height;
+    std::vector<float> weights(texels * components);
+    for (std::size_t x = 0; x < texels; ++x)
+        for (int i = 0; i < components; ++i)
+            weights[x * components + i] = t.data[(std::size_t(i / 4) * texels + x) * 4 + i % 4];
+    return weights;
+}
+
+// ---- file ------------------------------------------------------------------------------------
+
+FittedMaterial LpcaMaterial::toFittedMaterial() const {
+    FittedMaterial file = writeCommon();
+    file.parameters["clusters"] = std::to_string(_clusters);
+    file.parameters["components"] = std::to_string(_components);
+    file.textures.push_back(lpcaClusterTexture(_width, _height, clusterOf));
+    file.textures.push_back(lpcaWeightTexture(_width, _height, _components, weights));
+    // One layer per cluster; rows: view-major then component, columns: lights. The same
+    // layout as the GPU texture, within GL limits for Bonn (81 x 81c) and UBO2014 (151 x 151c).
+    file.textures.push_back({"eigenBrdfs",
+                             int(_lights.size()),
+                             int(_views.size()) * _components,
+                             _clusters,
+                             3,
+                             MaterialTexture::Half,
+                             {}});
+    MaterialTexture& e = file.textures.back();
+    e.data.resize(e.valueCount());
+    const std::size_t lights = _lights.size();
+    for (int k = 0; k < _clusters; ++k)
+        for (int i = 0; i < _components; ++i)
+            for (std::size_t v = 0; v < _views.size(); ++v)
+                for (std::size_t l = 0; l < lights; ++l)
+                    for (int c = 0; c < 3; ++c)
+                        e.data[(((std::size_t(k) * _views.size() + v) * _components + i) * lights +
+                                l) *
+                                   3 +
+                               c] = eigenBrdf(k, i)[(v * lights + l) * 3 + c];
+    return file;
+}
+
+osg::ref_ptr<LpcaMaterial> LpcaMaterial::fromFile(const FittedMaterial& file) {
+    osg::ref_ptr<LpcaMaterial> m = new LpcaMaterial;
+    m->readCommon(file);
+    int clusters = 0, components = 0;
+    try {
+        clusters = std::stoi(file.parameter("clusters"));
+        components = std::stoi(file.parameter("components"));
+    } catch (const std::invalid_argument&) {
+        fail(file.source, "clusters/components parameters are not integers");
+    }
+    if (clusters < 1 || clusters > 256 || components < 1)
+        fail(file.source, "invalid clusters/components");
+    const MaterialTexture& e = file.texture("eigenBrdfs");
+    const std::size_t views = m->_views.size(), lights = m->_lights.size();
+    if (e.width != int(lights) || e.height != int(views) * components || e.depth != clusters ||
+        e.channels != 3)
+        fail(file.source, "texture 'eigenBrdfs' does not match the directions and shape");
+    m->clusterOf = lpcaClusterFromTexture(file, clusters);
+    m->weights = lpcaWeightsFromTexture(file, components);
+    m->eigenBrdfs.resize(e.data.size());
+    const std::size_t size = views * lights * 3;
+    for (int k = 0; k < clusters; ++k)
+        for (int i = 0; i < components; ++i)
+            for (std::size_t v = 0; v < views; ++v)
+                for (std::size_t l = 0; l < lights; ++l)
+                    for (int c = 0; c < 3; ++c)
+                        m->eigenBrdfs[(std::size_t(k) * components + i) * size +
+                                      (v * lights + l) * 3 + c] =
+                            e.data[(((std::size_t(k) * views + v) * components + i) * lights + l) *
+                                       3 +
+                                   c];
+    try {
+        m->finishSetup(clusters, components);
+    } catch (const Error& error) {
+        fail(file.source, error.what());
+    }
+    return m;
+}
+
+// ---- GPU -------------------------------------------------------------------------------------
+
+osg::ref_ptr<osg::StateSet> LpcaMaterial::createStateSet() const {
+    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
+    addCommonState(*stateSet, methodName(), _width, _height);
+    const FittedMaterial file = toFittedMaterial();
+    addTexture(*stateSet, createFloatTexture(file.texture("cluster")).get(), "lpcaCluster", 0);
+    addTexture(*stateSet, createTextureArray(file.texture("weights")).get(), "lpcaWeights", 1);
+    addTexture(*stateSet, createTextureArray(file.texture("eigenBrdfs")).get(), "lpcaEigenBrdfs",
+               2);
+    addDirectionTable(*stateSet, _viewTable, "lpcaView", 3, 4);
+    addDirectionTable(*stateSet, _lightTable, "lpcaLight", 5, 6);
+    stateSet->addUniform(new osg::Uniform("lpcaComponents", _components));
+    return stateSet;
+}
+
+namespace {
+const bool registered = registerMethod(
+    {"lpca",
+     "local PCA (Mueller 2003): per texel a cluster index and c weights of its cluster's "
+     "Eigen-BRDFs, 3x3 view/light interpolation",
+     {{"clusters", "number of clusters k, 1..256 (default 32)"},
+      {"components", "Eigen-BRDFs per cluster c (default 8)"},
+      {"iterations", "maximum Lloyd iterations of the clustering (default 20)"},
+      {"training", "texels sampled to train the clusters, 0 = all (default 4096)"},
+      {"seed", "random seed of the training sample (default 1)"}},
+     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+         return LpcaMaterial::fit(btf, o);
+     },
+     [](const FittedMaterial& f) -> osg::ref_ptr<Material> { return LpcaMaterial::fromFile(f); }});
+}  // namespace
+
+}  // namespace osgBTF

@@ -1,0 +1,103 @@
+// osgBTF method "lpca": clustered local PCA of the texels' apparent BRDFs (Müller et al. 2003;
+// seed 000 sections 3-5, seed 001 section 3.5 equation 7).
+//
+//   BTF(x, v, l) ~ sum_{v' in N(v), l' in N(l)} w_v(v') w_l(l') sum_{i<c} alpha_i(x) E_{i,k(x)}(v',
+//   l')
+//
+// Each texel's ABRDF (all measured view x light x RGB values, one vector of V*L*3) belongs to one
+// of k clusters; a cluster is a c-dimensional subspace spanned by its Eigen-BRDFs E_{i,k}
+// (orthonormal vectors over all measured (view, light, rgb)); a texel stores its cluster index
+// k(x) and its c weights alpha_i(x) (the projections onto the Eigen-BRDFs). The cluster mean is
+// folded into the subspace (see README.md: seed 001 Table 2's 85.9 values per texel count exactly
+// c Eigen-BRDFs per cluster, no separate mean), so each cluster is the best rank-c *linear*
+// subspace of its members, which also contains the best mean + (c-1) components fit.
+// N(v), N(l): the 3 measured directions of the baked Delaunay table and their weights.
+//
+// Storage (seed 001 Table 2 at Bonn 81x81, 256x256, k = 32, c = 8: 85.9 values, 170.8 bytes):
+// cluster index 8-bit, weights half, Eigen-BRDFs half.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/DirectionInterpolation.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+/** Settings of an LPCA fit (FitOptions keys in brackets). */
+struct LpcaSettings {
+    int clusters = 32;          ///< [clusters] k, 1..256 (the index is stored in 8 bits)
+    int components = 8;         ///< [components] c Eigen-BRDFs per cluster, >= 1
+    int iterations = 20;        ///< [iterations] at most this many Lloyd iterations, >= 1
+    int trainingTexels = 4096;  ///< [training] texels the clusters are trained on (0 = all)
+    unsigned seed = 1;          ///< [seed] random seed of the training sample and refit subsampling
+
+    /** Reads and validates the options; throws Error "lpca: ..." for bad values. */
+    static LpcaSettings fromOptions(const FitOptions& options);
+};
+
+class LpcaMaterial : public Material {
+public:
+    LpcaMaterial() = default;
+    LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    META_Object(osgBTF, LpcaMaterial)
+
+        /** Fits the model (LpcaFit.cpp). Options: see LpcaSettings. Fills fitInfo with "seconds",
+         *  "iterations", "training_texels", "training_rms". Throws Error for invalid options. */
+        static osg::ref_ptr<LpcaMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+    static osg::ref_ptr<LpcaMaterial> fromFile(const FittedMaterial& file);
+
+    /** A model of the given shape with zero weights and Eigen-BRDFs, e.g. for memory accounting
+     *  of a configuration without fitting one. */
+    static osg::ref_ptr<LpcaMaterial> ofShape(int width, int height, const DirectionSet& views,
+                                              const DirectionSet& lights, int clusters,
+                                              int components);
+
+    std::string methodName() const override { return "lpca"; }
+    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+    void evaluateMeasured(std::size_t texel, float* abrdf) const override;
+    MemoryFootprint memory() const override;
+    FittedMaterial toFittedMaterial() const override;
+    osg::ref_ptr<osg::StateSet> createStateSet() const override;
+
+    int clusters() const { return _clusters; }
+    int components() const { return _components; }
+    /** Values of one Eigen-BRDF: views * lights * 3. */
+    std::size_t eigenBrdfSize() const { return _views.size() * _lights.size() * 3; }
+    /** Eigen-BRDF i of cluster k, [view][light][rgb] (the layout of MeasuredBtf::abrdf). */
+    const float* eigenBrdf(int k, int i) const {
+        return eigenBrdfs.data() + (std::size_t(k) * _components + i) * eigenBrdfSize();
+    }
+
+    /** Per texel (rows bottom-up): cluster index, 0 .. clusters-1. */
+    std::vector<std::uint8_t> clusterOf;
+    /** Per texel: c weights, [texel][component]; half values. */
+    std::vector<float> weights;
+    /** Per cluster: c Eigen-BRDFs, [cluster][component][view][light][rgb]; half values. */
+    std::vector<float> eigenBrdfs;
+
+    /** Call after changing the arrays' shape by hand: checks sizes, rebuilds direction tables. */
+    void finishSetup(int clusters, int components);
+
+private:
+    friend struct LpcaFitter;
+    int _clusters = 0, _components = 0;
+    DirectionInterpolator::Baked _viewTable, _lightTable;
+};
+
+/** A Texture2DArray for `texture` even when its depth is 1 (createFloatTexture makes a Texture2D
+ *  then, but the LPCA shaders sample arrays whatever the number of clusters or weight groups). */
+osg::ref_ptr<osg::Texture> createTextureArray(const MaterialTexture& texture);
+
+/** The per-texel textures shared by "lpca" and "lpca-revised": the cluster index (8-bit, index /
+ *  255) and the weights in groups of 4 (RGBA layers, zero-padded). */
+MaterialTexture lpcaClusterTexture(int width, int height,
+                                   const std::vector<std::uint8_t>& clusterOf);
+MaterialTexture lpcaWeightTexture(int width, int height, int components,
+                                  const std::vector<float>& weights);
+/** Reads them back; throws Error naming the file for wrong shapes or out-of-range indices. */
+std::vector<std::uint8_t> lpcaClusterFromTexture(const FittedMaterial& file, int clusters);
+std::vector<float> lpcaWeightsFromTexture(const FittedMaterial& file, int components);
+
+}  // namespace osgBTF

@@ -1,0 +1,330 @@
+// LPCA fit: generalised Lloyd iteration of local PCA (Kambhatla & Leen 1997, as Müller et al.
+// 2003 use it), trained on a random subsample of the texels as seed 001 section 4.4 says it can
+// be ("does not require the full dataset for training"), then every texel is assigned to the
+// cluster that reconstructs it best and projected onto that cluster's Eigen-BRDFs.
+//
+// Each cluster is the best rank-c linear subspace of its members (mean folded in, README.md):
+// its Eigen-BRDFs are the top-c right singular vectors of the members' ABRDF matrix X_k (m x D,
+// D = V*L*3), found from the small Gram matrix X_k X_k^T (m x m): if X_k X_k^T u = s^2 u then
+// E = X_k^T u / s. The reconstruction error of texel x in cluster k is |x|^2 - |E_k^T x|^2, so the
+// assignment of n texels to K clusters is one GEMM (n x D) * (D x K*c).
+//
+// This is the only translation unit that instantiates Eigen's SelfAdjointEigenSolver (slow to
+// compile); it is reached through LpcaMaterial::fit only.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include <Imath/half.h>
+#include <tbb/parallel_for.h>
+#include <Eigen/Dense>
+
+#include "core/Error.h"
+#include "core/Progress.h"
+#include "materials/lpca/Lpca.h"
+
+namespace osgBTF {
+
+namespace {
+
+using RowMatrix = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using ColMatrix = Eigen::MatrixXf;
+
+/** Members beyond this are subsampled when a cluster's subspace is refitted: the Gram matrix and
+ *  its eigendecomposition grow with the square and cube of the member count. */
+constexpr std::size_t kMaxRefitMembers = 256;
+/** Texels per block of the final projection pass (bounds the gathered ABRDF block's memory). */
+constexpr std::size_t kChunkTexels = 2048;
+
+/** Rows = the ABRDFs of `texels` (ascending for locality: the BTF is image-major). */
+void gatherRows(const MeasuredBtf& btf, const std::size_t* texels, std::size_t count,
+                RowMatrix& rows) {
+    const std::size_t pairs = btf.viewCount() * btf.lightCount();
+    const std::size_t stride = btf.texelCount() * 3;
+    rows.resize(Eigen::Index(count), Eigen::Index(pairs * 3));
+    const float* f = btf.floatData();
+    const Imath::half* h = btf.halfData();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const auto& r) {
+        for (std::size_t pair = 0; pair < pairs; ++pair) {
+            const std::size_t base = pair * stride;
+            for (std::size_t j = r.begin(); j < r.end(); ++j) {
+                const std::size_t i = base + texels[j] * 3;
+                float* out = rows.data() + j * pairs * 3 + pair * 3;
+                for (int c = 0; c < 3; ++c) out[c] = f ? f[i + c] : float(h[i + c]);
+            }
+        }
+    });
+}
+
+/** out = rows * basis, in parallel over blocks of rows (Eigen's GEMM is single-threaded here). */
+void project(const RowMatrix& rows, const Eigen::Ref<const ColMatrix>& basis, RowMatrix& out) {
+    out.resize(rows.rows(), basis.cols());
+    const Eigen::Index block = 128;
+    tbb::parallel_for(Eigen::Index(0), (rows.rows() + block - 1) / block, [&](Eigen::Index b) {
+        const Eigen::Index r0 = b * block, n = std::min(block, rows.rows() - r0);
+        out.middleRows(r0, n).noalias() = rows.middleRows(r0, n) * basis;
+    });
+}
+
+/** Best cluster of each row and its reconstruction error |x|^2 - |E_k^T x|^2 (>= 0). */
+void assign(const RowMatrix& rows, const Eigen::VectorXf& norms2,
+            const Eigen::Ref<const ColMatrix>& basis, int clusters, int components,
+            std::vector<int>& clusterOf, std::vector<double>& error, RowMatrix& projections) {
+    project(rows, basis, projections);
+    const std::size_t n = std::size_t(rows.rows());
+    clusterOf.resize(n);
+    error.resize(n);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
+        double best = 1e300;
+        int bestK = 0;
+        for (int k = 0; k < clusters; ++k) {
+            const double captured =
+                projections.row(Eigen::Index(j)).segment(k * components, components).squaredNorm();
+            const double e = double(norms2[Eigen::Index(j)]) - captured;
+            if (e < best) {
+                best = e;
+                bestK = k;
+            }
+        }
+        clusterOf[j] = bestK;
+        error[j] = std::max(best, 0.0);
+    });
+}
+
+/** The top-`components` right singular vectors of the member rows, as columns of `basis`
+ *  (zero columns where the members span fewer dimensions). */
+void fitSubspace(const RowMatrix& rows, const std::vector<std::size_t>& members, int components,
+                 Eigen::Ref<ColMatrix> basis) {
+    basis.setZero();
+    if (members.empty()) return;
+    RowMatrix x(Eigen::Index(members.size()), rows.cols());
+    for (std::size_t j = 0; j < members.size(); ++j)
+        x.row(Eigen::Index(j)) = rows.row(Eigen::Index(members[j]));
+    const Eigen::MatrixXd gram = (x * x.transpose()).cast<double>();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram);
+    const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
+    const Eigen::Index m = values.size();
+    const double largest = std::max(values[m - 1], 0.0);
+    for (int i = 0; i < components && i < m; ++i) {
+        const double value = values[m - 1 - i];
+        if (!(value > largest * 1e-10) || value <= 0) break;
+        const Eigen::VectorXf u =
+            (solver.eigenvectors().col(m - 1 - i) / std::sqrt(value)).cast<float>();
+        basis.col(i).noalias() = x.transpose() * u;
+        basis.col(i).normalize();  // removes the float rounding of the Gram route
+    }
+}
+
+}  // namespace
+
+LpcaSettings LpcaSettings::fromOptions(const FitOptions& options) {
+    static const std::set<std::string> known = {"clusters", "components", "iterations", "training",
+                                                "seed"};
+    for (const auto& [key, value] : options.values())
+        if (!known.count(key))
+            throw Error("lpca: unknown option '" + key +
+                        "' (known: clusters, components, iterations, training, seed)");
+    LpcaSettings s;
+    s.clusters = options.getInt("clusters", s.clusters);
+    s.components = options.getInt("components", s.components);
+    s.iterations = options.getInt("iterations", s.iterations);
+    s.trainingTexels = options.getInt("training", s.trainingTexels);
+    const int seed = options.getInt("seed", int(s.seed));
+    if (s.clusters < 1 || s.clusters > 256)
+        throw Error("lpca: clusters must be between 1 and 256 (8-bit index), got " +
+                    std::to_string(s.clusters));
+    if (s.components < 1)
+        throw Error("lpca: components must be at least 1, got " + std::to_string(s.components));
+    if (s.iterations < 1)
+        throw Error("lpca: iterations must be at least 1, got " + std::to_string(s.iterations));
+    if (s.trainingTexels < 0)
+        throw Error("lpca: training must be 0 (all texels) or a texel count, got " +
+                    std::to_string(s.trainingTexels));
+    if (seed < 0) throw Error("lpca: seed must be >= 0, got " + std::to_string(seed));
+    s.seed = unsigned(seed);
+    return s;
+}
+
+struct LpcaFitter {
+    static osg::ref_ptr<LpcaMaterial> run(const MeasuredBtf& btf, const LpcaSettings& s);
+};
+
+osg::ref_ptr<LpcaMaterial> LpcaMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+    return LpcaFitter::run(btf, LpcaSettings::fromOptions(options));
+}
+
+osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const MeasuredBtf& btf, const LpcaSettings& s) {
+    const auto start = std::chrono::steady_clock::now();
+    if (btf.empty()) throw Error("lpca: the BTF is empty");
+    const std::size_t texels = btf.texelCount();
+    const std::size_t dims = btf.viewCount() * btf.lightCount() * 3;
+    const int K = s.clusters, c = s.components;
+    if (std::size_t(c) > dims)
+        throw Error("lpca: components (" + std::to_string(c) + ") exceed the ABRDF size (" +
+                    std::to_string(dims) + ")");
+    if (std::size_t(K) > texels)
+        throw Error("lpca: clusters (" + std::to_string(K) + ") exceed the texel count (" +
+                    std::to_string(texels) + ")");
+    std::mt19937_64 random(s.seed);  // training sample and refit subsampling
+
+    // ---- training set ----
+    std::size_t trainCount = s.trainingTexels == 0
+                                 ? texels
+                                 : std::min<std::size_t>(texels, std::size_t(s.trainingTexels));
+    trainCount = std::max(trainCount, std::size_t(K));
+    std::vector<std::size_t> train(texels);
+    std::iota(train.begin(), train.end(), std::size_t(0));
+    if (trainCount < texels) {
+        for (std::size_t i = 0; i < trainCount; ++i)
+            std::swap(train[i], train[i + random() % (texels - i)]);
+        train.resize(trainCount);
+        std::sort(train.begin(), train.end());
+    }
+    RowMatrix x;
+    gatherRows(btf, train.data(), train.size(), x);
+    const Eigen::VectorXf norms2 = x.rowwise().squaredNorm();
+    const std::size_t n = train.size();
+
+    // ---- clustering: LBG-style doubling of generalised Lloyd iterations ----
+    // Start with one cluster; iterate (refit the subspaces, reassign) to convergence; split every
+    // cluster (the worst ones when fewer splits are needed) into its better and worse
+    // reconstructed halves; repeat until K clusters. Deterministic for a given training set, and
+    // a K-cluster fit passes through the converged state of each smaller doubling, so more
+    // clusters do not end with a larger training error (k-means++ seeding often did).
+    std::vector<int> clusterOf(n, 0);
+    std::vector<double> error(n, 0.0);
+    ColMatrix basis = ColMatrix::Zero(Eigen::Index(dims), Eigen::Index(K) * c);
+    RowMatrix projections;
+    double total = 0;
+    int iterations = 0, current = 1, reported = 0;
+    {
+        Progress progress("lpca: clustering", std::size_t(K));
+        for (;;) {
+            // Intermediate phases only prepare the next split: a few iterations suffice.
+            const int phaseIterations = current == K ? s.iterations : std::min(s.iterations, 5);
+            double previous = 1e300;
+            for (int it = 0; it < phaseIterations; ++it) {
+                std::vector<std::vector<std::size_t>> members(static_cast<std::size_t>(current));
+                for (std::size_t j = 0; j < n; ++j) members[std::size_t(clusterOf[j])].push_back(j);
+                // An empty cluster takes the worst-reconstructed texel of the largest cluster.
+                for (int k = 0; k < current; ++k) {
+                    if (!members[std::size_t(k)].empty()) continue;
+                    auto& donor = *std::max_element(
+                        members.begin(), members.end(),
+                        [](const auto& a, const auto& b) { return a.size() < b.size(); });
+                    if (donor.size() < 2) break;
+                    auto worst = std::max_element(
+                        donor.begin(), donor.end(),
+                        [&](std::size_t a, std::size_t b) { return error[a] < error[b]; });
+                    members[std::size_t(k)].push_back(*worst);
+                    clusterOf[*worst] = k;
+                    donor.erase(worst);
+                }
+                for (auto& m : members)
+                    if (m.size() > kMaxRefitMembers) {
+                        std::shuffle(m.begin(), m.end(), random);
+                        m.resize(kMaxRefitMembers);
+                    }
+                tbb::parallel_for(0, current, [&](int k) {
+                    fitSubspace(x, members[std::size_t(k)], c,
+                                basis.middleCols(Eigen::Index(k) * c, c));
+                });
+                const std::vector<int> previousAssignment = clusterOf;
+                assign(x, norms2, basis.leftCols(Eigen::Index(current) * c), current, c, clusterOf,
+                       error, projections);
+                total = std::accumulate(error.begin(), error.end(), 0.0);
+                ++iterations;
+                if (clusterOf == previousAssignment || previous - total <= 1e-4 * previous) break;
+                previous = total;
+            }
+            progress.advance(std::size_t(current - reported));
+            reported = current;
+            if (current == K) break;
+            std::vector<double> clusterError(std::size_t(current), 0.0);
+            for (std::size_t j = 0; j < n; ++j) clusterError[std::size_t(clusterOf[j])] += error[j];
+            std::vector<int> order(static_cast<std::size_t>(current));
+            std::iota(order.begin(), order.end(), 0);
+            std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+                return clusterError[std::size_t(a)] > clusterError[std::size_t(b)];
+            });
+            const int splits = std::min(current, K - current);
+            for (int i = 0; i < splits; ++i) {
+                const int from = order[std::size_t(i)], to = current + i;
+                std::vector<double> errors;
+                for (std::size_t j = 0; j < n; ++j)
+                    if (clusterOf[j] == from) errors.push_back(error[j]);
+                if (errors.size() < 2) continue;  // stays empty: the rule above fills it
+                std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+                const double median = errors[errors.size() / 2];
+                std::size_t moved = 0;
+                for (std::size_t j = 0; j < n && moved + 1 < errors.size(); ++j)
+                    if (clusterOf[j] == from && error[j] >= median) {
+                        clusterOf[j] = to;
+                        ++moved;
+                    }
+            }
+            current += splits;
+        }
+    }
+    const double trainingRms = std::sqrt(total / double(n * dims));
+    x.resize(0, 0);
+    projections.resize(0, 0);
+
+    // ---- the model: half Eigen-BRDFs; every texel assigned and projected with them ----
+    osg::ref_ptr<LpcaMaterial> m = new LpcaMaterial;
+    m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());
+    for (Eigen::Index i = 0; i < basis.size(); ++i)
+        basis.data()[i] = float(Imath::half(basis.data()[i]));
+    m->eigenBrdfs.resize(std::size_t(K) * c * dims);
+    for (int k = 0; k < K; ++k)
+        for (int i = 0; i < c; ++i)
+            std::copy_n(basis.col(Eigen::Index(k) * c + i).data(), dims,
+                        m->eigenBrdfs.data() + (std::size_t(k) * c + i) * dims);
+    m->clusterOf.resize(texels);
+    m->weights.resize(texels * std::size_t(c));
+    double allError = 0;
+    {
+        Progress progress("lpca: projecting", texels);
+        std::vector<std::size_t> chunk;
+        RowMatrix rows;
+        std::vector<int> chunkCluster;
+        std::vector<double> chunkError;
+        for (std::size_t t0 = 0; t0 < texels; t0 += kChunkTexels) {
+            const std::size_t count = std::min(kChunkTexels, texels - t0);
+            chunk.resize(count);
+            std::iota(chunk.begin(), chunk.end(), t0);
+            gatherRows(btf, chunk.data(), count, rows);
+            const Eigen::VectorXf rowNorms2 = rows.rowwise().squaredNorm();
+            assign(rows, rowNorms2, basis, K, c, chunkCluster, chunkError, projections);
+            for (std::size_t j = 0; j < count; ++j) {
+                const int k = chunkCluster[j];
+                m->clusterOf[t0 + j] = std::uint8_t(k);
+                for (int i = 0; i < c; ++i)
+                    m->weights[(t0 + j) * c + i] =
+                        float(Imath::half(projections(Eigen::Index(j), Eigen::Index(k) * c + i)));
+                allError += chunkError[j];
+            }
+            progress.advance(count);
+        }
+    }
+    m->finishSetup(K, c);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    auto text = [](double v) {
+        std::ostringstream out;
+        out << v;
+        return out.str();
+    };
+    m->fitInfo["seconds"] = text(seconds);
+    m->fitInfo["iterations"] = std::to_string(iterations);
+    m->fitInfo["training_texels"] = std::to_string(n);
+    m->fitInfo["training_rms"] = text(trainingRms);
+    m->fitInfo["rms"] = text(std::sqrt(allError / double(texels * dims)));
+    return m;
+}
+
+}  // namespace osgBTF

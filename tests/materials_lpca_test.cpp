@@ -1,0 +1,214 @@
+// LPCA (materials/lpca): option errors, recovery of a model-generated BTF, optimality for one
+// cluster (a global PCA), monotone error in k and c, measured == interpolated at the samples,
+// save/load, memory of seed 001 Table 2, and the error on the built-in sample.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include <Eigen/SVD>
+
+#include "core/Error.h"
+#include "core/ErrorMetrics.h"
+#include "core/SampleBtf.h"
+#include "materials/lambert/Lambert.h"
+#include "materials/lpca/Lpca.h"
+#include "tests/TestUtil.h"
+
+using namespace osgBTF;
+
+namespace {
+
+MeasuredBtf sample(int width, int height) {
+    SampleOptions options;
+    options.width = width;
+    options.height = height;
+    return makeSampleBtf(options);
+}
+
+std::string fitError(const std::string& options) {
+    try {
+        LpcaMaterial::fit(sample(4, 4), FitOptions::parse(options));
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+double sumSquaredResidual(const MeasuredBtf& btf, const Material& m) {
+    double sum = 0;
+    std::vector<float> model(btf.viewCount() * btf.lightCount() * 3);
+    for (std::size_t t = 0; t < btf.texelCount(); ++t) {
+        const std::vector<float> measured = btf.abrdf(t);
+        m.evaluateMeasured(t, model.data());
+        for (std::size_t i = 0; i < model.size(); ++i)
+            sum += double(measured[i] - model[i]) * (measured[i] - model[i]);
+    }
+    return sum;
+}
+
+}  // namespace
+
+TEST(Lpca, InvalidOptionsAreRefusedWithClearMessages) {
+    EXPECT_EQ(fitError("clusters=0"),
+              "lpca: clusters must be between 1 and 256 (8-bit index), got 0");
+    EXPECT_EQ(fitError("clusters=257"),
+              "lpca: clusters must be between 1 and 256 (8-bit index), got 257");
+    EXPECT_EQ(fitError("components=0"), "lpca: components must be at least 1, got 0");
+    EXPECT_EQ(fitError("iterations=0"), "lpca: iterations must be at least 1, got 0");
+    EXPECT_EQ(fitError("training=-1"),
+              "lpca: training must be 0 (all texels) or a texel count, got -1");
+    EXPECT_EQ(fitError("clusters=17"), "lpca: clusters (17) exceed the texel count (16)");
+    EXPECT_EQ(fitError("lobes=2"),
+              "lpca: unknown option 'lobes' (known: clusters, components, iterations, training, "
+              "seed)");
+    EXPECT_EQ(fitError("clusters=two"), "option clusters: 'two' is not an integer");
+}
+
+TEST(Lpca, RecoversClustersAndSubspacesOfAModelGeneratedBtf) {
+    // Two clusters, each a random 2D subspace of positive ABRDFs; texel t belongs to cluster
+    // t % 3 == 0; weights random; plus uniform noise of +-1e-3.
+    MeasuredBtf btf(8, 6, DirectionSet::bonn81(), DirectionSet::bonn81());
+    const std::size_t dims = 81 * 81 * 3;
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f), noise(-1e-3f, 1e-3f);
+    std::vector<std::vector<float>> basis(4, std::vector<float>(dims));
+    for (auto& b : basis)
+        for (auto& v : b) v = 0.5f * unit(random);
+    std::vector<int> truth(btf.texelCount());
+    for (std::size_t t = 0; t < btf.texelCount(); ++t) {
+        truth[t] = t % 3 == 0 ? 1 : 0;
+        const float a = unit(random), b = unit(random);
+        for (std::size_t i = 0; i < dims; ++i) {
+            const float value = a * basis[2 * truth[t]][i] + b * basis[2 * truth[t] + 1][i];
+            btf.setValue(i / 3 / 81, i / 3 % 81, t, int(i % 3), value + noise(random));
+        }
+    }
+    osg::ref_ptr<LpcaMaterial> m =
+        LpcaMaterial::fit(btf, FitOptions::parse("clusters=2 components=2 training=0"));
+    for (std::size_t t = 0; t < btf.texelCount(); ++t)
+        EXPECT_EQ(m->clusterOf[t] == m->clusterOf[0], truth[t] == truth[0]) << "texel " << t;
+    const ErrorSummary error =
+        computeError(btf, [&](std::size_t t, float* out) { m->evaluateMeasured(t, out); });
+    std::cout << "recovery: per-texel error avg " << error.average << " max " << error.maximum
+              << "\n";
+    // Noise alone: |RGB difference| of +-1e-3 uniform channels averages ~1e-3.
+    EXPECT_LT(error.average, 2e-3);
+    EXPECT_LT(error.maximum, 3e-3);
+}
+
+TEST(Lpca, OneClusterIsTheOptimalRankCApproximation) {
+    // k = 1 is a global PCA of the ABRDFs (uncentred, the mean folded into the subspace): its
+    // squared error must be the optimal rank-c error, the sum of the discarded squared singular
+    // values of the texels x (views*lights*3) matrix (Eckart-Young), up to half rounding.
+    const MeasuredBtf btf = sample(8, 6);
+    const int c = 3;
+    osg::ref_ptr<LpcaMaterial> m = LpcaMaterial::fit(
+        btf, FitOptions::parse("clusters=1 training=0 components=" + std::to_string(c)));
+    Eigen::MatrixXd x(btf.texelCount(), 81 * 81 * 3);
+    for (std::size_t t = 0; t < btf.texelCount(); ++t) {
+        const std::vector<float> a = btf.abrdf(t);
+        for (std::size_t i = 0; i < a.size(); ++i) x(Eigen::Index(t), Eigen::Index(i)) = a[i];
+    }
+    const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(x).singularValues();
+    double optimal = 0;
+    for (Eigen::Index i = c; i < s.size(); ++i) optimal += s[i] * s[i];
+    const double fitted = sumSquaredResidual(btf, *m);
+    std::cout << "rank-" << c << " optimum " << optimal << ", lpca k=1 " << fitted << "\n";
+    EXPECT_GE(fitted, optimal * (1 - 1e-6));
+    EXPECT_LE(fitted, optimal * 1.01);
+}
+
+TEST(Lpca, ErrorDecreasesAsClustersOrComponentsGrow) {
+    const MeasuredBtf btf = sample(12, 12);
+    auto averageError = [&](int k, int c) {
+        osg::ref_ptr<LpcaMaterial> m =
+            LpcaMaterial::fit(btf, FitOptions::parse("training=0 clusters=" + std::to_string(k) +
+                                                     " components=" + std::to_string(c)));
+        const double e = computeError(btf, [&](std::size_t t, float* out) {
+                             m->evaluateMeasured(t, out);
+                         }).average;
+        std::cout << "k=" << k << " c=" << c << ": error avg " << e << "\n";
+        return e;
+    };
+    double previous = 1e9;
+    for (int c : {1, 2, 4, 8}) {
+        const double e = averageError(2, c);
+        EXPECT_LT(e, previous) << "c=" << c;
+        previous = e;
+    }
+    previous = 1e9;
+    for (int k : {1, 2, 4, 8}) {
+        const double e = averageError(k, 2);
+        EXPECT_LT(e, previous) << "k=" << k;
+        previous = e;
+    }
+}
+
+TEST(Lpca, InterpolatedEvaluationEqualsMeasuredAtTheSamples) {
+    const MeasuredBtf btf = sample(5, 3);
+    osg::ref_ptr<LpcaMaterial> m =
+        LpcaMaterial::fit(btf, FitOptions::parse("clusters=3 components=4"));
+    std::vector<float> measured(81 * 81 * 3);
+    for (std::size_t t : {0, 7, 14}) {
+        m->evaluateMeasured(t, measured.data());
+        for (std::size_t v = 0; v < 81; v += 7)
+            for (std::size_t l = 0; l < 81; l += 5) {
+                const glm::vec3 e = m->evaluate(int(t % 5), int(t / 5), btf.views().vector(v),
+                                                btf.lights().vector(l));
+                for (int c = 0; c < 3; ++c) EXPECT_NEAR(e[c], measured[(v * 81 + l) * 3 + c], 1e-5);
+            }
+    }
+}
+
+TEST(Lpca, SaveLoadRoundTripIsExactAndOiioReadsTheFile) {
+    test::TempDir dir;
+    osg::ref_ptr<LpcaMaterial> m =
+        LpcaMaterial::fit(sample(7, 5), FitOptions::parse("clusters=3 components=5"));
+    saveMaterial(*m, dir.file("lpca.exr"));
+    osg::ref_ptr<Material> back = loadMaterial(dir.file("lpca.exr"));
+    ASSERT_EQ(back->methodName(), "lpca");
+    const LpcaMaterial& b = static_cast<const LpcaMaterial&>(*back);
+    EXPECT_EQ(b.clusters(), 3);
+    EXPECT_EQ(b.components(), 5);
+    EXPECT_EQ(b.clusterOf, m->clusterOf);
+    EXPECT_EQ(b.weights, m->weights);
+    EXPECT_EQ(b.eigenBrdfs, m->eigenBrdfs);
+    EXPECT_EQ(b.fitInfo.at("iterations"), m->fitInfo.at("iterations"));
+    EXPECT_EQ(b.width(), 7);
+    EXPECT_EQ(b.height(), 5);
+    const auto info = test::runCommand("oiiotool --info " + test::shellQuote(dir.file("lpca.exr")));
+    EXPECT_EQ(info.exitCode, 0) << info.output;
+}
+
+TEST(Lpca, MemoryMatchesSeed001Table2AtTheStandardConfiguration) {
+    // Bonn 81x81, 256x256 texels, 32 clusters x 8 components: 85.9 values, 170.8 bytes per texel.
+    osg::ref_ptr<LpcaMaterial> m =
+        LpcaMaterial::ofShape(256, 256, DirectionSet::bonn81(), DirectionSet::bonn81(), 32, 8);
+    const MemoryFootprint memory = m->memory();
+    std::cout << "lpca 32x8 at 256x256: " << memory.valuesPerTexel << " values, "
+              << memory.bytesPerTexel << " bytes per texel\n";
+    EXPECT_NEAR(memory.valuesPerTexel, 85.9, 0.05);
+    EXPECT_NEAR(memory.bytesPerTexel, 170.8, 0.05);
+    EXPECT_EQ(memory.totalBytes, std::uint64_t(65536) * 17 + std::uint64_t(32) * 8 * 19683 * 2);
+}
+
+TEST(Lpca, ErrorOnTheBuiltInSampleIsWellBelowTheLambertBaseline) {
+    // Small enough for a Debug/ASan build; bench_fit_lpca --error gives the default 32x8 figures.
+    const MeasuredBtf btf = sample(16, 16);
+    osg::ref_ptr<LpcaMaterial> m =
+        LpcaMaterial::fit(btf, FitOptions::parse("clusters=8 components=4"));
+    const ErrorSummary e =
+        computeError(btf, [&](std::size_t t, float* out) { m->evaluateMeasured(t, out); });
+    osg::ref_ptr<LambertMaterial> lambert = LambertMaterial::fit(btf, {});
+    const ErrorSummary base =
+        computeError(btf, [&](std::size_t t, float* out) { lambert->evaluateMeasured(t, out); });
+    std::cout << "lpca (8 clusters, 4 components) on the 16x16 sample: error avg " << e.average
+              << " min " << e.minimum << " max " << e.maximum << "; lambert avg " << base.average
+              << "; fit " << m->fitInfo["seconds"] << " s\n";
+    ::testing::Test::RecordProperty("error_avg", std::to_string(e.average));
+    EXPECT_EQ(e.nonFiniteValues, 0u);
+    // LPCA's first component alone can represent Lambert's rho * l_z per texel (up to the
+    // clustering), so 4 components and 8 clusters must do much better.
+    EXPECT_LT(e.average, 0.5 * base.average);
+    EXPECT_LT(e.maximum, base.maximum);
+}
