@@ -1,0 +1,696 @@
+// Reads top to bottom: storage layout, options, fitter, CPU evaluator, memory, save/load,
+// StateSet builder, registration. The model and its equation: Rf.h.
+#include "materials/rf/Rf.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include <Imath/half.h>
+#include <ceres/tiny_solver.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <glm/geometric.hpp>
+#include <osg/Uniform>
+
+#include "core/Error.h"
+#include "core/Progress.h"
+#include "materials/MaterialState.h"
+
+namespace osgBTF {
+
+// ---- storage layout --------------------------------------------------------------------------
+
+namespace {
+
+/** One array of the model as it is stored (file part, GPU texture): the single description that
+ *  save, load, memory accounting and the StateSet builder all read, so they cannot disagree. */
+struct StoredArray {
+    const char* name;     ///< texture name in the file
+    const char* sampler;  ///< GLSL sampler in shaders/rf.frag
+    int depth;            ///< layers (a Texture2DArray on the GPU when > 1)
+    int channels;
+    MaterialTexture::PixelKind kind;
+    std::vector<float> RfMaterial::*member;
+};
+
+std::array<StoredArray, 3> storedArrays(std::size_t views, int lobes) {
+    return {
+        {{"rhoD", "rfRhoD", 1, 3, MaterialTexture::UNorm8, &RfMaterial::rhoD},
+         {"rhoV", "rfRhoV", int(views), 3, MaterialTexture::Half, &RfMaterial::rhoV},
+         {"lobes", "rfLobes", int(views) * lobes, 4, MaterialTexture::Half, &RfMaterial::lobes}}};
+}
+
+double bytesPerValue(MaterialTexture::PixelKind kind) {
+    switch (kind) {
+        case MaterialTexture::UNorm8:
+            return 1;
+        case MaterialTexture::Half:
+            return 2;
+        case MaterialTexture::Float:
+            return 4;
+    }
+    return 4;
+}
+
+/** Exactly what the file stores and loadFittedMaterial returns for UNorm8 (k / 255.0f). */
+float toUNorm8(float v) {
+    return std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;
+}
+
+float toHalf(float v) {
+    return float(Imath::half(std::clamp(v, -65504.0f, 65504.0f)));
+}
+
+/** One lobe, in float and in the order the shader computes it (shaders/rf.frag). */
+inline float lobeValue(const float* p, const glm::vec3& l) {
+    const float base = p[0] * l.x + p[1] * l.y + p[2] * l.z;
+    return base > 0.0f ? std::pow(base, p[3]) : 0.0f;
+}
+
+constexpr int kMaxLayers = 2048;  // GL_MAX_ARRAY_TEXTURE_LAYERS guaranteed by GL 3.3+
+
+}  // namespace
+
+RfMaterial::RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop)
+    : Material(other, copyop),
+      rhoD(other.rhoD),
+      rhoV(other.rhoV),
+      lobes(other.lobes),
+      _lobes(other._lobes),
+      _viewTable(other._viewTable),
+      _lightVectors(other._lightVectors) {}
+
+void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
+                          int lobeCount) {
+    if (width <= 0 || height <= 0)
+        throw Error("rf: invalid size " + std::to_string(width) + "x" + std::to_string(height));
+    if (lobeCount < 1 || lobeCount > kMaxLobes)
+        throw Error("rf: lobes must be between 1 and " + std::to_string(kMaxLobes) + ", got " +
+                    std::to_string(lobeCount));
+    if (views.size() < 3) throw Error("rf: needs at least 3 measured views to interpolate");
+    if (lights.size() == 0) throw Error("rf: needs at least one measured light");
+    const std::size_t layers = views.size() * std::size_t(lobeCount);
+    if (layers > std::size_t(kMaxLayers))
+        throw Error("rf: " + std::to_string(views.size()) + " views x " +
+                    std::to_string(lobeCount) + " lobes need " + std::to_string(layers) +
+                    " texture layers, more than the " + std::to_string(kMaxLayers) +
+                    " OpenGL guarantees");
+    const std::size_t texels = std::size_t(width) * std::size_t(height);
+    checkMemory(std::uint64_t(texels) * (3 + views.size() * (3 + 4 * lobeCount)) * sizeof(float),
+                "rf model");
+    _viewTable = DirectionInterpolator(views).bake(kDirectionTableResolution);
+    _lightVectors.clear();
+    for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
+    _lobes = lobeCount;
+    rhoD.assign(texels * 3, 0.0f);
+    rhoV.assign(texels * views.size() * 3, 0.0f);
+    lobes.assign(texels * layers * 4, 0.0f);
+    setGeometry(width, height, std::move(views), std::move(lights));
+}
+
+osg::ref_ptr<RfMaterial> RfMaterial::create(int width, int height, DirectionSet views,
+                                            DirectionSet lights, int lobeCount) {
+    osg::ref_ptr<RfMaterial> m = new RfMaterial;
+    m->setShape(width, height, std::move(views), std::move(lights), lobeCount);
+    return m;
+}
+
+void RfMaterial::roundToStorage() {
+    for (float& v : rhoD) v = toUNorm8(v);
+    for (float& v : rhoV) v = toHalf(v);
+    for (float& v : lobes) v = toHalf(v);
+}
+
+// ---- options ---------------------------------------------------------------------------------
+
+RfMaterial::Settings RfMaterial::settingsFrom(const FitOptions& options) {
+    static const char* const known[] = {"lobes", "iterations", "starts", "max-exponent"};
+    for (const auto& entry : options.values())
+        if (std::find_if(std::begin(known), std::end(known),
+                         [&](const char* k) { return entry.first == k; }) == std::end(known))
+            throw Error("rf: unknown option '" + entry.first +
+                        "' (known: lobes, iterations, starts, max-exponent)");
+    Settings s;
+    const auto outOfRange = [&](const std::string& key, const std::string& range) {
+        return Error("option " + key + ": must be " + range + ", got " +
+                     options.getString(key, ""));
+    };
+    s.lobes = options.getInt("lobes", s.lobes);
+    if (s.lobes < 1 || s.lobes > kMaxLobes)
+        throw outOfRange("lobes", "between 1 and " + std::to_string(kMaxLobes));
+    s.iterations = options.getInt("iterations", s.iterations);
+    if (s.iterations < 1) throw outOfRange("iterations", "at least 1");
+    s.starts = options.getInt("starts", s.starts);
+    if (s.starts < 1 || s.starts > 3) throw outOfRange("starts", "between 1 and 3");
+    s.maxExponent = options.getDouble("max-exponent", s.maxExponent);
+    // Above 256 a base a little over 1 overflows half precision; below 1 no cosine fits.
+    if (!(s.maxExponent >= 1.0 && s.maxExponent <= 256.0))
+        throw outOfRange("max-exponent", "between 1 and 256");
+    return s;
+}
+
+// ---- fitter ----------------------------------------------------------------------------------
+
+namespace {
+
+/** The lobe sum of one (texel, view) minus its target luminance, over the measured lights, with
+ *  the analytic Jacobian (TinySolver's functor interface). Parameters per lobe: a, b, c and u,
+ *  with n = nMin + (nMax - nMin) * sigmoid(u): the exponent stays in its valid range without
+ *  bound constraints, which Levenberg-Marquardt in TinySolver does not have. */
+struct LobeResidual {
+    using Scalar = double;
+    enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = Eigen::Dynamic };
+
+    const double* lights = nullptr;  ///< xyz per light
+    const double* target = nullptr;  ///< luminance per light
+    int lightCount = 0;
+    int lobes = 0;
+    double nMin = 0, nMax = 0;
+
+    int NumResiduals() const { return lightCount; }
+    int NumParameters() const { return 4 * lobes; }
+
+    double exponent(double u) const { return nMin + (nMax - nMin) / (1.0 + std::exp(-u)); }
+    double parameterOf(double n) const {
+        // Keep starts off the saturated ends of the sigmoid, where the gradient vanishes.
+        const double margin = 0.01 * (nMax - nMin);
+        n = std::clamp(n, nMin + margin, nMax - margin);
+        return -std::log((nMax - nMin) / (n - nMin) - 1.0);
+    }
+
+    bool operator()(const double* p, double* r, double* jacobian) const {
+        for (int l = 0; l < lightCount; ++l) r[l] = -target[l];
+        for (int i = 0; i < lobes; ++i) {
+            const double* q = p + 4 * i;
+            const double n = exponent(q[3]);
+            const double dn = (n - nMin) * (nMax - n) / (nMax - nMin);
+            double* J = jacobian ? jacobian + std::size_t(4 * i) * lightCount : nullptr;
+            for (int l = 0; l < lightCount; ++l) {
+                const double* L = lights + 3 * l;
+                const double base = q[0] * L[0] + q[1] * L[1] + q[2] * L[2];
+                double f = 0, logBase = 0, slope = 0;
+                if (base > 1e-12) {
+                    // Single precision is plenty for data known to ~1e-3 and twice as fast
+                    // (exp/log are most of the fit's time).
+                    logBase = std::log(float(base));
+                    f = std::exp(float(n * logBase));
+                    slope = n * f / base;
+                }
+                r[l] += f;
+                if (J) {
+                    J[l] = slope * L[0];
+                    J[lightCount + l] = slope * L[1];
+                    J[2 * lightCount + l] = slope * L[2];
+                    J[3 * lightCount + l] = f * logBase * dn;
+                }
+            }
+        }
+        return true;
+    }
+};
+
+using Solver = ceres::TinySolver<LobeResidual>;
+using Vector = Eigen::VectorXd;
+
+/** Fits the lobes of one texel in all measured views and then its colours. One per TBB task. */
+class TexelFitter {
+public:
+    TexelFitter(const MeasuredBtf& btf, const RfMaterial::Settings& settings)
+        : _settings(settings),
+          _views(btf.viewCount()),
+          _lights(btf.lightCount()),
+          _lightXyz(_lights * 3),
+          _luminance(_lights),
+          _residual(_lights) {
+        for (std::size_t l = 0; l < _lights; ++l)
+            for (int a = 0; a < 3; ++a) _lightXyz[l * 3 + a] = btf.lights().vector(l)[a];
+        _problem.lights = _lightXyz.data();
+        _problem.target = _luminance.data();
+        _problem.lightCount = int(_lights);
+        _problem.lobes = settings.lobes;
+        _problem.nMin = RfMaterial::kMinExponent;
+        _problem.nMax = settings.maxExponent;
+        _solver.options.max_num_iterations = settings.iterations + 1;  // counts the start
+        _solver.options.parameter_tolerance = 1e-7;
+        for (std::size_t v = 0; v < _views; ++v) {
+            const glm::vec3 d = btf.views().vector(v);
+            _mirror.push_back(glm::normalize(glm::dvec3(-d.x, -d.y, std::max(d.z, 0.05f))));
+        }
+    }
+
+    std::uint64_t iterations = 0;  ///< LM iterations over all solves
+    std::uint64_t fallbacks = 0;   ///< (texel, view) fits that kept their initialisation
+
+    /** abrdf: the texel's [view][light][rgb] values; previous: the left neighbour's lobe
+     *  parameters (a warm start) or empty. Writes the texel's final, rounded model into m. */
+    void fitTexel(const float* abrdf, std::vector<Vector>& previous, RfMaterial& m,
+                  std::size_t texel) {
+        // Pass 1: rho_d = 0, the lobes see the data as measured and the closed form finds any
+        // light-independent floor. (Starting at the texel's minimum instead leaves the lobes
+        // to fit l_z - min(l_z), which no lobe without an offset can: nearly Lambertian texels
+        // came out worse than the Lambert baseline.) Pass 2, where the texel's lowest value is
+        // at least 0.01: the lobes fitted to the data minus that minimum (what recovers a model
+        // with a real floor), pass 1 as a second start; the better pass (total squared error of
+        // the stored model) is kept.
+        const double zero[3] = {0, 0, 0};
+        std::vector<Vector> first(_views);
+        std::vector<float> fitted = fitLobes(abrdf, zero, previous, first);
+        if (!previous.empty()) previous = first;
+        std::vector<float> kept = fitted;  // storeTexel rescales its input in place
+        const double error1 = storeTexel(abrdf, fitted, m, texel);
+        double floor[3] = {std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+                           std::numeric_limits<double>::max()};
+        for (std::size_t i = 0; i < _views * _lights; ++i)
+            for (int c = 0; c < 3; ++c) floor[c] = std::min(floor[c], double(abrdf[i * 3 + c]));
+        if (std::max({floor[0], floor[1], floor[2]}) >= 0.01) {
+            std::vector<Vector> second(_views);
+            std::vector<float> refitted = fitLobes(abrdf, floor, first, second);
+            if (storeTexel(abrdf, refitted, m, texel) > error1) {
+                storeTexel(abrdf, kept, m, texel);
+            } else if (!previous.empty()) {
+                previous = second;
+            }
+        }
+    }
+
+private:
+    /** The lobes of every view of one texel for its data minus `floor`; `starts` holds a start
+     *  per view (or empty vectors), `results` receives the LM parameters. Returns (a, b, c, n)
+     *  per view and lobe. */
+    std::vector<float> fitLobes(const float* abrdf, const double floor[3],
+                                const std::vector<Vector>& starts, std::vector<Vector>& results) {
+        const int k = _settings.lobes;
+        std::vector<float> fitted(_views * std::size_t(k) * 4);
+        for (std::size_t v = 0; v < _views; ++v) {
+            const float* y = abrdf + v * _lights * 3;
+            for (std::size_t l = 0; l < _lights; ++l)
+                _luminance[l] = ((y[l * 3] - floor[0]) + (y[l * 3 + 1] - floor[1]) +
+                                 (y[l * 3 + 2] - floor[2])) /
+                                3.0;
+            const Vector* start = v < starts.size() && starts[v].size() ? &starts[v] : nullptr;
+            const Vector best = fitView(v, start);
+            results[v] = best;
+            for (int i = 0; i < k; ++i) {
+                float* out = &fitted[(v * k + i) * 4];
+                for (int a = 0; a < 3; ++a) out[a] = float(best[4 * i + a]);
+                out[3] = float(_problem.exponent(best[4 * i + 3]));
+            }
+        }
+        return fitted;
+    }
+
+    /** The lobes of one view for the luminance in _luminance: up to `starts` initialisations,
+     *  each refined by LM; the best valid result (finite, peak bounded) wins. */
+    Vector fitView(std::size_t v, const Vector* neighbour) {
+        double maxY = 0, energy = 0;
+        for (double y : _luminance) {
+            maxY = std::max(maxY, y);
+            energy += y * y;
+        }
+        // Divergent fits (seed 001 4.4) show up as lobes whose peak, between the measured
+        // lights, is far above anything measured: refuse those.
+        const double peakBound = 2.0 * maxY + 1e-3;
+        _solver.options.function_tolerance = 1e-7 * energy + 1e-30;
+        _solver.options.gradient_tolerance = 1e-12 * (maxY + 1e-6);
+
+        Vector best = greedyStart(maxY, nullptr);
+        if (maxY <= 1e-6) return best;  // black in this view: the start is as good as any
+        double bestCost = cost(best);
+        const double good = 1e-4 * energy;  // relative rms residual 1 %: no need for more starts
+        bool improved = false, mirrorTried = false;
+        for (int s = 0; s < _settings.starts; ++s) {
+            Vector x;
+            if (s == 0) {
+                x = best;
+            } else if (s == 1 && neighbour && neighbour->size() == best.size()) {
+                x = *neighbour;
+            } else if (_settings.lobes > 1 && !mirrorTried) {
+                x = greedyStart(maxY, &_mirror[v]);
+                mirrorTried = true;
+            } else {
+                continue;
+            }
+            const auto& summary = _solver.Solve(_problem, &x);
+            iterations += std::uint64_t(std::max(summary.iterations, 0));
+            const double c = valid(x, peakBound) ? cost(x) : std::numeric_limits<double>::max();
+            if (c < bestCost) {
+                best = x;
+                bestCost = c;
+                improved = true;
+            }
+            if (bestCost <= good) break;
+        }
+        if (!improved) ++fallbacks;
+        return best;
+    }
+
+    double cost(const Vector& x) {
+        _problem(x.data(), _residual.data(), nullptr);
+        double sum = 0;
+        for (double r : _residual) sum += r * r;
+        return std::isfinite(sum) ? sum : std::numeric_limits<double>::max();
+    }
+
+    bool valid(const Vector& x, double peakBound) const {
+        double peak = 0;
+        for (int i = 0; i < _settings.lobes; ++i) {
+            const double a = x[4 * i], b = x[4 * i + 1], c = x[4 * i + 2], u = x[4 * i + 3];
+            if (!std::isfinite(a) || !std::isfinite(b) || !std::isfinite(c) || !std::isfinite(u))
+                return false;
+            const double length = std::sqrt(a * a + b * b + c * c);
+            if (length == 0) continue;
+            // Highest base over the upper hemisphere: the lobe axis, or the horizon below it.
+            const double z = c / length;
+            const double reach = z >= 0 ? length : length * std::sqrt(std::max(0.0, 1 - z * z));
+            peak += std::pow(reach, _problem.exponent(u));
+        }
+        return std::isfinite(peak) && peak <= peakBound;
+    }
+
+    /** Lobes placed one after the other on what the previous ones leave unexplained: a broad
+     *  lobe (n = 1) along the luminance-weighted mean light, then narrower ones (n = 8, 16, ...)
+     *  at the brightest remaining light, or the first of them along `second` (the mirror
+     *  direction of the view, where a specular peak sits). Magnitudes in closed form. */
+    Vector greedyStart(double maxY, const glm::dvec3* second) {
+        const int k = _settings.lobes;
+        Vector x(4 * k);
+        for (std::size_t l = 0; l < _lights; ++l) _residual[l] = _luminance[l];
+        const double smallest = 1e-3 * maxY + 1e-9, largest = std::max(maxY, smallest);
+        for (int i = 0; i < k; ++i) {
+            glm::dvec3 d(0, 0, 1);
+            double n = 1.0;
+            if (i == 0) {
+                glm::dvec3 sum(0);
+                for (std::size_t l = 0; l < _lights; ++l)
+                    sum += std::max(_residual[l], 0.0) * light(l);
+                if (glm::length(sum) > 1e-12) d = glm::normalize(sum);
+            } else {
+                n = std::min(8.0 * double(1 << std::min(i - 1, 10)), 0.5 * _problem.nMax);
+                if (i == 1 && second) {
+                    d = *second;
+                } else {
+                    std::size_t peak = 0;
+                    for (std::size_t l = 1; l < _lights; ++l)
+                        if (_residual[l] > _residual[peak]) peak = l;
+                    d = light(peak);
+                }
+            }
+            n = _problem.exponent(_problem.parameterOf(n));
+            double sumRf = 0, sumFf = 0;
+            std::vector<double>& f = _lobe;
+            f.resize(_lights);
+            for (std::size_t l = 0; l < _lights; ++l) {
+                f[l] = std::pow(std::max(0.0, glm::dot(d, light(l))), n);
+                sumRf += _residual[l] * f[l];
+                sumFf += f[l] * f[l];
+            }
+            const double magnitude =
+                std::clamp(sumFf > 0 ? sumRf / sumFf : smallest, smallest, largest);
+            for (std::size_t l = 0; l < _lights; ++l) _residual[l] -= magnitude * f[l];
+            const glm::dvec3 abc = std::pow(magnitude, 1.0 / n) * d;
+            x[4 * i] = abc.x;
+            x[4 * i + 1] = abc.y;
+            x[4 * i + 2] = abc.z;
+            x[4 * i + 3] = _problem.parameterOf(n);
+        }
+        return x;
+    }
+
+    glm::dvec3 light(std::size_t l) const {
+        return {_lightXyz[l * 3], _lightXyz[l * 3 + 1], _lightXyz[l * 3 + 2]};
+    }
+
+    /** Rounds the lobes to half, then solves the colour terms in closed form with exactly those
+     *  lobes: per channel, rho_d over all views jointly with rho_v per view (rho_v eliminated:
+     *  rho_v = A_v - rho_d B_v, leaving a 1-D least-squares problem in rho_d), rho_d rounded to
+     *  8 bits, then rho_v with the rounded rho_d, rounded to half. Returns the texel's total
+     *  squared error of the stored model. */
+    double storeTexel(const float* abrdf, std::vector<float>& fitted, RfMaterial& m,
+                      std::size_t texel) {
+        const int k = _settings.lobes;
+        const std::size_t texels = m.texelCount();
+        const float nLow = toHalf(float(RfMaterial::kMinExponent));
+        const float nHigh = toHalf(float(_settings.maxExponent));
+        std::vector<float> S(_views * _lights);
+        std::vector<glm::vec3> L(_lights);
+        for (std::size_t l = 0; l < _lights; ++l) L[l] = glm::vec3(light(l));
+        for (std::size_t v = 0; v < _views; ++v) {
+            float* p = &fitted[v * k * 4];
+            // Scale the lobes so that their sum peaks at 1 over the measured lights: rho_v then
+            // carries the magnitude and the lobe bases stay near 1, where half is most precise.
+            float peak = 0;
+            for (std::size_t l = 0; l < _lights; ++l) {
+                float s = 0;
+                for (int i = 0; i < k; ++i) s += lobeValue(p + 4 * i, L[l]);
+                peak = std::max(peak, s);
+            }
+            if (peak > 0 && std::isfinite(peak))
+                for (int i = 0; i < k; ++i)
+                    for (int a = 0; a < 3; ++a)
+                        p[4 * i + a] *= std::pow(peak, -1.0f / p[4 * i + 3]);
+            for (int i = 0; i < k; ++i) {
+                for (int a = 0; a < 3; ++a) p[4 * i + a] = toHalf(p[4 * i + a]);
+                p[4 * i + 3] = std::clamp(toHalf(p[4 * i + 3]), nLow, nHigh);
+                std::copy_n(p + 4 * i, 4, &m.lobes[((v * k + i) * texels + texel) * 4]);
+            }
+            for (std::size_t l = 0; l < _lights; ++l) {
+                float s = 0;
+                for (int i = 0; i < k; ++i) s += lobeValue(p + 4 * i, L[l]);
+                S[v * _lights + l] = s;
+            }
+        }
+        double squaredError = 0;
+        for (int c = 0; c < 3; ++c) {
+            std::vector<double> A(_views, 0.0), B(_views, 0.0), SS(_views, 0.0);
+            for (std::size_t v = 0; v < _views; ++v) {
+                double sy = 0, s1 = 0, ss = 0;
+                for (std::size_t l = 0; l < _lights; ++l) {
+                    const double s = S[v * _lights + l];
+                    sy += s * abrdf[(v * _lights + l) * 3 + c];
+                    s1 += s;
+                    ss += s * s;
+                }
+                SS[v] = ss;
+                if (ss > 1e-20) {
+                    A[v] = sy / ss;
+                    B[v] = s1 / ss;
+                }
+            }
+            double eg = 0, gg = 0;
+            for (std::size_t v = 0; v < _views; ++v)
+                for (std::size_t l = 0; l < _lights; ++l) {
+                    const double s = S[v * _lights + l];
+                    const double g = 1.0 - B[v] * s;
+                    eg += (abrdf[(v * _lights + l) * 3 + c] - A[v] * s) * g;
+                    gg += g * g;
+                }
+            const float d = toUNorm8(gg > 1e-12 ? float(eg / gg) : 0.0f);
+            m.rhoD[texel * 3 + c] = d;
+            for (std::size_t v = 0; v < _views; ++v) {
+                double sy = 0;
+                for (std::size_t l = 0; l < _lights; ++l)
+                    sy += S[v * _lights + l] * (abrdf[(v * _lights + l) * 3 + c] - d);
+                const float rho = SS[v] > 1e-20 ? toHalf(float(std::max(0.0, sy / SS[v]))) : 0.0f;
+                m.rhoV[(v * texels + texel) * 3 + c] = rho;
+                for (std::size_t l = 0; l < _lights; ++l) {
+                    const double r =
+                        abrdf[(v * _lights + l) * 3 + c] - d - rho * S[v * _lights + l];
+                    squaredError += r * r;
+                }
+            }
+        }
+        return squaredError;
+    }
+
+    RfMaterial::Settings _settings;
+    std::size_t _views, _lights;
+    std::vector<double> _lightXyz, _luminance, _residual, _lobe;
+    std::vector<glm::dvec3> _mirror;
+    LobeResidual _problem;
+    Solver _solver;
+};
+
+}  // namespace
+
+osg::ref_ptr<RfMaterial> RfMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+    const Settings settings = settingsFrom(options);
+    if (btf.empty()) throw Error("rf: the measured BTF is empty");
+    osg::ref_ptr<RfMaterial> m =
+        create(btf.width(), btf.height(), btf.views(), btf.lights(), settings.lobes);
+
+    // Blocks of consecutive texels (along rows): gathering their ABRDFs reads each measured
+    // image in contiguous runs, and each texel can start from its left neighbour's lobes.
+    const std::size_t blockSize = 32, texels = btf.texelCount();
+    const std::size_t views = btf.viewCount(), lights = btf.lightCount();
+    const std::size_t blocks = (texels + blockSize - 1) / blockSize;
+    std::atomic<std::uint64_t> iterations{0}, fallbacks{0};
+    Progress progress("rf fit", texels);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const auto& range) {
+        TexelFitter fitter(btf, settings);
+        std::vector<float> abrdfs(blockSize * views * lights * 3);
+        for (std::size_t b = range.begin(); b != range.end(); ++b) {
+            const std::size_t first = b * blockSize, count = std::min(blockSize, texels - first);
+            for (std::size_t v = 0; v < views; ++v)
+                for (std::size_t l = 0; l < lights; ++l)
+                    for (std::size_t t = 0; t < count; ++t)
+                        for (int c = 0; c < 3; ++c)
+                            abrdfs[((t * views + v) * lights + l) * 3 + c] =
+                                btf.value(v, l, first + t, c);
+            std::vector<Vector> previous(views);
+            for (std::size_t t = 0; t < count; ++t) {
+                // A new row has no left neighbour in this block.
+                if ((first + t) % std::size_t(btf.width()) == 0) previous.assign(views, Vector());
+                fitter.fitTexel(&abrdfs[t * views * lights * 3], previous, *m, first + t);
+            }
+            progress.advance(count);
+        }
+        iterations += fitter.iterations;
+        fallbacks += fitter.fallbacks;
+    });
+    progress.finish();
+
+    std::ostringstream seconds, meanIterations;
+    seconds << progress.elapsedSeconds();
+    meanIterations << double(iterations) / double(texels * views);
+    m->fitInfo["seconds"] = seconds.str();
+    m->fitInfo["iterations"] = meanIterations.str();
+    m->fitInfo["fallbacks"] = std::to_string(fallbacks.load());
+    m->fitInfo["lobes"] = std::to_string(settings.lobes);
+    std::ostringstream maxExponent;
+    maxExponent << settings.maxExponent;
+    m->fitInfo["max-exponent"] = maxExponent.str();
+    return m;
+}
+
+// ---- CPU evaluator ---------------------------------------------------------------------------
+
+float RfMaterial::lobeSum(std::size_t texel, std::size_t view, const glm::vec3& light) const {
+    float sum = 0;
+    for (int i = 0; i < _lobes; ++i)
+        sum += lobeValue(&lobes[((view * _lobes + i) * texelCount() + texel) * 4], light);
+    return sum;
+}
+
+glm::vec3 RfMaterial::reflectanceField(std::size_t texel, std::size_t view,
+                                       const glm::vec3& light) const {
+    const float* rho = &rhoV[(view * texelCount() + texel) * 3];
+    return glm::vec3(rho[0], rho[1], rho[2]) * lobeSum(texel, view, light);
+}
+
+glm::vec3 RfMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
+    const std::size_t t = std::size_t(y) * _width + x;
+    const InterpolationWeights w = DirectionInterpolator::lookupBaked(_viewTable, view);
+    glm::vec3 color(rhoD[t * 3], rhoD[t * 3 + 1], rhoD[t * 3 + 2]);
+    for (int j = 0; j < 3; ++j)
+        if (w.weight[j] > 0.0f) color += w.weight[j] * reflectanceField(t, w.index[j], light);
+    return color;
+}
+
+void RfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
+    const glm::vec3 d(rhoD[texel * 3], rhoD[texel * 3 + 1], rhoD[texel * 3 + 2]);
+    for (std::size_t v = 0; v < _views.size(); ++v)
+        for (const glm::vec3& light : _lightVectors) {
+            const glm::vec3 value = d + reflectanceField(texel, v, light);
+            *abrdf++ = value.r;
+            *abrdf++ = value.g;
+            *abrdf++ = value.b;
+        }
+}
+
+// ---- memory ----------------------------------------------------------------------------------
+
+MemoryFootprint RfMaterial::memory() const {
+    // Per-texel arrays only: the baked view table is derived from the direction set, not fitted
+    // data (seed 001 Table 2 does not count it either).
+    MemoryFootprint footprint;
+    for (const StoredArray& a : storedArrays(_views.size(), _lobes)) {
+        const std::vector<float>& data = this->*a.member;
+        const double values = double(data.size()) / double(texelCount());
+        footprint.valuesPerTexel += values;
+        footprint.bytesPerTexel += values * bytesPerValue(a.kind);
+        footprint.totalBytes += std::uint64_t(double(data.size()) * bytesPerValue(a.kind));
+    }
+    return footprint;
+}
+
+// ---- save / load -----------------------------------------------------------------------------
+
+FittedMaterial RfMaterial::toFittedMaterial() const {
+    FittedMaterial file = writeCommon();
+    file.parameters["lobes"] = std::to_string(_lobes);
+    for (const StoredArray& a : storedArrays(_views.size(), _lobes))
+        file.textures.push_back(
+            {a.name, _width, _height, a.depth, a.channels, a.kind, this->*a.member});
+    return file;
+}
+
+osg::ref_ptr<RfMaterial> RfMaterial::fromFile(const FittedMaterial& file) {
+    osg::ref_ptr<RfMaterial> m = new RfMaterial;
+    m->readCommon(file);
+    int lobeCount = 0;
+    try {
+        lobeCount = std::stoi(file.parameter("lobes"));
+    } catch (const std::logic_error&) {
+        fail(file.source, "parameter 'lobes' is not an integer");
+    }
+    try {
+        m->setShape(m->_width, m->_height, m->_views, m->_lights, lobeCount);
+    } catch (const Error& e) {
+        fail(file.source, e.what());
+    }
+    for (const StoredArray& a : storedArrays(m->_views.size(), lobeCount)) {
+        const MaterialTexture& t = file.texture(a.name);
+        if (t.width != m->_width || t.height != m->_height || t.depth != a.depth ||
+            t.channels != a.channels || t.kind != a.kind)
+            fail(file.source, std::string("texture '") + a.name + "' must be " +
+                                  std::to_string(m->_width) + "x" + std::to_string(m->_height) +
+                                  ", " + std::to_string(a.depth) + " layer(s) of " +
+                                  std::to_string(a.channels) + " channels, stored as " +
+                                  (a.kind == MaterialTexture::UNorm8 ? "8-bit" : "half"));
+        if (std::any_of(t.data.begin(), t.data.end(), [](float v) { return !std::isfinite(v); }))
+            fail(file.source, std::string("texture '") + a.name + "' holds non-finite values");
+        (*m).*a.member = t.data;
+    }
+    return m;
+}
+
+// ---- StateSet --------------------------------------------------------------------------------
+
+osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
+    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
+    addCommonState(*stateSet, methodName(), _width, _height);
+    int unit = 0;
+    for (const StoredArray& a : storedArrays(_views.size(), _lobes)) {
+        const MaterialTexture t{a.name,     _width, _height,        a.depth,
+                                a.channels, a.kind, this->*a.member};
+        addTexture(*stateSet, createFloatTexture(t).get(), a.sampler, unit++);
+    }
+    addDirectionTable(*stateSet, _viewTable, "rfView", unit, unit + 1);
+    stateSet->addUniform(new osg::Uniform("rfLobeCount", _lobes));
+    return stateSet;
+}
+
+// ---- registration ----------------------------------------------------------------------------
+
+namespace {
+const bool registered = registerMethod(
+    {"rf",
+     "reflectance fields (Meseth 2003): per measured view, rho_d + rho_v(v) RGB x k light lobes "
+     "(a l_x + b l_y + c l_z)^n, views blended with interpolation weights",
+     {{"lobes", "lobes per view, 1-8 (default 2)"},
+      {"iterations", "Levenberg-Marquardt iterations per start (default 20)"},
+      {"starts",
+       "initialisations tried per texel and view when the first fits poorly, 1-3 "
+       "(default 2: greedy, then the left neighbour's lobes)"},
+      {"max-exponent", "largest lobe exponent n, 1-256 (default 64)"}},
+     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+         return RfMaterial::fit(btf, o);
+     },
+     [](const FittedMaterial& f) -> osg::ref_ptr<Material> { return RfMaterial::fromFile(f); }});
+}  // namespace
+
+}  // namespace osgBTF

@@ -1,0 +1,104 @@
+// osgBTF method "rf": reflectance fields (Meseth, Müller, Klein 2003; seed 001 section 3.3).
+//
+// For every measured view v the texel's reflectance field (fixed view, varying light) is a
+// diffuse term plus an RGB albedo times k Lafortune-like lobes in the light direction only:
+//
+//   RF_v(x, l) = rho_d(x) + rho_v(x, v) * sum_i max(0, a_vi(x) l_x + b_vi(x) l_y + c_vi(x)
+//   l_z)^n_vi(x)
+//
+// and a view that was not measured blends the three nearest measured views with the Delaunay
+// interpolation weights of core/DirectionInterpolation.h (baked table, the same on CPU and GPU):
+//
+//   BTF(x, v, l) ~ sum_j w_j(v) RF_{v_j}(x, l)
+//
+// rho_d, rho_v RGB; the lobes are scalar (luminance), so colour varies only through rho_v.
+// seed 001's equation (5) writes the lobe as a dot product without the exponent in the garbled
+// text extraction; the exponent n is Meseth's definition ("similar to the Lafortune lobes") and
+// the value count of Table 2 (4 values per lobe) confirms it. max(0, .) keeps a lobe's base
+// non-negative so any real exponent is defined (the shader does the same).
+//
+// Storage (values / bytes per texel with V views and k lobes; Table 2 with V = 81, k = 2):
+//   rho_d   RGB, 8-bit fixed point (UNorm8)           3 values,          3 bytes
+//   rho_v   RGB per view, half                        3 V values,        6 V bytes
+//   lobes   (a, b, c, n) per view and lobe, half      4 k V values,      8 k V bytes
+//   total   3 + V (3 + 4k) = 894 values, 3 + 2 V (3 + 4k) = 1785 bytes for V = 81, k = 2.
+//
+// Fit (fit()): per texel and measured view, Levenberg-Marquardt (Ceres' TinySolver, analytic
+// Jacobian) of the lobes to the view's luminance over the measured lights, several starts,
+// then the colour terms in closed form (variable projection): rho_d jointly over all views,
+// rho_v per view, both computed with the lobes already rounded to their storage precision, so
+// CPU, file and GPU evaluate exactly the same model; texels whose data have a floor get a second
+// pass fitted above it (README.md). Parallel over texel blocks with TBB.
+#pragma once
+
+#include <vector>
+
+#include "core/DirectionInterpolation.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+class RfMaterial : public Material {
+public:
+    /** Fit settings; see settingsFrom() for the option names. */
+    struct Settings {
+        int lobes = 2;            ///< lobes per view, 1..8
+        int iterations = 20;      ///< Levenberg-Marquardt iterations per start
+        int starts = 2;           ///< initialisations tried per (texel, view), 1..3
+        double maxExponent = 64;  ///< upper bound of n (the Bonn lights are 15 degrees apart)
+    };
+    /** Smallest exponent a lobe may have (n > 0 keeps the lobe a lobe). */
+    static constexpr double kMinExponent = 0.25;
+    /** Most lobes per view: 8 x 151 UBO2014 views stay within GL's 2048 array layers. */
+    static constexpr int kMaxLobes = 8;
+
+    RfMaterial() = default;
+    RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    META_Object(osgBTF, RfMaterial)
+
+        /** Reads and validates "lobes", "iterations", "starts", "max-exponent"; throws Error for an
+         *  unknown option or a value out of range. */
+        static Settings settingsFrom(const FitOptions& options);
+    /** Fits the model to a measured BTF (see the file comment). Throws Error for bad options or
+     *  data the model cannot hold. Fills fitInfo: seconds, lobes, iterations (mean LM iterations
+     *  per texel and view), fallbacks (fits that kept their initialisation). */
+    static osg::ref_ptr<RfMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+    static osg::ref_ptr<RfMaterial> fromFile(const FittedMaterial& file);
+    /** A zero model of the given shape: memory accounting, tests and synthetic data. Throws Error
+     *  if the shape is invalid (fewer than 3 views, lobes out of range, too many layers). */
+    static osg::ref_ptr<RfMaterial> create(int width, int height, DirectionSet views,
+                                           DirectionSet lights, int lobes);
+
+    std::string methodName() const override { return "rf"; }
+    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+    void evaluateMeasured(std::size_t texel, float* abrdf) const override;
+    MemoryFootprint memory() const override;
+    FittedMaterial toFittedMaterial() const override;
+    osg::ref_ptr<osg::StateSet> createStateSet() const override;
+
+    int lobeCount() const { return _lobes; }
+    /** The reflectance field of measured view `view` without rho_d: rho_v * lobe sum. */
+    glm::vec3 reflectanceField(std::size_t texel, std::size_t view, const glm::vec3& light) const;
+    /** sum_i max(0, (a, b, c)_i . light)^n_i of one texel and measured view. */
+    float lobeSum(std::size_t texel, std::size_t view, const glm::vec3& light) const;
+    /** Rounds every array to its storage precision (rho_d to 1/255 in [0, 1], the rest to half),
+     *  as the fitter does; call it after setting values by hand. */
+    void roundToStorage();
+
+    /** rho_d: [y][x][rgb], rows bottom-up; multiples of 1/255. */
+    std::vector<float> rhoD;
+    /** rho_v: [view][y][x][rgb]. */
+    std::vector<float> rhoV;
+    /** Lobes: [view * lobeCount() + lobe][y][x][a, b, c, n]. */
+    std::vector<float> lobes;
+
+private:
+    /** Sizes the arrays and builds the view interpolation table. */
+    void setShape(int width, int height, DirectionSet views, DirectionSet lights, int lobes);
+
+    int _lobes = 0;
+    DirectionInterpolator::Baked _viewTable;
+    std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
+};
+
+}  // namespace osgBTF
