@@ -372,8 +372,18 @@ void decodeImage(const std::string& archive, const Member& member,
     const bool isFloat = spec.format.is_floating_point();
     bool ok;
     if (is8bit && orientation == 1) {
-        scratch.bytes8.resize(pixels * channels);
-        ok = input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, scratch.bytes8.data());
+        // Native reads of all channels: OIIO 2.4's converting read_image allocates a 64 MiB
+        // scanline buffer per call, which dominated small-image loads (and crawled under ASan).
+        const int fileChannels = spec.nchannels;
+        scratch.bytes8.resize(pixels * fileChannels);
+        ok = input->read_native_scanlines(0, 0, 0, storedH, 0, 0, fileChannels,
+                                          scratch.bytes8.data());
+        if (ok && fileChannels != channels) {
+            for (std::size_t p = 0; p < pixels; ++p)
+                for (int c = 0; c < channels; ++c)
+                    scratch.bytes8[p * channels + c] = scratch.bytes8[p * fileChannels + c];
+            scratch.bytes8.resize(pixels * channels);
+        }
         if (ok && target.f)
             storeRows(scratch.bytes8.data(), storedW, storedH, channels, target,
                       [&](unsigned char v) { return curve.byte(v); });
