@@ -5,13 +5,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PACKAGES=(
-  build-essential cmake ninja-build pkg-config clang-format
+  build-essential cmake ninja-build pkg-config
   libopenscenegraph-dev openscenegraph          # OSG 3.6.5 libraries, osgviewer, osgconv
   libopenexr-dev openexr libopenimageio-dev openimageio-tools   # float images, exrheader, oiiotool
   libglm-dev libeigen3-dev libceres-dev libtbb-dev libzip-dev zip unzip
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)
-  xvfb xauth
 )
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
