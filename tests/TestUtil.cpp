@@ -1,12 +1,14 @@
 #include "tests/TestUtil.h"
 
+#include <sys/wait.h>
 #include <array>
 #include <cstdio>
 #include <fstream>
 #include <random>
 #include <sstream>
 #include <stdexcept>
-#include <sys/wait.h>
+
+#include "core/Error.h"
 
 namespace osgBTF::test {
 
@@ -50,6 +52,17 @@ std::string shellQuote(const std::string& text) {
             quoted += c;
     }
     return quoted + "'";
+}
+
+std::string errorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    } catch (const std::exception& e) {
+        return std::string("unexpected exception type: ") + e.what();
+    }
+    return "no error";
 }
 
 void writeTextFile(const std::string& path, const std::string& content) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace osgBTF::test {
@@ -28,6 +29,10 @@ CommandResult runCommand(const std::string& commandLine);
 
 /** Quotes a path for the shell. */
 std::string shellQuote(const std::string& text);
+
+/** Runs f and returns the message of the osgBTF::Error it throws; "no error" if it throws none,
+ *  "unexpected exception type: ..." for any other exception. */
+std::string errorOf(const std::function<void()>& f);
 
 void writeTextFile(const std::string& path, const std::string& content);
 std::string readTextFile(const std::string& path);

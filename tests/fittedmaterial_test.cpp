@@ -27,17 +27,9 @@ using osgBTF::test::runCommand;
 using osgBTF::test::shellQuote;
 using osgBTF::test::TempDir;
 
-namespace {
+using osgBTF::test::errorOf;
 
-template <typename Body>
-std::string errorOf(Body body) {
-    try {
-        body();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "";
-}
+namespace {
 
 MaterialTexture makeTexture(const std::string& name, int width, int height, int depth, int channels,
                             MaterialTexture::PixelKind kind, unsigned seed) {

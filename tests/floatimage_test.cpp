@@ -25,18 +25,9 @@ using osgBTF::test::runCommand;
 using osgBTF::test::shellQuote;
 using osgBTF::test::TempDir;
 
-namespace {
+using osgBTF::test::errorOf;
 
-/** The message of the Error `body` throws, or "" if it throws none. */
-template <typename Body>
-std::string errorOf(Body body) {
-    try {
-        body();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "";
-}
+namespace {
 
 void oiiotool(const std::string& arguments) {
     const auto result = runCommand("oiiotool " + arguments);

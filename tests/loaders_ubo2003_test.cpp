@@ -25,6 +25,8 @@ using osgBTF::test::runCommand;
 using osgBTF::test::shellQuote;
 using osgBTF::test::TempDir;
 
+using osgBTF::test::errorOf;
+
 namespace {
 
 // Non-square texels catch transposed images; the light and view sets differ so a swapped
@@ -64,18 +66,6 @@ MeasuredBtf makeBtf(const DirectionSet& views, const DirectionSet& lights, int w
 
 MeasuredBtf smallBtf(const std::function<float(std::size_t, std::size_t, int, int, int)>& f) {
     return makeBtf(smallViews(), smallLights(), kW, kH, f);
-}
-
-/** Runs f, expects an osgBTF::Error and returns its message. */
-std::string errorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    } catch (const std::exception& e) {
-        return std::string("unexpected exception type: ") + e.what();
-    }
-    return "no error";
 }
 
 /** Writes a PNG of w x h RGB pixels, rows top first. */

@@ -24,21 +24,12 @@ using osgBTF::test::readTextFile;
 using osgBTF::test::TempDir;
 using osgBTF::test::writeTextFile;
 
+using osgBTF::test::errorOf;
+
 namespace {
 
 constexpr int kW = 5, kH = 3;  // non-square catches transposes
 constexpr double kPi = 3.14159265358979323846;
-
-std::string errorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    } catch (const std::exception& e) {
-        return std::string("unexpected exception type: ") + e.what();
-    }
-    return "no error";
-}
 
 /** Exactly representable in half, float and double, so every scalar size stores it exactly. */
 float exactValue(int i) {

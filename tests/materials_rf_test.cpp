@@ -16,16 +16,9 @@
 
 using namespace osgBTF;
 
-namespace {
+using osgBTF::test::errorOf;
 
-std::string errorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
-}
+namespace {
 
 MeasuredBtf sample(int width, int height) {
     SampleOptions options;
