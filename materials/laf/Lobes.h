@@ -14,7 +14,7 @@
 // The RGB colours are then linear given the lobes and are solved in closed form per channel
 // (variable projection): the nonlinear solver never sees them. Several starts (a diffuse-like
 // lobe plus mirror / retro-reflective lobes, and the already fitted left neighbour) are tried on a
-// subsample of the pairs; the best is refined on all pairs.
+// subsample of the pairs; the best is refined on a larger subsample (PairTable).
 #pragma once
 
 #include <array>
@@ -67,7 +67,8 @@ T luminanceModel(const T* params, int lobes, const glm::dvec3& w) {
 struct PairTable {
     std::vector<glm::dvec3> products;  ///< v * l (componentwise) per pair, [view][light]
     std::vector<int> pairView;         ///< view index of each pair
-    std::vector<int> subsample;        ///< pairs used to compare starting points
+    std::vector<int> subsample;        ///< pairs used to compare starting points (~500)
+    std::vector<int> refineSubset;     ///< pairs the best start is refined on (~1300)
 };
 PairTable makePairTable(const std::vector<glm::vec3>& views, const std::vector<glm::vec3>& lights);
 
@@ -83,7 +84,8 @@ struct LuminanceFit {
 LuminanceFit fitLuminance(const PairTable& pairs, const double* target, const double* scale,
                           int lobes, int maxIterations, const std::vector<double>* neighbour);
 
-/** Continues LM from `params` on all pairs (SLAF's alternation); returns the iterations spent. */
+/** Continues LM from `params` on the refine subset (SLAF's alternation); returns the iterations
+ *  spent. */
 int refineLuminance(const PairTable& pairs, const double* target, const double* scale, int lobes,
                     int maxIterations, std::vector<double>& params);
 
