@@ -1,10 +1,11 @@
 // Benchmark: seed 000 Table 1 in our own run: time per pass of the original LPCA rendering
 // (3x3 manual direction interpolation) and the revised one (3D texture, 2 fetches + 1 lerp per
 // component) for c = 2, 4, 8 at 1024x1024, the same fitted data in the same run.
-// Usage: bench_lpca_pass_time [--size N] [--frames F] [--viewport P] [--resolution R]
+// Usage: bench_lpca_pass_time [--size N] [--frames F] [--viewport P] [--resolution R] [--unorm8 1]
 //   Renders a full-viewport patch through the headless renderer (OSGBTF_HEADLESS picks EGL or
 //   OSMesa); prints the GL renderer, wall / CPU / GPU-timer ms per pass (medians), the speed-up,
-//   and the extra per-texel error of the resampled model.
+//   and the extra per-texel error of the resampled model. --unorm8 1 times the revised method's
+//   8-bit storage (the seed's RGBA8 3D textures) instead of half floats.
 #include <cstdio>
 #include <string>
 
@@ -46,7 +47,7 @@ double errorAverage(const osgBTF::MeasuredBtf& btf, const osgBTF::Material& m) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    int size = 64, frames = 5, viewport = 1024, resolution = 16;
+    int size = 64, frames = 5, viewport = 1024, resolution = 16, unorm8 = 0;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string arg = argv[i];
         const int value = std::stoi(argv[i + 1]);
@@ -58,6 +59,8 @@ int main(int argc, char** argv) {
             viewport = value;
         else if (arg == "--resolution")
             resolution = value;
+        else if (arg == "--unorm8")
+            unorm8 = value;
     }
     try {
         osgBTF::SampleOptions sample;
@@ -67,10 +70,10 @@ int main(int argc, char** argv) {
         renderer.setCamera(osgBTF::orthoUnitSquare(viewport, viewport));
         std::printf(
             "renderer: %s (%s), software: %s; %dx%d pass, data %dx%d, 32 clusters, grid "
-            "%d^4\n",
+            "%d^4, revised storage %s\n",
             renderer.glRenderer().c_str(), renderer.glVersion().c_str(),
             renderer.isSoftwareRenderer() ? "yes" : "no", viewport, viewport, size, size,
-            resolution);
+            resolution, unorm8 ? "unorm8" : "half");
         std::printf(
             "| c | LPCA wall ms | LPCA CPU ms | LPCA GPU ms | revised wall ms | revised CPU "
             "ms | revised GPU ms | speed-up (wall) | error LPCA | error revised |\n");
@@ -79,7 +82,7 @@ int main(int argc, char** argv) {
             osg::ref_ptr<osgBTF::LpcaMaterial> lpca = osgBTF::LpcaMaterial::fit(
                 btf, osgBTF::FitOptions::parse("clusters=32 components=" + std::to_string(c)));
             osg::ref_ptr<osgBTF::LpcaRevisedMaterial> revised =
-                osgBTF::LpcaRevisedMaterial::fromLpca(*lpca, resolution, false);
+                osgBTF::LpcaRevisedMaterial::fromLpca(*lpca, resolution, unorm8 != 0);
             osgBTF::PassTiming timing[2];
             const osgBTF::Material* materials[2] = {lpca.get(), revised.get()};
             for (int m = 0; m < 2; ++m) {
