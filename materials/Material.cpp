@@ -62,6 +62,7 @@ std::string FitOptions::getString(const std::string& key, const std::string& fal
 Material::Material(const Material& other, const osg::CopyOp& copyop)
     : osg::Object(other, copyop),
       fitInfo(other.fitInfo),
+      sourceFile(other.sourceFile),
       _width(other._width),
       _height(other._height),
       _views(other._views),
@@ -78,6 +79,14 @@ void Material::evaluateMeasured(std::size_t texel, float* abrdf) const {
             *abrdf++ = value.b;
         }
     }
+}
+
+osg::StateSet* Material::sharedStateSet() const {
+    // One lock for all materials: this runs once per material, the lock only guards the check.
+    static std::mutex mutex;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!_sharedStateSet) _sharedStateSet = createStateSet();
+    return _sharedStateSet.get();
 }
 
 void Material::setGeometry(int width, int height, DirectionSet views, DirectionSet lights) {
@@ -162,7 +171,9 @@ osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file) {
 }
 
 osg::ref_ptr<Material> loadMaterial(const std::string& path) {
-    return materialFromFile(loadFittedMaterial(path));
+    osg::ref_ptr<Material> material = materialFromFile(loadFittedMaterial(path));
+    material->sourceFile = path;
+    return material;
 }
 
 osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {

@@ -81,8 +81,17 @@ public:
     /** Textures and uniforms of this material plus the method's shared program. */
     virtual osg::ref_ptr<osg::StateSet> createStateSet() const = 0;
 
+    /** createStateSet(), built once per material and shared by everything that renders it (every
+     *  osgBTF::MaterialNode using this material): textures are uploaded once per context. Safe to
+     *  call from several cull threads. */
+    osg::StateSet* sharedStateSet() const;
+
     /** Free-form facts from fitting (time, iterations, error), saved as parameters "fit.*". */
     std::map<std::string, std::string> fitInfo;
+
+    /** The file this material was loaded from (set by loadMaterial), empty for a material fitted
+     *  in memory. Lets a scene that holds the material refer to it by file name. */
+    std::string sourceFile;
 
 protected:
     void setGeometry(int width, int height, DirectionSet views, DirectionSet lights);
@@ -93,6 +102,9 @@ protected:
 
     int _width = 0, _height = 0;
     DirectionSet _views, _lights;
+
+private:
+    mutable osg::ref_ptr<osg::StateSet> _sharedStateSet;
 };
 
 /** A compression method: how to fit it and how to read its files. */

@@ -24,6 +24,7 @@ Runner addSampleCommand(CLI::App& app, CommonOptions& common);
 Runner addContactSheetCommand(CLI::App& app, CommonOptions& common);
 Runner addFitCommand(CLI::App& app, CommonOptions& common);
 Runner addEvalCommand(CLI::App& app, CommonOptions& common);
+Runner addCompareCommand(CLI::App& app, CommonOptions& common);
 
 /** Adds --storage, --decode to a subcommand that loads measured data. */
 void addLoadOptions(CLI::App& command, CommonOptions& common);

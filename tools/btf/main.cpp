@@ -48,9 +48,9 @@ int main(int argc, char** argv) {
     app.add_flag("--progress,!--no-progress", progress,
                  "Show progress bars on stderr (default: when stderr is a terminal)");
     const std::vector<tool::Runner> runners{
-        tool::addInfoCommand(app, common), tool::addSampleCommand(app, common),
+        tool::addInfoCommand(app, common),         tool::addSampleCommand(app, common),
         tool::addContactSheetCommand(app, common), tool::addFitCommand(app, common),
-        tool::addEvalCommand(app, common)};
+        tool::addEvalCommand(app, common),         tool::addCompareCommand(app, common)};
     try {
         app.parse(argc, argv);
         Progress::setEnabled(progress);

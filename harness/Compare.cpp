@@ -1,0 +1,457 @@
+#include "harness/Compare.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include "core/Error.h"
+#include "core/FloatImage.h"
+#include "core/Progress.h"
+#include "harness/Pictures.h"
+#include "harness/Report.h"
+#include "loaders/LoadBtf.h"
+#include "materials/MaterialImage.h"
+
+namespace osgBTF {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> allCompareMethods() {
+    return {"laf", "slaf", "rf", "pca", "lpca", "lpca-revised"};
+}
+
+namespace {
+
+constexpr const char* kBaseline = "lambert";
+
+std::string formatNumber(double value, int precision) {
+    std::ostringstream out;
+    out << std::setprecision(precision) << value;
+    return out.str();
+}
+
+void writeText(const std::string& path, const std::string& text) {
+    writeFileAtomically(path, [&](const std::string& temporary) {
+        std::ofstream out(temporary);
+        out << text;
+        out.close();
+        if (!out) throw Error(path + ": cannot write");
+    });
+}
+
+/** Replaces `target` by the finished folder `temporary` (both in the same parent). */
+void publishFolder(const fs::path& temporary, const fs::path& target) {
+    std::error_code ec;
+    fs::path old;
+    if (fs::exists(target)) {
+        old = target;
+        old += ".old" + std::to_string(getpid());
+        fs::rename(target, old, ec);
+        if (ec) throw Error(target.string() + ": cannot replace: " + ec.message());
+    }
+    fs::rename(temporary, target, ec);
+    if (ec) {
+        if (!old.empty()) fs::rename(old, target);
+        throw Error(target.string() + ": cannot rename " + temporary.string() +
+                    " to it: " + ec.message());
+    }
+    if (!old.empty()) fs::remove_all(old, ec);
+}
+
+std::vector<std::string> orderedMethods(const CompareOptions& options) {
+    std::vector<std::string> methods{kBaseline};
+    for (const std::string& m : options.methods) {
+        findMethod(m);  // throws "unknown method 'x' (known: ...)"
+        if (std::find(methods.begin(), methods.end(), m) == methods.end()) methods.push_back(m);
+    }
+    for (const auto& entry : options.methodOptions)
+        if (std::find(methods.begin(), methods.end(), entry.first) == methods.end())
+            throw Error("options given for method '" + entry.first +
+                        "', which is not among the compared methods");
+    return methods;
+}
+
+/** Measured (view, light) pairs shown in the grids and used for the GPU spot check. */
+std::vector<std::pair<std::size_t, std::size_t>> spotPairs(const MeasuredBtf& btf) {
+    const float wanted[][4] = {{0, 0, 45, 0}, {45, 90, 60, 180}, {60, 0, 30, 270}};
+    std::vector<std::pair<std::size_t, std::size_t>> pairs;
+    for (const auto& w : wanted) {
+        const auto pair = std::make_pair(nearestDirection(btf.views(), w[0], w[1]),
+                                         nearestDirection(btf.lights(), w[2], w[3]));
+        if (std::find(pairs.begin(), pairs.end(), pair) == pairs.end()) pairs.push_back(pair);
+    }
+    return pairs;
+}
+
+std::string pairName(const MeasuredBtf& btf, const std::pair<std::size_t, std::size_t>& p) {
+    const Direction& v = btf.views()[p.first];
+    const Direction& l = btf.lights()[p.second];
+    return "view " + formatNumber(v.theta, 3) + "," + formatNumber(v.phi, 3) + " light " +
+           formatNumber(l.theta, 3) + "," + formatNumber(l.phi, 3);
+}
+
+/** Column labels above a row of tiles; returns false if no font is available. */
+bool labelColumns(FloatImage& image, const std::vector<std::string>& labels, int cellWidth, int gap,
+                  int bandHeight, float textValue = 1.0f) {
+    bool drawn = true;
+    for (std::size_t i = 0; i < labels.size(); ++i)
+        drawn &= drawText(image, int(i) * (cellWidth + gap) + 3, bandHeight - 6, labels[i],
+                          std::max(10, bandHeight - 8), textValue);
+    return drawn;
+}
+
+void fitStage(const CompareOptions& options, const fs::path& work, CompareResult& result) {
+    const std::string tool = options.fitTool.empty() ? defaultFitTool() : options.fitTool;
+    Progress progress("fitting (child processes)", result.methods.size());
+    for (MethodResult& m : result.methods) {
+        FitJob job;
+        job.tool = tool;
+        job.input = options.input;
+        job.method = m.method;
+        job.options = m.options;
+        job.extraArguments = options.fitExtraArguments;
+        job.globalArguments = options.fitGlobalArguments;
+        m.fittedFile = "fits/" + m.method + ".exr";
+        job.output = (work / m.fittedFile).string();
+        job.log = (work / ("fits/" + m.method + ".log")).string();
+        const fs::path previous = fs::path(options.outputDir) / m.fittedFile;
+        if (options.reuseFits && canReuseFit(job, previous.string(), m.fit)) {
+            fs::copy_file(previous, job.output);
+            // Same fit, same age: a later run still sees it as newer than INPUT.
+            fs::last_write_time(job.output, fs::last_write_time(previous));
+            fs::copy_file(previous.string() + ".json", job.output + ".json");
+            std::error_code ec;  // the log is nice to have
+            fs::copy_file(fs::path(options.outputDir) / ("fits/" + m.method + ".log"), job.log, ec);
+        } else {
+            m.fit = runFitProcess(job);
+            if (m.fit.ok) writeFitRecord(job, m.fit, job.output + ".json");
+        }
+        if (!m.fit.ok) {
+            m.failed = true;
+            m.failure = "failed: " + m.fit.message;
+        }
+        progress.advance();
+    }
+}
+
+void errorStage(const MeasuredBtf& btf, const fs::path& work, CompareResult& result,
+                std::vector<osg::ref_ptr<Material>>& materials) {
+    Progress progress("error and memory tables (CPU)", result.methods.size());
+    materials.assign(result.methods.size(), nullptr);
+    for (std::size_t i = 0; i < result.methods.size(); ++i) {
+        MethodResult& m = result.methods[i];
+        if (!m.failed) {
+            try {
+                osg::ref_ptr<Material> material = loadMaterial((work / m.fittedFile).string());
+                if (material->width() != btf.width() || material->height() != btf.height())
+                    throw Error(m.fittedFile + ": fitted to a different size");
+                m.error = computeError(btf, [&](std::size_t texel, float* out) {
+                    material->evaluateMeasured(texel, out);
+                });
+                m.memory = material->memory();
+                if (m.memory.bytesPerTexel > 0)
+                    m.compressionRatio = result.rawBytesPerTexel / m.memory.bytesPerTexel;
+                m.cost = shaderCost(*material);
+                const auto seconds = material->fitInfo.find("seconds");
+                if (seconds != material->fitInfo.end()) m.fitSeconds = std::stod(seconds->second);
+                materials[i] = material;
+            } catch (const std::exception& e) {
+                m.failed = true;
+                m.failure = std::string("failed: ") + e.what();
+            }
+        }
+        progress.advance();
+    }
+}
+
+void gpuStage(const CompareOptions& options, const MeasuredBtf& btf, const fs::path& work,
+              CompareResult& result, const std::vector<osg::ref_ptr<Material>>& materials) {
+    std::unique_ptr<HeadlessRenderer> renderer;
+    try {
+        renderer = std::make_unique<HeadlessRenderer>();
+    } catch (const Error& e) {
+        result.gpuNote = std::string("no headless OpenGL context: ") + e.what();
+        return;
+    }
+    result.gpuRan = true;
+    result.glRenderer = renderer->glRenderer();
+    result.glVersion = renderer->glVersion();
+    result.softwareRenderer = renderer->isSoftwareRenderer();
+    result.gpuNote = "rendered with " + result.glRenderer + " (" + result.glVersion + ")";
+
+    {
+        Progress progress("GPU spot check", materials.size());
+        for (std::size_t i = 0; i < materials.size(); ++i) {
+            if (materials[i]) try {
+                    double worst = 0;
+                    for (const auto& [v, l] : result.spotCheckPairs) {
+                        const glm::vec3 view = btf.views().vector(v),
+                                        light = btf.lights().vector(l);
+                        worst = std::max(
+                            worst, maxAbsDifference(
+                                       renderMaterialImage(*renderer, *materials[i], view, light),
+                                       evaluateMaterialImage(*materials[i], view, light)));
+                    }
+                    result.methods[i].gpuCpuMaxDifference = worst;
+                } catch (const Error& e) {
+                    // One method's GPU trouble must not cost the others their results.
+                    result.gpuNote += "; " + result.methods[i].method + " GPU check: " + e.what();
+                }
+            progress.advance();
+        }
+    }
+    {
+        Progress progress("pass timing", materials.size() + 1);
+        result.calibration = runCalibration(*renderer, options.pass);
+        progress.advance();
+        const double pixels = double(options.pass.width) * double(options.pass.height);
+        for (std::size_t i = 0; i < materials.size(); ++i) {
+            if (materials[i]) try {
+                    MethodResult& m = result.methods[i];
+                    m.pass = timeMaterialPass(*renderer, *materials[i], options.pass);
+                    if (m.cost.counted && result.calibration.fetchesPerSecond > 0) {
+                        m.floorMs = double(m.cost.tex(options.pass.lights)) * pixels /
+                                    result.calibration.fetchesPerSecond * 1e3;
+                        if (m.floorMs > 0 && m.pass.ms >= 0) m.floorRatio = m.pass.ms / m.floorMs;
+                    }
+                } catch (const Error& e) {
+                    result.gpuNote += "; " + result.methods[i].method + " pass timing: " + e.what();
+                }
+            progress.advance();
+        }
+    }
+    {
+        const std::vector<SphereSetting> settings = defaultSphereSettings();
+        Progress progress("model renders", settings.size() * materials.size());
+        std::vector<std::vector<FloatImage>> rows;
+        std::vector<std::string> labels;
+        for (std::size_t i = 0; i < materials.size(); ++i)
+            if (materials[i]) labels.push_back(result.methods[i].method);
+        for (const SphereSetting& setting : settings) {
+            std::vector<FloatImage> row;
+            for (const auto& material : materials) {
+                if (material)
+                    row.push_back(renderSphere(*renderer, *material, setting, options.sphereSize,
+                                               options.sphereTextureScale));
+                progress.advance();
+            }
+            rows.push_back(std::move(row));
+        }
+        constexpr int kGap = 4, kBand = 22;
+        FloatImage sheet = addTopBand(tileImages(rows, kGap, 0.0f), kBand, 0.0f);
+        result.labelsDrawn &= labelColumns(sheet, labels, options.sphereSize, kGap, kBand);
+        writeFloatImage(sheet, (work / "pictures/spheres.png").string(), false, true);
+        std::string caption = "Sphere rendered with every method (columns: ";
+        for (std::size_t i = 0; i < labels.size(); ++i) caption += (i ? ", " : "") + labels[i];
+        caption += "; lambert is the plain lit texture baseline). Rows: ";
+        for (std::size_t i = 0; i < settings.size(); ++i)
+            caption += (i ? ", " : "") + settings[i].name;
+        caption += ". sRGB-encoded preview of linear values, texture repeated " +
+                   formatNumber(options.sphereTextureScale, 3) + " times.";
+        result.pictures.push_back({"pictures/spheres.png", caption});
+    }
+}
+
+void pictureStage(const MeasuredBtf& btf, const fs::path& work, CompareResult& result,
+                  const std::vector<osg::ref_ptr<Material>>& materials) {
+    Progress progress("pictures", 3);
+    std::vector<std::string> labels;
+    for (std::size_t i = 0; i < materials.size(); ++i)
+        if (materials[i]) labels.push_back(result.methods[i].method);
+    const int factor = std::max(1, int(std::ceil(128.0 / std::max(btf.width(), 1))));
+    const int cell = btf.width() * factor;
+    constexpr int kGap = 4, kBand = 22;
+    bool labelsDrawn = true;
+
+    // Error maps, one colour scale for all methods.
+    result.errorMapMax = 0;
+    for (std::size_t i = 0; i < materials.size(); ++i)
+        if (materials[i] && std::isfinite(result.methods[i].error.maximum))
+            result.errorMapMax = std::max(result.errorMapMax, result.methods[i].error.maximum);
+    {
+        std::vector<FloatImage> maps;
+        for (std::size_t i = 0; i < materials.size(); ++i)
+            if (materials[i])
+                maps.push_back(
+                    enlarge(colourMappedErrors(result.methods[i].error.perTexel, btf.width(),
+                                               btf.height(), result.errorMapMax),
+                            factor));
+        if (!maps.empty()) {
+            FloatImage sheet = addTopBand(tileImages({maps}, kGap, 1.0f), kBand, 1.0f);
+            labelsDrawn &= labelColumns(sheet, labels, cell, kGap, kBand, 0.0f);
+            // Legend: a colour bar under the maps with its end values.
+            const int barWidth = std::min(sheet.width, 256);
+            FloatImage legend(std::max(sheet.width, barWidth), 40, 3);
+            std::fill(legend.pixels.begin(), legend.pixels.end(), 1.0f);
+            const FloatImage bar = colourBar(barWidth, 14);
+            for (int y = 0; y < bar.height; ++y)
+                for (int x = 0; x < bar.width; ++x)
+                    for (int c = 0; c < 3; ++c) legend.at(x, 4 + y, c) = bar.at(x, y, c);
+            labelsDrawn &= drawText(legend, 0, 36, "0", 12, 0.0f);
+            labelsDrawn &= drawText(legend, std::max(0, barWidth - 60), 36,
+                                    formatNumber(result.errorMapMax, 3), 12, 0.0f);
+            sheet = stackImages(sheet, legend, 2, 1.0f);
+            writeFloatImage(sheet, (work / "pictures/error-maps.png").string());
+            result.pictures.push_back(
+                {"pictures/error-maps.png",
+                 "Per-texel error (seed 001 sec. 4.1) of each method, viridis colour map from 0 "
+                 "(dark blue) to " +
+                     formatNumber(result.errorMapMax, 4) +
+                     " (yellow, the largest per-texel error of all methods); magenta = NaN/Inf. "
+                     "Columns: " +
+                     [&] {
+                         std::string s;
+                         for (std::size_t i = 0; i < labels.size(); ++i)
+                             s += (i ? ", " : "") + labels[i];
+                         return s;
+                     }() +
+                     "; each texel enlarged " + std::to_string(factor) + "x."});
+        }
+    }
+    progress.advance();
+
+    // Measured vs modelled for the spot-check pairs.
+    {
+        std::vector<std::vector<FloatImage>> rows;
+        std::string rowNames;
+        for (const auto& pair : result.spotCheckPairs) {
+            const glm::vec3 view = btf.views().vector(pair.first);
+            const glm::vec3 light = btf.lights().vector(pair.second);
+            std::vector<FloatImage> row{
+                enlarge(measuredImage(btf, pair.first, pair.second), factor)};
+            for (const auto& material : materials)
+                if (material)
+                    row.push_back(enlarge(evaluateMaterialImage(*material, view, light), factor));
+            rows.push_back(std::move(row));
+            rowNames += (rowNames.empty() ? "" : "; ") + pairName(btf, pair);
+        }
+        std::vector<std::string> columns{"measured"};
+        columns.insert(columns.end(), labels.begin(), labels.end());
+        FloatImage sheet = addTopBand(tileImages(rows, kGap, 0.0f), kBand, 0.0f);
+        labelsDrawn &= labelColumns(sheet, columns, cell, kGap, kBand);
+        writeFloatImage(sheet, (work / "pictures/measured-vs-model.png").string(), false, true);
+        std::string columnNames;
+        for (std::size_t i = 0; i < columns.size(); ++i)
+            columnNames += (i ? ", " : "") + columns[i];
+        result.pictures.push_back(
+            {"pictures/measured-vs-model.png",
+             "Measured images and each model (CPU evaluator) at measured (view, light) pairs. "
+             "Columns: " +
+                 columnNames + ". Rows: " + rowNames + " (theta,phi degrees). sRGB-encoded."});
+    }
+    progress.advance();
+
+    std::vector<PlotPoint> points;
+    for (const MethodResult& m : result.methods)
+        if (!m.failed) points.push_back({m.method, m.memory.bytesPerTexel, m.error.average});
+    writeText(
+        (work / "pictures/error-vs-memory.svg").string(),
+        errorMemorySvg(points, "Error vs memory: " + fs::path(result.input).filename().string()));
+    result.pictures.push_back({"pictures/error-vs-memory.svg",
+                               "Average per-texel error against bytes per texel (log scale)."});
+    progress.advance();
+    result.labelsDrawn = result.labelsDrawn && labelsDrawn;
+}
+
+}  // namespace
+
+void recommend(CompareResult& result) {
+    const MethodResult* best = nullptr;
+    for (const MethodResult& m : result.methods) {
+        if (m.failed) continue;
+        if (result.maxBytesPerTexel > 0 && m.memory.bytesPerTexel > result.maxBytesPerTexel)
+            continue;
+        if (result.maxMsPerPass > 0 && !(m.pass.ms >= 0 && m.pass.ms <= result.maxMsPerPass))
+            continue;
+        if (!best || m.error.average < best->error.average) best = &m;
+    }
+    std::string budgets;
+    if (result.maxBytesPerTexel > 0)
+        budgets += "at most " + formatNumber(result.maxBytesPerTexel, 6) + " bytes per texel";
+    if (result.maxMsPerPass > 0)
+        budgets += std::string(budgets.empty() ? "" : " and ") + "at most " +
+                   formatNumber(result.maxMsPerPass, 6) + " ms per pass (" +
+                   std::to_string(result.pass.width) + "x" + std::to_string(result.pass.height) +
+                   ", " + std::to_string(result.pass.lights) + " light" +
+                   (result.pass.lights == 1 ? "" : "s") + ")";
+    if (budgets.empty()) budgets = "no budget given";
+    if (best) {
+        result.recommended = best->method;
+        result.recommendation = "Recommendation: " + best->method +
+                                " (lowest average per-texel error, " +
+                                formatNumber(best->error.average, 5) + ", within " + budgets + ")";
+    } else {
+        result.recommended.clear();
+        result.recommendation =
+            "Recommendation: none; no completed method fits the budgets (" + budgets + ")";
+    }
+}
+
+CompareResult runCompare(const CompareOptions& options) {
+    const std::vector<std::string> methods = orderedMethods(options);
+    if (options.outputDir.empty()) throw Error("no output folder given");
+    // Loading first: a bad INPUT stops here, before any folder is created.
+    const MeasuredBtf btf = loadMeasuredBtf(options.input, options.load);
+
+    CompareResult result;
+    result.input = options.input;
+    result.width = btf.width();
+    result.height = btf.height();
+    result.views = btf.viewCount();
+    result.lights = btf.lightCount();
+    result.rawBytesPerTexel = double(btf.viewCount() * btf.lightCount() * 3);
+    result.rawTotalBytes = std::uint64_t(btf.texelCount()) * btf.viewCount() * btf.lightCount() * 3;
+    result.pass = options.pass;
+    result.maxBytesPerTexel = options.maxBytesPerTexel;
+    result.maxMsPerPass = options.maxMsPerPass;
+    result.spotCheckPairs = spotPairs(btf);
+    result.labelsDrawn = true;  // until a label fails to draw
+    for (const std::string& name : methods) {
+        MethodResult m;
+        m.method = name;
+        const auto it = options.methodOptions.find(name);
+        if (it != options.methodOptions.end()) m.options = it->second;
+        result.methods.push_back(std::move(m));
+    }
+
+    const fs::path target = fs::absolute(options.outputDir).lexically_normal();
+    const fs::path parent =
+        target.has_filename() ? target.parent_path() : target.parent_path().parent_path();
+    const fs::path finalTarget = target.has_filename() ? target : target.parent_path();
+    std::error_code ec;
+    fs::create_directories(parent, ec);
+    if (ec) throw Error(parent.string() + ": cannot create the folder: " + ec.message());
+    fs::path work = parent / (finalTarget.filename().string() + ".tmp" + std::to_string(getpid()));
+    fs::remove_all(work, ec);
+    fs::create_directories(work / "fits", ec);
+    if (!ec) fs::create_directories(work / "pictures", ec);
+    if (ec) throw Error(work.string() + ": cannot create the folder: " + ec.message());
+    try {
+        CompareOptions effective = options;
+        effective.outputDir = finalTarget.string();
+        fitStage(effective, work, result);
+        std::vector<osg::ref_ptr<Material>> materials;
+        errorStage(btf, work, result, materials);
+        if (options.gpu)
+            gpuStage(options, btf, work, result, materials);
+        else
+            result.gpuNote = "GPU part skipped (--no-gpu)";
+        pictureStage(btf, work, result, materials);
+        recommend(result);
+        writeText((work / "report.md").string(), reportMarkdown(result));
+        writeText((work / "results.csv").string(), resultsCsv(result));
+        writeText((work / "results.json").string(), resultsJson(result));
+        publishFolder(work, finalTarget);
+    } catch (...) {
+        fs::remove_all(work, ec);
+        throw;
+    }
+    return result;
+}
+
+}  // namespace osgBTF

@@ -1,0 +1,314 @@
+#include "harness/Report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/MeasuredBtf.h"
+
+namespace osgBTF {
+
+namespace {
+
+std::string fixed(double value, int decimals) {
+    if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+    if (std::isnan(value)) return "nan";
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
+    return buffer;
+}
+
+std::string general(double value, int digits = 5) {
+    if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+    return buffer;
+}
+
+std::string full(double value) {
+    return general(value, 17);
+}
+
+std::string optionText(const MethodResult& m) {
+    std::string text;
+    for (const auto& [key, value] : m.options)
+        text += (text.empty() ? "" : " ") + key + "=" + value;
+    return text.empty() ? "defaults" : text;
+}
+
+std::string cell(const std::string& text) {
+    std::string out;
+    for (char c : text)
+        out += c == '|' ? std::string("\\|") : c == '\n' ? std::string(" ") : std::string(1, c);
+    return out;
+}
+
+std::string csvField(const std::string& text) {
+    if (text.find_first_of(",\"\n") == std::string::npos) return text;
+    std::string out = "\"";
+    for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return out + "\"";
+}
+
+nlohmann::json number(double value) {
+    if (std::isfinite(value)) return value;
+    return std::isnan(value) ? "nan" : value > 0 ? "inf" : "-inf";
+}
+
+std::string passDescription(const CompareResult& r) {
+    return std::to_string(r.pass.width) + "x" + std::to_string(r.pass.height) + " pixels, " +
+           std::to_string(r.pass.lights) + " light" + (r.pass.lights == 1 ? "" : "s") +
+           ", median of " + std::to_string(r.pass.frames) + " frames, texture repeated " +
+           general(r.pass.textureScale, 3) + " times across the viewport";
+}
+
+}  // namespace
+
+std::string reportMarkdown(const CompareResult& r) {
+    std::ostringstream md;
+    const std::string name = std::filesystem::path(r.input).filename().string();
+    md << "# BTF method comparison: " << name << "\n\n"
+       << "Input `" << r.input << "`: " << r.width << "x" << r.height << " texels, " << r.views
+       << " views x " << r.lights << " lights. Raw data: " << general(r.rawBytesPerTexel, 8)
+       << " bytes per texel (8-bit RGB per measured value), " << formatBytes(r.rawTotalBytes)
+       << " in all.\n\n"
+       << "GPU: " << r.gpuNote << ".\n\n"
+       << "**" << r.recommendation << ".**\n\n"
+       << "Definitions of every column: harness/README.md in the osgBTF sources.\n\n";
+
+    md << "## Table 1: error\n\n"
+       << "Per-texel error (seed 001 sec. 4.1: mean over all " << r.views * r.lights
+       << " measured (view, light) pairs of |measured - model| in RGB, 8-bit data scaled to "
+          "[0, 1]) as average / minimum / maximum over texels; RMSE over every channel value; "
+          "PSNR with peak 1. From the CPU evaluator. The GPU column is the largest |GPU - CPU| "
+          "over "
+       << r.spotCheckPairs.size() << " (view, light) images.\n\n"
+       << "| method | options | avg | min | max | RMSE | PSNR dB | NaN/Inf | max GPU-CPU |\n"
+       << "|---|---|---|---|---|---|---|---|---|\n";
+    for (const MethodResult& m : r.methods) {
+        md << "| " << m.method << " | " << cell(optionText(m)) << " | ";
+        if (m.failed) {
+            md << cell(m.failure) << " | | | | | | |\n";
+            continue;
+        }
+        md << fixed(m.error.average, 5) << " | " << fixed(m.error.minimum, 5) << " | "
+           << fixed(m.error.maximum, 5) << " | " << fixed(m.error.rmse, 5) << " | "
+           << fixed(m.error.psnr, 2) << " | " << m.error.nonFiniteValues << " | "
+           << (m.gpuCpuMaxDifference >= 0 ? general(m.gpuCpuMaxDifference, 3) : "n/a") << " |\n";
+    }
+
+    md << "\n## Table 2: memory\n\n"
+       << "Storage as seed 001 Table 2 counts it (Material::memory(): per-texel arrays fully, "
+          "shared tables divided by the texel count). Compression ratio = raw bytes per texel ("
+       << general(r.rawBytesPerTexel, 8) << ") / bytes per texel.\n\n"
+       << "| method | values/texel | bytes/texel | total | compression ratio |\n"
+       << "|---|---|---|---|---|\n"
+       << "| raw data | " << general(double(r.views * r.lights * 3), 8) << " | "
+       << general(r.rawBytesPerTexel, 8) << " | " << formatBytes(r.rawTotalBytes) << " | 1 |\n";
+    for (const MethodResult& m : r.methods) {
+        md << "| " << m.method << " | ";
+        if (m.failed) {
+            md << cell(m.failure) << " | | | |\n";
+            continue;
+        }
+        md << fixed(m.memory.valuesPerTexel, 1) << " | " << fixed(m.memory.bytesPerTexel, 1)
+           << " | " << formatBytes(m.memory.totalBytes) << " (" << m.memory.totalBytes
+           << " bytes) | " << general(m.compressionRatio, 4) << " |\n";
+    }
+
+    md << "\n## Table 3: pass cost\n\n"
+       << "ALU / TEX: static count of the fragment shader (harness/ShaderCost.h), fixed + per "
+          "light, and the total at "
+       << r.pass.lights << " light" << (r.pass.lights == 1 ? "" : "s") << ". ";
+    if (r.gpuRan) {
+        const std::string clock = r.calibration.fetches.clock;
+        md << "Time per pass: " << passDescription(r) << "; clock: " << clock
+           << (clock == "GL_TIME_ELAPSED"
+                   ? " (GPU timer queries around the camera's draw)"
+                   : " (software renderer: wall time of a frame ending with glFinish, read-back "
+                     "included; its GL timer queries are meaningless)")
+           << ", renderer " << r.glRenderer << ".\n\n"
+           << "Calibration in the same run: an empty pass took " << fixed(r.calibration.empty.ms, 3)
+           << " ms, " << r.calibration.fetchCount << " RGBA32F texelFetch per pixel took "
+           << fixed(r.calibration.fetches.ms, 3)
+           << " ms: " << general(r.calibration.fetchesPerSecond / 1e9, 4)
+           << " G fetches/s. Floor = TEX total x pixels / that rate; ratio = time / floor.\n\n";
+    } else {
+        md << "No pass times: " << r.gpuNote << ".\n\n";
+    }
+    md << "| method | ALU fixed + per light | TEX fixed + per light | ALU total | TEX total | "
+          "count rule | ms per pass | floor ms | ratio to floor |\n"
+       << "|---|---|---|---|---|---|---|---|---|\n";
+    for (const MethodResult& m : r.methods) {
+        md << "| " << m.method << " | ";
+        if (m.failed) {
+            md << cell(m.failure) << " | | | | | | | |\n";
+            continue;
+        }
+        if (m.cost.counted)
+            md << m.cost.fixedAlu << " + " << m.cost.perLightAlu << " | " << m.cost.fixedTex
+               << " + " << m.cost.perLightTex << " | " << m.cost.alu(r.pass.lights) << " | "
+               << m.cost.tex(r.pass.lights) << " | " << cell(m.cost.formula) << " | ";
+        else
+            md << "n/a | n/a | n/a | n/a | not counted | ";
+        md << (m.pass.ms >= 0 ? fixed(m.pass.ms, 3) : "n/a") << " | "
+           << (m.floorMs >= 0 ? fixed(m.floorMs, 3) : "n/a") << " | "
+           << (m.floorRatio >= 0 ? fixed(m.floorRatio, 2) : "n/a") << " |\n";
+    }
+
+    md << "\n## Fitting\n\n"
+       << "Each fit runs as a `btf fit` child process. Fit s: the fit alone (fitInfo.seconds, "
+          "saved in the fitted file); process s: the whole child (load, fit, save, error); peak "
+          "memory: the child's maximum resident set (wait4 rusage). Reused fits show the "
+          "figures of the run that made them.\n\n"
+       << "| method | fit s | process s | peak memory | reused | file | log |\n"
+       << "|---|---|---|---|---|---|---|\n";
+    for (const MethodResult& m : r.methods) {
+        const std::string log = "fits/" + m.method + ".log";
+        md << "| " << m.method << " | ";
+        if (m.failed && !m.fit.ok) {
+            md << cell(m.failure) << " | " << fixed(m.fit.wallSeconds, 2) << " | "
+               << formatBytes(m.fit.peakRssBytes) << " | no | | [log](" << log << ") |\n";
+            continue;
+        }
+        md << (m.fitSeconds >= 0 ? fixed(m.fitSeconds, 2) : (m.failed ? cell(m.failure) : "n/a"))
+           << " | " << fixed(m.fit.wallSeconds, 2) << " | " << formatBytes(m.fit.peakRssBytes)
+           << " | " << (m.fit.reused ? "yes" : "no") << " | [" << m.fittedFile << "]("
+           << m.fittedFile << ") | [log](" << log << ") |\n";
+    }
+
+    md << "\n## Pictures\n\n";
+    if (!r.labelsDrawn)
+        md << "(No font was found for labels inside the pictures: the column order is in each "
+              "caption.)\n\n";
+    for (const ComparePicture& p : r.pictures)
+        md << "![" << p.file << "](" << p.file << ")\n\n" << p.caption << "\n\n";
+    md << "## Recommendation\n\n" << r.recommendation << ".\n";
+    return md.str();
+}
+
+std::string resultsCsv(const CompareResult& r) {
+    std::ostringstream csv;
+    csv << "method,status,message,options,error_avg,error_min,error_max,rmse,psnr_db,"
+           "nonfinite_values,gpu_cpu_max_diff,values_per_texel,bytes_per_texel,total_bytes,"
+           "compression_ratio,alu_fixed,tex_fixed,alu_per_light,tex_per_light,alu_total,"
+           "tex_total,pass_ms,pass_clock,floor_ms,floor_ratio,fit_seconds,fit_process_seconds,"
+           "peak_rss_bytes,reused,fitted_file\n";
+    for (const MethodResult& m : r.methods) {
+        csv << csvField(m.method) << "," << (m.failed ? "failed" : "ok") << ","
+            << csvField(m.failed ? m.failure : "") << "," << csvField(optionText(m)) << ",";
+        if (m.failed) {
+            // 22 empty measures (error_avg .. fit_seconds), then what the failed child reported.
+            csv << std::string(22, ',') << (m.fit.ok ? "" : full(m.fit.wallSeconds)) << ","
+                << (m.fit.ok ? "" : std::to_string(m.fit.peakRssBytes)) << ",,\n";
+            continue;
+        }
+        const auto optional = [](double v) { return v >= 0 ? full(v) : std::string(); };
+        csv << full(m.error.average) << "," << full(m.error.minimum) << "," << full(m.error.maximum)
+            << "," << full(m.error.rmse) << "," << full(m.error.psnr) << ","
+            << m.error.nonFiniteValues << "," << optional(m.gpuCpuMaxDifference) << ","
+            << full(m.memory.valuesPerTexel) << "," << full(m.memory.bytesPerTexel) << ","
+            << m.memory.totalBytes << "," << full(m.compressionRatio) << ",";
+        if (m.cost.counted)
+            csv << m.cost.fixedAlu << "," << m.cost.fixedTex << "," << m.cost.perLightAlu << ","
+                << m.cost.perLightTex << "," << m.cost.alu(r.pass.lights) << ","
+                << m.cost.tex(r.pass.lights) << ",";
+        else
+            csv << ",,,,,,";
+        csv << optional(m.pass.ms) << "," << m.pass.clock << "," << optional(m.floorMs) << ","
+            << optional(m.floorRatio) << "," << optional(m.fitSeconds) << ","
+            << full(m.fit.wallSeconds) << "," << m.fit.peakRssBytes << ","
+            << (m.fit.reused ? "yes" : "no") << "," << csvField(m.fittedFile) << "\n";
+    }
+    return csv.str();
+}
+
+std::string resultsJson(const CompareResult& r) {
+    nlohmann::json j;
+    j["input"] = {{"path", r.input},
+                  {"width", r.width},
+                  {"height", r.height},
+                  {"views", r.views},
+                  {"lights", r.lights},
+                  {"raw_bytes_per_texel", r.rawBytesPerTexel},
+                  {"raw_total_bytes", r.rawTotalBytes}};
+    j["gpu"] = {{"ran", r.gpuRan},
+                {"note", r.gpuNote},
+                {"renderer", r.glRenderer},
+                {"version", r.glVersion},
+                {"software", r.softwareRenderer}};
+    j["pass"] = {{"width", r.pass.width},
+                 {"height", r.pass.height},
+                 {"lights", r.pass.lights},
+                 {"frames", r.pass.frames},
+                 {"texture_scale", r.pass.textureScale}};
+    if (r.gpuRan)
+        j["calibration"] = {{"fetches_per_pixel", r.calibration.fetchCount},
+                            {"empty_ms", r.calibration.empty.ms},
+                            {"fetch_ms", r.calibration.fetches.ms},
+                            {"fetches_per_second", r.calibration.fetchesPerSecond},
+                            {"clock", r.calibration.fetches.clock}};
+    nlohmann::json pairs = nlohmann::json::array();
+    for (const auto& [v, l] : r.spotCheckPairs) pairs.push_back({{"view", v}, {"light", l}});
+    j["spot_check_pairs"] = pairs;
+    nlohmann::json methods = nlohmann::json::array();
+    for (const MethodResult& m : r.methods) {
+        nlohmann::json e{
+            {"method", m.method}, {"options", m.options}, {"status", m.failed ? "failed" : "ok"}};
+        if (m.failed) e["message"] = m.failure;
+        e["fit"] = {{"process_seconds", m.fit.wallSeconds},
+                    {"peak_rss_bytes", m.fit.peakRssBytes},
+                    {"reused", m.fit.reused}};
+        if (!m.failed) {
+            e["fitted_file"] = m.fittedFile;
+            e["fit"]["seconds"] = number(m.fitSeconds);
+            e["error"] = {{"average", number(m.error.average)},
+                          {"minimum", number(m.error.minimum)},
+                          {"maximum", number(m.error.maximum)},
+                          {"rmse", number(m.error.rmse)},
+                          {"psnr_db", number(m.error.psnr)},
+                          {"nonfinite_values", m.error.nonFiniteValues}};
+            if (m.gpuCpuMaxDifference >= 0) e["error"]["gpu_cpu_max_diff"] = m.gpuCpuMaxDifference;
+            e["memory"] = {{"values_per_texel", m.memory.valuesPerTexel},
+                           {"bytes_per_texel", m.memory.bytesPerTexel},
+                           {"total_bytes", m.memory.totalBytes},
+                           {"compression_ratio", m.compressionRatio}};
+            nlohmann::json pass{{"counted", m.cost.counted}, {"rule", m.cost.formula}};
+            if (m.cost.counted) {
+                pass["alu_fixed"] = m.cost.fixedAlu;
+                pass["tex_fixed"] = m.cost.fixedTex;
+                pass["alu_per_light"] = m.cost.perLightAlu;
+                pass["tex_per_light"] = m.cost.perLightTex;
+                pass["alu_total"] = m.cost.alu(r.pass.lights);
+                pass["tex_total"] = m.cost.tex(r.pass.lights);
+            }
+            if (m.pass.ms >= 0) {
+                pass["ms"] = m.pass.ms;
+                pass["clock"] = m.pass.clock;
+                pass["wall_ms"] = m.pass.timing.wallMs;
+                pass["cpu_ms"] = m.pass.timing.cpuMs;
+                pass["gpu_timer_ms"] = m.pass.timing.gpuMs;
+            }
+            if (m.floorMs >= 0) pass["floor_ms"] = m.floorMs;
+            if (m.floorRatio >= 0) pass["floor_ratio"] = m.floorRatio;
+            e["pass"] = pass;
+        }
+        methods.push_back(e);
+    }
+    j["methods"] = methods;
+    nlohmann::json pictures = nlohmann::json::array();
+    for (const ComparePicture& p : r.pictures)
+        pictures.push_back({{"file", p.file}, {"caption", p.caption}});
+    j["pictures"] = pictures;
+    j["error_map_max"] = r.errorMapMax;
+    j["recommendation"] = {{"method", r.recommended},
+                           {"text", r.recommendation},
+                           {"max_bytes_per_texel", r.maxBytesPerTexel},
+                           {"max_ms_per_pass", r.maxMsPerPass}};
+    return j.dump(2) + "\n";
+}
+
+}  // namespace osgBTF

@@ -1,0 +1,286 @@
+#include "plugins/btf/ReaderWriterBTF.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+#include <system_error>
+
+#include <osg/Notify>
+#include <osgDB/FileNameUtils>
+#include <osgDB/FileUtils>
+#include <osgDB/ReadFile>
+
+#include "core/Error.h"
+#include "loaders/LoadBtf.h"
+#include "materials/Material.h"
+#include "scene/MaterialNode.h"
+
+namespace fs = std::filesystem;
+
+namespace osgBTF::plugin {
+
+namespace {
+
+const char* const kPseudoSyntax = "MODEL.(MATERIAL[,scale=S][,KEY=VALUE...]).btfmaterial";
+
+/** What the option string asks of these readers. */
+struct Settings {
+    std::string method = "lpca";
+    std::map<std::string, std::string> values;  // every KEY=VALUE word, method options among them
+    float textureScale = 1.0f;
+    std::string cacheDir;  // empty: caching off
+};
+
+std::string defaultCacheDir() {
+    if (const char* dir = std::getenv("OSGBTF_CACHE_DIR"); dir && *dir) return dir;
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
+        return (fs::path(xdg) / "osgbtf").string();
+    if (const char* home = std::getenv("HOME"); home && *home)
+        return (fs::path(home) / ".cache" / "osgbtf").string();
+    return {};
+}
+
+/** Parses option words; `extra` (from a pseudo-file name) wins over the -O string. */
+Settings parseSettings(const osgDB::Options* options, const std::string& extra = {}) {
+    Settings settings;
+    settings.cacheDir = defaultCacheDir();
+    std::string text = options ? options->getOptionString() : std::string();
+    text += " " + extra;
+    for (char& c : text)
+        if (c == ',') c = ' ';
+    std::istringstream words(text);
+    std::string word;
+    while (words >> word) {
+        const auto eq = word.find('=');
+        if (eq == std::string::npos || eq == 0) continue;  // another plugin's flag
+        const std::string key = word.substr(0, eq), value = word.substr(eq + 1);
+        if (key == "method") {
+            settings.method = value;
+        } else if (key == "cache") {
+            settings.cacheDir = value == "off" ? std::string() : value;
+        } else if (key == "scale") {
+            char* end = nullptr;
+            const float scale = std::strtof(value.c_str(), &end);
+            if (value.empty() || *end || !(scale > 0.0f))
+                throw Error("option scale=" + value + ": expected a positive number");
+            settings.textureScale = scale;
+        } else {
+            settings.values[key] = value;
+        }
+    }
+    return settings;
+}
+
+/** The method's own options among the words; the rest belongs to other plugins. */
+FitOptions fitOptionsFor(const MethodInfo& method, const Settings& settings) {
+    FitOptions options;
+    for (const auto& [key, value] : settings.values)
+        for (const auto& known : method.options)
+            if (known.first == key) options.set(key, value);
+    return options;
+}
+
+std::string hex64(std::uint64_t value) {
+    char text[17];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
+    return text;
+}
+
+std::uint64_t fnv1a64(const std::string& text) {
+    std::uint64_t hash = 14695981039346656037ull;
+    for (unsigned char c : text) {
+        hash ^= c;
+        hash *= 1099511628211ull;
+    }
+    return hash;
+}
+
+/** Everything a fit depends on, as one line (stored in the fitted file to detect collisions). */
+std::string cacheKey(const std::string& path, const std::string& method,
+                     const FitOptions& options) {
+    std::error_code error;
+    const fs::path absolute = fs::absolute(path, error);
+    std::ostringstream key;
+    key << "osgbtf-fit-cache-1|" << (error ? fs::path(path) : absolute).lexically_normal().string()
+        << "|";
+    if (fs::is_directory(path, error)) {
+        // A folder of images: its newest member stands for its modification time.
+        std::uintmax_t size = 0;
+        fs::file_time_type newest{};
+        for (const auto& entry : fs::directory_iterator(path, error)) {
+            if (!entry.is_regular_file(error)) continue;
+            size += entry.file_size(error);
+            newest = std::max(newest, entry.last_write_time(error));
+        }
+        key << size << "|" << newest.time_since_epoch().count();
+    } else {
+        key << fs::file_size(path, error) << "|"
+            << fs::last_write_time(path, error).time_since_epoch().count();
+    }
+    key << "|" << method;
+    for (const auto& [name, value] : options.values()) key << "|" << name << "=" << value;
+    return key.str();
+}
+
+/** A measured BTF fitted with the settings' method, through the fit cache. */
+osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& settings) {
+    const MethodInfo& method = findMethod(settings.method);
+    const FitOptions fitOptions = fitOptionsFor(method, settings);
+    std::string optionText;
+    for (const auto& [name, value] : fitOptions.values())
+        optionText += (optionText.empty() ? "" : " ") + name + "=" + value;
+    const std::string key = cacheKey(path, method.name, fitOptions);
+
+    fs::path cacheFile;
+    if (!settings.cacheDir.empty()) {
+        cacheFile =
+            fs::path(settings.cacheDir) / (fs::path(path).filename().string() + "-" + method.name +
+                                           "-" + hex64(fnv1a64(key)) + ".btfmat");
+        std::error_code error;
+        if (fs::exists(cacheFile, error)) {
+            try {
+                osg::ref_ptr<Material> material = loadSharedMaterial(cacheFile.string());
+                const auto it = material->fitInfo.find("cacheKey");
+                if (it != material->fitInfo.end() && it->second == key) {
+                    OSG_NOTICE << "osgBTF: " << path << ": using the cached fit "
+                               << cacheFile.string() << std::endl;
+                    return material;
+                }
+                OSG_NOTICE << "osgBTF: " << cacheFile.string()
+                           << " was fitted from something else; fitting again" << std::endl;
+            } catch (const Error& e) {
+                OSG_WARN << "osgBTF: ignoring the damaged cache file " << e.what() << std::endl;
+            }
+        }
+    }
+    OSG_NOTICE << "osgBTF: " << path << ": fitting method '" << method.name << "'"
+               << (optionText.empty() ? std::string() : " (" + optionText + ")")
+               << (cacheFile.empty() ? std::string(", cache off")
+                                     : ", then caching it in " + cacheFile.string())
+               << std::endl;
+    osg::ref_ptr<Material> material;
+    {
+        const MeasuredBtf btf = loadMeasuredBtf(path);
+        material = method.fit(btf, fitOptions);
+    }
+    material->fitInfo["cacheKey"] = key;
+    if (!cacheFile.empty()) {
+        try {
+            std::error_code error;
+            fs::create_directories(cacheFile.parent_path(), error);
+            if (error) fail(cacheFile.parent_path().string(), "cannot create: " + error.message());
+            saveMaterial(*material, cacheFile.string());  // atomic: temporary name, then rename
+            material->sourceFile = cacheFile.string();
+        } catch (const Error& e) {
+            OSG_WARN << "osgBTF: cannot cache the fit: " << e.what() << std::endl;
+        }
+    }
+    return material;
+}
+
+/** Measured BTFs go through the fit; everything else is read as a fitted-material file. */
+bool isMeasured(const std::string& path) {
+    const std::string ext = osgDB::getLowerCaseFileExtension(path);
+    std::error_code error;
+    return ext == "btf" || ext == "zip" || fs::is_directory(path, error);
+}
+
+osg::ref_ptr<Material> readMaterial(const std::string& path, const Settings& settings) {
+    return isMeasured(path) ? fitMeasured(path, settings) : loadSharedMaterial(path);
+}
+
+osgDB::ReaderWriter::ReadResult notFound(const std::string& file) {
+    osgDB::ReaderWriter::ReadResult result(osgDB::ReaderWriter::ReadResult::FILE_NOT_FOUND);
+    result.message() = file + ": no such file";
+    return result;
+}
+
+osgDB::ReaderWriter::ReadResult error(const std::string& message) {
+    return osgDB::ReaderWriter::ReadResult(message);  // ERROR_IN_READING_FILE
+}
+
+/** Splits "MODEL.(MATERIAL,k=v,...)" into model, material and the k=v words. */
+bool splitPseudoName(const std::string& inner, std::string& model, std::string& material,
+                     std::string& words) {
+    if (inner.empty() || inner.back() != ')') return false;
+    const auto open = inner.rfind(".(");
+    if (open == std::string::npos || open == 0) return false;
+    model = inner.substr(0, open);
+    const std::string params = inner.substr(open + 2, inner.size() - open - 3);
+    const auto comma = params.find(',');
+    material = params.substr(0, comma);
+    words = comma == std::string::npos ? std::string() : params.substr(comma + 1);
+    return !material.empty() && material.find(')') == std::string::npos;
+}
+
+}  // namespace
+
+ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
+    if (extension == "btfmat")
+        supportsExtension("btfmat", "osgBTF fitted material (OpenEXR inside) -> MaterialNode");
+    else if (extension == "btf")
+        supportsExtension("btf", "UBO2014 measured BTF, fitted on load -> MaterialNode");
+    else if (extension == "zip")
+        supportsExtension("zip", "UBO2003/ATRIUM measured BTF zip, fitted on load -> MaterialNode");
+    else if (extension == "btfmaterial")
+        supportsExtension(
+            "btfmaterial",
+            std::string("pseudo-loader: a model under an osgBTF material, ") + kPseudoSyntax);
+    if (extension != "btfmat") {
+        supportsOption("method=<name>", "fit method for measured BTFs (default lpca)");
+        supportsOption("<key>=<value>", "an option of the fit method, e.g. clusters=32");
+        supportsOption("cache=<dir>|off", "fit cache folder (default ~/.cache/osgbtf)");
+    }
+    supportsOption("scale=<s>", "texture scale (tiling) of the MaterialNode (default 1)");
+}
+
+osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readObject(const std::string& file,
+                                                            const Options* options) const {
+    // As for every node format: osgconv reads its input with readObjectFile.
+    return readNode(file, options);
+}
+
+osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& file,
+                                                          const Options* options) const {
+    const std::string ext = osgDB::getLowerCaseFileExtension(file);
+    if (!acceptsExtension(ext)) return ReadResult::FILE_NOT_HANDLED;
+    try {
+        if (ext == "btfmaterial") {
+            std::string modelName, materialName, words;
+            const std::string inner = osgDB::getNameLessExtension(file);
+            if (!splitPseudoName(inner, modelName, materialName, words))
+                return error(file + ": expected " + kPseudoSyntax);
+            const Settings settings = parseSettings(options, words);
+            const std::string materialPath = osgDB::findDataFile(materialName, options);
+            if (materialPath.empty()) return notFound(materialName);
+            osg::ref_ptr<Material> material = readMaterial(materialPath, settings);
+            osg::ref_ptr<osg::Node> model = osgDB::readRefNodeFile(modelName, options);
+            if (!model) return error(modelName + ": cannot read the model");
+            osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
+            node->setTextureScale(settings.textureScale);
+            node->addChild(model.get());
+            return node.get();
+        }
+
+        const Settings settings = parseSettings(options);
+        std::string path = osgDB::findDataFile(file, options);
+        if (path.empty() && ext == "btfmat") {
+            // "x.exr.btfmat": the fitted file x.exr, read as a material rather than an image.
+            const std::string inner = osgDB::getNameLessExtension(file);
+            if (!osgDB::getFileExtension(inner).empty()) path = osgDB::findDataFile(inner, options);
+        }
+        if (path.empty()) return notFound(file);
+        osg::ref_ptr<Material> material =
+            ext == "btfmat" ? loadSharedMaterial(path) : fitMeasured(path, settings);
+        osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
+        if (!node->getMaterial()) return error(node->getMaterialError());
+        node->setTextureScale(settings.textureScale);
+        return node.get();
+    } catch (const std::exception& e) {
+        return error(e.what());
+    }
+}
+
+}  // namespace osgBTF::plugin

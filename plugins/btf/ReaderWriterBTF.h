@@ -1,0 +1,59 @@
+/* osgBTF's osgDB readers: BTF materials as scene-graph nodes (osgBTF::MaterialNode).
+ *
+ * One source, four plugin modules (osgDB loads osgdb_<ext>.so per extension); each module claims
+ * only its own extension:
+ *
+ *   osgdb_btfmat       x.btfmat       a fitted-material file (`btf fit -o x.btfmat`; OpenEXR
+ *                                     inside) -> MaterialNode. Files named otherwise
+ *                                     (`btf fit -o x.exr`) read as the pseudo-file name
+ *                                     x.exr.btfmat.
+ *   osgdb_btf          x.btf          a UBO2014 measured BTF, fitted on load -> MaterialNode
+ *   osgdb_zip          x.zip          a UBO2003/ATRIUM measured BTF zip, fitted on load
+ *   osgdb_btfmaterial  (pseudo-loader) puts a model under a material, all in one file name:
+ *
+ *       MODEL.(MATERIAL[,scale=S][,KEY=VALUE...]).btfmaterial
+ *
+ *     e.g.  osgviewer "cow.osgt.(wool-lpca.btfmat,scale=4).btfmaterial"
+ *           osgviewer "cow.osgt.(wool.btf,method=lambert).btfmaterial"
+ *     MODEL is any file osgDB reads; MATERIAL a fitted-material file (any extension) or a
+ *     measured BTF (.btf, .zip, or a folder of UBO2003 images) fitted on load; scale=S is the
+ *     texture scale (the material repeats S times per texture-coordinate unit); other KEY=VALUE
+ *     pairs are fit options, as with -O. The parentheses let names and values contain dots;
+ *     names cannot contain ',' or ')'. Quote the name in a shell.
+ *
+ * Options (-O "...", words separated by spaces; unknown words belong to other plugins):
+ *   method=NAME      fit method for measured BTFs (default lpca; `btf fit --help` lists them)
+ *   KEY=VALUE        an option of that method (e.g. clusters=32 components=8); options the
+ *                    method does not have are ignored
+ *   scale=S          texture scale of the MaterialNode (default 1)
+ *   cache=DIR        folder of fitted measured BTFs (default $OSGBTF_CACHE_DIR, else
+ *                    $XDG_CACHE_HOME/osgbtf, else ~/.cache/osgbtf); cache=off fits every time
+ *
+ * Fit cache: a measured BTF is fitted once; the result is saved (atomically) as
+ * DIR/<name>-<method>-<16 hex digits>.btfmat, the digits a hash of the input's absolute path,
+ * size, modification time, the method and its options. The next load of the same input with the
+ * same options reads that file instead of fitting. OSG_NOTICE says which of the two happened.
+ *
+ * Results: FILE_NOT_HANDLED for another extension, FILE_NOT_FOUND (message "FILE: no such
+ * file") and ERROR_IN_READING_FILE with the osgBTF::Error message "FILE: problem". */
+#pragma once
+
+#include <string>
+
+#include <osgDB/ReaderWriter>
+
+namespace osgBTF::plugin {
+
+class ReaderWriterBTF : public osgDB::ReaderWriter {
+public:
+    /** Claims `extension` (one of btfmat, btf, zip, btfmaterial). */
+    explicit ReaderWriterBTF(const std::string& extension);
+
+    const char* className() const override { return "osgBTF material reader"; }
+
+    ReadResult readNode(const std::string& file, const Options* options) const override;
+    /** The same MaterialNode (osgconv reads its input through readObjectFile). */
+    ReadResult readObject(const std::string& file, const Options* options) const override;
+};
+
+}  // namespace osgBTF::plugin

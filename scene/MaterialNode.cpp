@@ -1,0 +1,393 @@
+#include "scene/MaterialNode.h"
+
+#include <cmath>
+#include <filesystem>
+#include <system_error>
+
+#include <osg/Camera>
+#include <osg/Geometry>
+#include <osg/LightSource>
+#include <osg/Notify>
+#include <osg/Transform>
+#include <osg/View>
+#include <osgDB/FileUtils>
+#include <osgUtil/CullVisitor>
+#include <osgUtil/TangentSpaceGenerator>
+
+#include "core/Error.h"
+
+namespace osgBTF {
+
+// Materials loaded from files are shared while anything holds them: two nodes naming the same
+// file use one Material, hence one StateSet and one copy of its textures per context.
+osg::ref_ptr<Material> loadSharedMaterial(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code error;
+    fs::path canonical = fs::weakly_canonical(path, error);
+    if (error) canonical = path;
+    const auto size = fs::file_size(canonical, error);
+    const auto time = fs::last_write_time(canonical, error);
+    const std::string stamp =
+        std::to_string(size) + ":" + std::to_string(time.time_since_epoch().count());
+
+    static std::mutex mutex;
+    static std::map<std::string, std::pair<std::string, osg::observer_ptr<Material>>> loaded;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        const auto it = loaded.find(canonical.string());
+        osg::ref_ptr<Material> material;
+        if (it != loaded.end() && it->second.first == stamp && it->second.second.lock(material))
+            return material;
+    }
+    osg::ref_ptr<Material> material = loadMaterial(path);  // outside the lock: may take a while
+    std::lock_guard<std::mutex> lock(mutex);
+    loaded[canonical.string()] = {stamp, material.get()};
+    return material;
+}
+
+namespace {
+
+constexpr unsigned kTangentAttribute = 6;  // shaders/common/btf.vert: osgBTF_tangent
+
+// ---- tangents ------------------------------------------------------------------------------
+
+bool isPerVertex(const osg::Array* array, unsigned vertexCount) {
+    return array && array->getNumElements() == vertexCount &&
+           (array->getBinding() == osg::Array::BIND_PER_VERTEX ||
+            array->getBinding() == osg::Array::BIND_UNDEFINED);
+}
+
+osg::Vec3 vec3At(const osg::Array& array, unsigned i) {
+    switch (array.getType()) {
+        case osg::Array::Vec3ArrayType:
+            return static_cast<const osg::Vec3Array&>(array)[i];
+        case osg::Array::Vec4ArrayType: {
+            const osg::Vec4& v = static_cast<const osg::Vec4Array&>(array)[i];
+            return osg::Vec3(v.x(), v.y(), v.z());
+        }
+        default:
+            return osg::Vec3();
+    }
+}
+
+/** Tangent xyz along +s and handedness w (binormal = w * cross(normal, tangent)) for one
+ *  Geometry, from osgUtil::TangentSpaceGenerator run on a copy that holds only what it reads (it
+ *  would otherwise rewrite indexed geometry in place, and reads normals out of bounds unless
+ *  they are per vertex). */
+bool addTangents(osg::Geometry& geometry) {
+    if (geometry.getVertexAttribArray(kTangentAttribute)) return false;  // never twice
+    const osg::Array* vertices = geometry.getVertexArray();
+    if (!vertices || vertices->getNumElements() == 0) return false;
+    const unsigned count = vertices->getNumElements();
+    const osg::Array* texCoords = geometry.getTexCoordArray(0);
+    if (!isPerVertex(texCoords, count)) {
+        OSG_INFO << "osgBTF::MaterialNode: geometry '" << geometry.getName()
+                 << "' has no per-vertex texture coordinates on unit 0: no tangents" << std::endl;
+        return false;
+    }
+    const osg::Array* normals = geometry.getNormalArray();
+    const bool vertexNormals =
+        isPerVertex(normals, count) && (normals->getType() == osg::Array::Vec3ArrayType ||
+                                        normals->getType() == osg::Array::Vec4ArrayType);
+
+    osg::ref_ptr<osg::Geometry> work = new osg::Geometry;
+    work->setVertexArray(const_cast<osg::Array*>(vertices));
+    work->setTexCoordArray(0, const_cast<osg::Array*>(texCoords));
+    if (vertexNormals) work->setNormalArray(const_cast<osg::Array*>(normals));
+    for (unsigned i = 0; i < geometry.getNumPrimitiveSets(); ++i)
+        work->addPrimitiveSet(geometry.getPrimitiveSet(i));
+    osg::ref_ptr<osgUtil::TangentSpaceGenerator> generator = new osgUtil::TangentSpaceGenerator;
+    generator->generate(work.get(), 0);
+    const osg::Vec4Array* t = generator->getTangentArray();
+    const osg::Vec4Array* b = generator->getBinormalArray();
+    const osg::Vec4Array* n = generator->getNormalArray();
+    if (!t || t->size() != count || !b || b->size() != count) return false;
+
+    osg::ref_ptr<osg::Vec4Array> tangents = new osg::Vec4Array(count);
+    for (unsigned i = 0; i < count; ++i) {
+        osg::Vec3 tangent((*t)[i].x(), (*t)[i].y(), (*t)[i].z());
+        const osg::Vec3 binormal((*b)[i].x(), (*b)[i].y(), (*b)[i].z());
+        const osg::Vec3 normal =
+            vertexNormals ? vec3At(*normals, i) : osg::Vec3((*n)[i].x(), (*n)[i].y(), (*n)[i].z());
+        const float length = tangent.length();
+        if (!(length > 1e-12f) || !std::isfinite(length)) {
+            (*tangents)[i] = osg::Vec4(0, 0, 0, 1);  // the shader then picks a frame itself
+            continue;
+        }
+        tangent /= length;
+        (*tangents)[i] = osg::Vec4(tangent, ((normal ^ tangent) * binormal) < 0 ? -1.0f : 1.0f);
+    }
+    geometry.setVertexAttribArray(kTangentAttribute, tangents.get(), osg::Array::BIND_PER_VERTEX);
+    if (geometry.getUseDisplayList()) geometry.dirtyDisplayList();
+    return true;
+}
+
+class TangentVisitor : public osg::NodeVisitor {
+public:
+    TangentVisitor() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+    void apply(osg::Geometry& geometry) override {
+        if (addTangents(geometry)) ++changed;
+    }
+    unsigned changed = 0;
+};
+
+// ---- lights --------------------------------------------------------------------------------
+
+EyeLight toEyeLight(const osg::Light& light, const osg::Matrixd& toEye) {
+    const osg::Vec4d position = osg::Vec4d(light.getPosition()) * toEye;
+    const osg::Vec4& diffuse = light.getDiffuse();
+    EyeLight eye;
+    eye.color = osg::Vec3(diffuse.r(), diffuse.g(), diffuse.b());
+    if (std::abs(position.w()) < 1e-12) {
+        osg::Vec3d direction(position.x(), position.y(), position.z());
+        direction.normalize();
+        eye.position = osg::Vec4(osg::Vec3(direction), 0.0f);
+    } else {
+        eye.position = osg::Vec4(position.x() / position.w(), position.y() / position.w(),
+                                 position.z() / position.w(), 1.0f);
+    }
+    return eye;
+}
+
+/** Every LightSource below the root, its light in eye space, as the CullVisitor would place it:
+ *  Transforms compose as in cull (ABSOLUTE_RF ones restart from the eye), ABSOLUTE_RF light
+ *  sources are in eye space, nested Cameras are skipped (their subgraphs have their own
+ *  lights), switched-off children and nodes outside the traversal mask are ignored. */
+class LightCollector : public osg::NodeVisitor {
+public:
+    LightCollector(const osg::Matrixd& rootModelView, unsigned traversalMask)
+        : osg::NodeVisitor(TRAVERSE_ACTIVE_CHILDREN) {
+        setTraversalMask(traversalMask);
+        _matrices.push_back(rootModelView);
+    }
+    void apply(osg::Camera&) override {}
+    void apply(osg::Transform& transform) override {
+        osg::Matrixd matrix = _matrices.back();
+        transform.computeLocalToWorldMatrix(matrix, this);
+        _matrices.push_back(matrix);
+        traverse(transform);
+        _matrices.pop_back();
+    }
+    void apply(osg::LightSource& source) override {
+        if (const osg::Light* light = dynamic_cast<const osg::Light*>(source.getLight()))
+            lights.push_back(
+                toEyeLight(*light, source.getReferenceFrame() == osg::LightSource::ABSOLUTE_RF
+                                       ? osg::Matrixd::identity()
+                                       : _matrices.back()));
+        traverse(source);
+    }
+    std::vector<EyeLight> lights;
+
+private:
+    std::vector<osg::Matrixd> _matrices;
+};
+
+}  // namespace
+
+unsigned generateTangents(osg::Node& node) {
+    TangentVisitor visitor;
+    node.accept(visitor);
+    return visitor.changed;
+}
+
+// ---- MaterialNode --------------------------------------------------------------------------
+
+MaterialNode::MaterialNode() {
+    createNodeState();
+}
+
+MaterialNode::MaterialNode(Material* material) : MaterialNode() {
+    setMaterial(material);
+}
+
+MaterialNode::MaterialNode(const MaterialNode& other, const osg::CopyOp& copyop)
+    : osg::Group(other, copyop),
+      _material(other._material),
+      _materialFile(other._materialFile),
+      _materialError(other._materialError),
+      _textureScale(other._textureScale) {
+    // The material (and its shared StateSet) is shared; per-node and per-camera state is not.
+    createNodeState();
+}
+
+void MaterialNode::createNodeState() {
+    _textureScaleUniform = new osg::Uniform("osgBTF_textureScale", _textureScale);
+    _nodeStateSet = new osg::StateSet;
+    _nodeStateSet->addUniform(_textureScaleUniform.get());
+}
+
+void MaterialNode::setMaterial(Material* material) {
+    _material = material;
+    _materialError.clear();
+    if (material) {
+        _materialFile = material->sourceFile;
+        try {
+            material->sharedStateSet();  // builds the program and textures now, not in cull
+        } catch (const std::exception& e) {
+            _materialError = e.what();
+            OSG_WARN << "osgBTF::MaterialNode: " << e.what() << std::endl;
+            _material = nullptr;
+        }
+    } else {
+        _materialFile.clear();
+    }
+    generateTangents();
+}
+
+bool MaterialNode::setMaterialFile(const std::string& file, const osgDB::Options* options) {
+    const std::string path = osgDB::findDataFile(file, options);
+    osg::ref_ptr<Material> material;
+    std::string problem;
+    if (path.empty()) {
+        problem = file + ": no such file";
+    } else {
+        try {
+            material = loadSharedMaterial(path);
+        } catch (const std::exception& e) {
+            problem = e.what();
+        }
+    }
+    if (material) {
+        setMaterial(material.get());
+        _materialFile = file;
+        return _material.valid();
+    }
+    _material = nullptr;
+    _materialFile = file;
+    _materialError = problem;
+    OSG_WARN << "osgBTF::MaterialNode: " << problem
+             << " (the node draws its children without the material)" << std::endl;
+    return false;
+}
+
+void MaterialNode::setTextureScale(float scale) {
+    _textureScale = scale;
+    _textureScaleUniform->set(scale);
+}
+
+unsigned MaterialNode::generateTangents() {
+    return osgBTF::generateTangents(*this);
+}
+
+bool MaterialNode::addChild(osg::Node* child) {
+    if (!osg::Group::addChild(child)) return false;
+    osgBTF::generateTangents(*child);
+    return true;
+}
+
+bool MaterialNode::insertChild(unsigned int index, osg::Node* child) {
+    if (!osg::Group::insertChild(index, child)) return false;
+    osgBTF::generateTangents(*child);
+    return true;
+}
+
+bool MaterialNode::replaceChild(osg::Node* origChild, osg::Node* newChild) {
+    if (!osg::Group::replaceChild(origChild, newChild)) return false;
+    if (newChild) osgBTF::generateTangents(*newChild);
+    return true;
+}
+
+bool MaterialNode::setChild(unsigned int index, osg::Node* node) {
+    if (!osg::Group::setChild(index, node)) return false;
+    if (node) osgBTF::generateTangents(*node);
+    return true;
+}
+
+std::vector<EyeLight> MaterialNode::collectLights(osgUtil::CullVisitor& cv) {
+    // The scene is what the innermost camera being culled sees: the subgraph below the last
+    // Camera on the node path, or everything the cull started from. Its model-view matrix is
+    // recovered from this node's: current = path * root, path being the Transforms in between
+    // as the CullVisitor composed them. An ABSOLUTE_RF Transform in between hides the root's
+    // matrix; then the camera's view matrix stands in for it (exact for a top-level camera).
+    const osg::NodePath& path = cv.getNodePath();
+    std::size_t root = 0;
+    for (std::size_t i = 0; i < path.size(); ++i)
+        if (dynamic_cast<const osg::Camera*>(path[i])) root = i + 1;
+    osg::Camera* camera = cv.getCurrentCamera();
+    osg::Matrixd pathMatrix;
+    bool recoverable = true;
+    for (std::size_t i = root; i < path.size(); ++i) {
+        const osg::Transform* transform = path[i]->asTransform();
+        if (!transform) continue;
+        if (transform->getReferenceFrame() != osg::Transform::RELATIVE_RF) recoverable = false;
+        transform->computeLocalToWorldMatrix(pathMatrix, &cv);
+    }
+    osg::Matrixd rootModelView = camera ? camera->getViewMatrix() : osg::Matrixd::identity();
+    osg::Matrixd inversePath;
+    if (recoverable && cv.getModelViewMatrix() && inversePath.invert(pathMatrix))
+        rootModelView = inversePath * osg::Matrixd(*cv.getModelViewMatrix());
+
+    std::vector<EyeLight> lights;
+    if (root < path.size()) {
+        LightCollector collector(rootModelView, cv.getTraversalMask());
+        path[root]->accept(collector);
+        lights = std::move(collector.lights);
+    }
+    if (lights.empty()) {
+        // No LightSource: the light osgViewer adds itself (View::setLightingMode), as SceneView
+        // places it: a headlight in eye space, a sky light in world space.
+        osg::Camera* master = cv.getRenderStage() ? cv.getRenderStage()->getCamera() : camera;
+        osg::View* view = master ? master->getView() : nullptr;
+        if (view && view->getLight() && view->getLightingMode() != osg::View::NO_LIGHT)
+            lights.push_back(
+                toEyeLight(*view->getLight(), view->getLightingMode() == osg::View::SKY_LIGHT
+                                                  ? master->getViewMatrix()
+                                                  : osg::Matrixd::identity()));
+        else
+            lights.push_back({osg::Vec4(0, 0, 1, 0), osg::Vec3(1, 1, 1)});
+    }
+    if (lights.size() > std::size_t(kMaxLights)) {
+        OSG_INFO << "osgBTF::MaterialNode: " << lights.size()
+                 << " lights, the shaders use the first " << kMaxLights << std::endl;
+        lights.resize(kMaxLights);
+    }
+    return lights;
+}
+
+osg::StateSet* MaterialNode::lightStateSet(osgUtil::CullVisitor& cv) {
+    const osg::FrameStamp* stamp = cv.getFrameStamp();
+    std::lock_guard<std::mutex> lock(_lightsMutex);
+    CameraLights& entry = _lightsPerCamera[cv.getCurrentCamera()];
+    if (!entry.stateSet) {
+        entry.stateSet = new osg::StateSet;
+        entry.stateSet->setDataVariance(osg::Object::DYNAMIC);
+        entry.count = new osg::Uniform("osgBTF_lightCount", 0);
+        entry.positions =
+            new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", kMaxLights);
+        entry.colors = new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", kMaxLights);
+        for (osg::Uniform* uniform :
+             {entry.count.get(), entry.positions.get(), entry.colors.get()}) {
+            uniform->setDataVariance(osg::Object::DYNAMIC);
+            entry.stateSet->addUniform(uniform);
+        }
+    } else if (stamp && entry.frameNumber == stamp->getFrameNumber()) {
+        return entry.stateSet.get();  // culled again in this frame (several parents)
+    }
+    entry.frameNumber = stamp ? stamp->getFrameNumber() : ~0u;
+    const std::vector<EyeLight> lights = collectLights(cv);
+    entry.count->set(int(lights.size()));
+    for (int i = 0; i < kMaxLights; ++i) {
+        const bool used = i < int(lights.size());
+        entry.positions->setElement(i, used ? lights[i].position : osg::Vec4());
+        entry.colors->setElement(i, used ? lights[i].color : osg::Vec3());
+    }
+    return entry.stateSet.get();
+}
+
+void MaterialNode::traverse(osg::NodeVisitor& nv) {
+    osgUtil::CullVisitor* cv =
+        nv.getVisitorType() == osg::NodeVisitor::CULL_VISITOR ? nv.asCullVisitor() : nullptr;
+    if (!cv || !_material) {
+        osg::Group::traverse(nv);
+        return;
+    }
+    cv->pushStateSet(_material->sharedStateSet());
+    cv->pushStateSet(_nodeStateSet.get());
+    cv->pushStateSet(lightStateSet(*cv));
+    osg::Group::traverse(nv);
+    cv->popStateSet();
+    cv->popStateSet();
+    cv->popStateSet();
+}
+
+}  // namespace osgBTF

@@ -1,0 +1,128 @@
+// osgBTF: the scene-graph node that renders its children with a fitted BTF material.
+//
+//   osg::ref_ptr<osgBTF::MaterialNode> node = new osgBTF::MaterialNode;
+//   node->setMaterialFile("wool-lpca.btfmat");   // or setMaterial(material)
+//   node->setTextureScale(4);                    // the material repeats 4x per texcoord unit
+//   node->addChild(osgDB::readNodeFile("cow.osgt"));
+//
+// What it does (scene/README.md has the details and limits):
+//  - applies the material's shared StateSet (one osg::Program per method, textures and uniforms
+//    per material, built once per Material object) to its children, plus its own texture scale;
+//  - gives every Geometry below it that lacks one a tangent frame (vertex attribute 6,
+//    "osgBTF_tangent": xyz along +s, w = handedness), once, when children are added or the
+//    material is set;
+//  - feeds every osg::LightSource of the scene being culled (up to 8) to the shaders in eye
+//    space, for each camera and frame; with no LightSource in the scene, the view's own light
+//    (osgViewer's headlight or sky light), or a white headlight when there is no view.
+// A material that cannot be loaded is reported with OSG_WARN (file and problem); the node then
+// draws its children with their own state, so the rest of the scene is unaffected.
+#pragma once
+
+#include <map>
+#include <mutex>
+#include <string>
+
+#include <osg/Group>
+#include <osg/Light>
+#include <osg/Matrixd>
+#include <osg/StateSet>
+#include <osg/Uniform>
+#include <osgDB/Options>
+
+#include "materials/Material.h"
+
+namespace osgUtil {
+class CullVisitor;
+}
+
+namespace osgBTF {
+
+/** One light as the shaders see it: eye-space position (w = 0: direction toward the light,
+ *  w = 1: point position) and RGB colour (the osg::Light's diffuse). */
+struct EyeLight {
+    osg::Vec4 position;
+    osg::Vec3 color;
+};
+
+/** The shader's light limit (shaders/common/btf_main.glsl). */
+constexpr int kMaxLights = 8;
+
+class MaterialNode : public osg::Group {
+public:
+    MaterialNode();
+    explicit MaterialNode(Material* material);
+    MaterialNode(const MaterialNode& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    META_Node(osgBTF, MaterialNode)
+
+        /** Uses `material` (null: none). Forgets the material file name unless the material knows
+         *  the file it was loaded from (Material::sourceFile), which then becomes the file name. */
+        void setMaterial(Material* material);
+    Material* getMaterial() { return _material.get(); }
+    const Material* getMaterial() const { return _material.get(); }
+
+    /** Loads a fitted-material file, found like any osgDB file (as given, then on the options'
+     *  and OSG_FILE_PATH's data paths). Files already loaded by any MaterialNode (same path, size
+     *  and modification time) are shared, not read again. On failure: OSG_WARN
+     *  "osgBTF::MaterialNode: FILE: problem", no material, returns false; the file name is kept
+     *  either way (a scene written back keeps referring to it). */
+    bool setMaterialFile(const std::string& file, const osgDB::Options* options = nullptr);
+    /** The name given to setMaterialFile (or the loaded material's source file); what .osgt/.osgb
+     *  files store. */
+    const std::string& getMaterialFile() const { return _materialFile; }
+    /** The problem of the last failed setMaterialFile, empty after a success. */
+    const std::string& getMaterialError() const { return _materialError; }
+
+    /** Tiling: how often the material repeats per unit of texture coordinate (default 1). */
+    void setTextureScale(float scale);
+    float getTextureScale() const { return _textureScale; }
+
+    /** Adds tangents (attribute 6) to every Geometry below this node that has texture
+     *  coordinates on unit 0 and no attribute 6 yet. Called automatically by addChild,
+     *  insertChild, replaceChild, setChild and setMaterial; call it yourself after adding
+     *  geometry deeper below a child. Returns the number of geometries it changed. */
+    unsigned generateTangents();
+
+    /** The lights the shaders get when this node is culled with `cv` (what traverse() uses;
+     *  public for tests and tools). */
+    static std::vector<EyeLight> collectLights(osgUtil::CullVisitor& cv);
+
+    bool addChild(osg::Node* child) override;
+    bool insertChild(unsigned int index, osg::Node* child) override;
+    bool replaceChild(osg::Node* origChild, osg::Node* newChild) override;
+    bool setChild(unsigned int index, osg::Node* node) override;
+
+    void traverse(osg::NodeVisitor& nv) override;
+
+protected:
+    ~MaterialNode() override = default;
+    void createNodeState();
+
+    /** The per-camera light uniforms, refilled once per frame. */
+    osg::StateSet* lightStateSet(osgUtil::CullVisitor& cv);
+
+    osg::ref_ptr<Material> _material;
+    std::string _materialFile;
+    std::string _materialError;
+    float _textureScale = 1.0f;
+    osg::ref_ptr<osg::StateSet> _nodeStateSet;  // osgBTF_textureScale
+    osg::ref_ptr<osg::Uniform> _textureScaleUniform;
+
+    struct CameraLights {
+        unsigned frameNumber = ~0u;
+        osg::ref_ptr<osg::StateSet> stateSet;
+        osg::ref_ptr<osg::Uniform> count, positions, colors;
+    };
+    std::mutex _lightsMutex;  // cull threads of several cameras may share this node
+    std::map<const void*, CameraLights> _lightsPerCamera;
+};
+
+/** Loads a fitted-material file, sharing the Material with every earlier load of the same file
+ *  (same path, size and modification time) that is still alive. Throws Error like
+ *  loadMaterial. */
+osg::ref_ptr<Material> loadSharedMaterial(const std::string& path);
+
+/** Adds tangents below `node` (see MaterialNode::generateTangents); returns how many geometries
+ *  got one. */
+unsigned generateTangents(osg::Node& node);
+
+}  // namespace osgBTF

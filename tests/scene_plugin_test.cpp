@@ -1,0 +1,255 @@
+// Tests for plugins/btf (osgdb_btfmat, osgdb_btf, osgdb_zip, osgdb_btfmaterial), loaded the way
+// applications load them: through osgDB and the build's plugin folder. No OpenGL here.
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include <osg/Geode>
+#include <osg/Geometry>
+#include <osg/Notify>
+#include <osgDB/ReadFile>
+#include <osgDB/Registry>
+#include <osgDB/WriteFile>
+
+#include "core/SampleBtf.h"
+#include "materials/lambert/Lambert.h"
+#include "scene/MaterialNode.h"
+#include "tests/TestUtil.h"
+
+namespace fs = std::filesystem;
+using namespace osgBTF;
+using osgBTF::test::TempDir;
+using ReadResult = osgDB::ReaderWriter::ReadResult;
+
+namespace {
+
+void usePluginsFromBuild() {
+    static const bool done = [] {
+        const std::string dir = OSGBTF_BUILD_DIR "/lib";
+        setenv("OSG_LIBRARY_PATH", dir.c_str(), 0);
+        osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
+        if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);
+        return true;
+    }();
+    (void)done;
+}
+
+ReadResult readNode(const std::string& file, const std::string& optionString = {}) {
+    usePluginsFromBuild();
+    osg::ref_ptr<osgDB::Options> options = new osgDB::Options(optionString);
+    return osgDB::Registry::instance()->readNode(file, options.get());
+}
+
+class NotifyCapture : public osg::NotifyHandler {
+public:
+    void notify(osg::NotifySeverity, const char* message) override { text += message; }
+    std::string text;
+};
+
+struct ScopedNotifyCapture {
+    osg::ref_ptr<NotifyCapture> capture = new NotifyCapture;
+    ScopedNotifyCapture() { osg::setNotifyHandler(capture.get()); }
+    ~ScopedNotifyCapture() { osg::setNotifyHandler(new osg::StandardNotifyHandler); }
+    const std::string& text() const { return capture->text; }
+};
+
+osg::ref_ptr<LambertMaterial> sampleMaterial() {
+    SampleOptions options;
+    options.width = 4;
+    options.height = 4;
+    return LambertMaterial::fit(makeSampleBtf(options), {});
+}
+
+/** A tiny UBO2003 zip (8x8 texels, the 81x81 Bonn directions) written by the tool. */
+std::string writeSampleZip(const TempDir& dir) {
+    const std::string zip = dir.file("sample.zip");
+    const auto result = osgBTF::test::runCommand(std::string(OSGBTF_BTF_TOOL) +
+                                                 " --no-progress sample --size 8 -o " +
+                                                 osgBTF::test::shellQuote(zip));
+    EXPECT_EQ(result.exitCode, 0) << result.output;
+    return zip;
+}
+
+std::vector<std::string> filesIn(const std::string& folder) {
+    std::vector<std::string> names;
+    std::error_code error;
+    for (const auto& entry : fs::directory_iterator(folder, error))
+        names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+MaterialNode* asMaterialNode(const ReadResult& result) {
+    return dynamic_cast<MaterialNode*>(const_cast<ReadResult&>(result).getNode());
+}
+
+}  // namespace
+
+// ---- failure cases first ---------------------------------------------------------------------
+
+TEST(ScenePlugins, MissingFittedFileIsFileNotFound) {
+    TempDir dir;
+    const ReadResult result = readNode(dir.file("nope.btfmat"));
+    EXPECT_EQ(result.status(), ReadResult::FILE_NOT_FOUND);
+    EXPECT_EQ(result.message(), dir.file("nope.btfmat") + ": no such file");
+}
+
+TEST(ScenePlugins, NotAFittedFileIsAnErrorNamingIt) {
+    TempDir dir;
+    osgBTF::test::writeTextFile(dir.file("text.btfmat"), "not an EXR file\n");
+    const ReadResult result = readNode(dir.file("text.btfmat"));
+    EXPECT_EQ(result.status(), ReadResult::ERROR_IN_READING_FILE);
+    EXPECT_EQ(result.message().rfind(dir.file("text.btfmat") + ": ", 0), 0u) << result.message();
+}
+
+TEST(ScenePlugins, UnknownMethodInAFittedFile) {
+    TempDir dir;
+    FittedMaterial fitted = sampleMaterial()->toFittedMaterial();
+    fitted.method = "mystery";
+    saveFittedMaterial(fitted, dir.file("mystery.btfmat"));
+    const ReadResult result = readNode(dir.file("mystery.btfmat"));
+    EXPECT_EQ(result.status(), ReadResult::ERROR_IN_READING_FILE);
+    EXPECT_EQ(result.message().rfind(dir.file("mystery.btfmat") + ": unknown method 'mystery' "
+                                                                  "(this osgBTF knows: ",
+                                     0),
+              0u)
+        << result.message();
+}
+
+TEST(ScenePlugins, PseudoLoaderSyntaxErrors) {
+    EXPECT_EQ(readNode("model.osgt.btfmaterial").message(),
+              "model.osgt.btfmaterial: expected "
+              "MODEL.(MATERIAL[,scale=S][,KEY=VALUE...]).btfmaterial");
+    EXPECT_EQ(readNode("model.osgt.().btfmaterial").message(),
+              "model.osgt.().btfmaterial: expected "
+              "MODEL.(MATERIAL[,scale=S][,KEY=VALUE...]).btfmaterial");
+    TempDir dir;
+    saveMaterial(*sampleMaterial(), dir.file("m.btfmat"));
+    const std::string badScale = "model.osgt.(" + dir.file("m.btfmat") + ",scale=zero).btfmaterial";
+    EXPECT_EQ(readNode(badScale).message(), "option scale=zero: expected a positive number");
+}
+
+TEST(ScenePlugins, PseudoLoaderMissingMaterialOrModel) {
+    TempDir dir;
+    ReadResult result = readNode("model.osgt.(" + dir.file("none.btfmat") + ").btfmaterial");
+    EXPECT_EQ(result.status(), ReadResult::FILE_NOT_FOUND);
+    EXPECT_EQ(result.message(), dir.file("none.btfmat") + ": no such file");
+    saveMaterial(*sampleMaterial(), dir.file("m.btfmat"));
+    ScopedNotifyCapture quiet;  // osgDB complains about the model as well
+    result = readNode(dir.file("none.osgt") + ".(" + dir.file("m.btfmat") + ").btfmaterial");
+    EXPECT_EQ(result.status(), ReadResult::ERROR_IN_READING_FILE);
+    EXPECT_EQ(result.message(), dir.file("none.osgt") + ": cannot read the model");
+}
+
+TEST(ScenePlugins, UnknownFitMethod) {
+    TempDir dir;
+    const std::string zip = writeSampleZip(dir);
+    const ReadResult result = readNode(zip, "method=nope cache=" + dir.file("cache"));
+    EXPECT_EQ(result.status(), ReadResult::ERROR_IN_READING_FILE);
+    EXPECT_EQ(result.message().rfind("unknown method 'nope' (known: ", 0), 0u) << result.message();
+    EXPECT_FALSE(fs::exists(dir.file("cache")));
+}
+
+TEST(ScenePlugins, BrokenMeasuredFileIsAnErrorNamingIt) {
+    TempDir dir;
+    osgBTF::test::writeTextFile(dir.file("broken.zip"), "PK but not really");
+    const ReadResult result = readNode(dir.file("broken.zip"), "method=lambert cache=off");
+    EXPECT_EQ(result.status(), ReadResult::ERROR_IN_READING_FILE);
+    EXPECT_EQ(result.message().rfind(dir.file("broken.zip") + ": ", 0), 0u) << result.message();
+}
+
+// ---- what works ------------------------------------------------------------------------------
+
+TEST(ScenePlugins, FittedFileGivesAMaterialNode) {
+    TempDir dir;
+    osg::ref_ptr<LambertMaterial> material = sampleMaterial();
+    saveMaterial(*material, dir.file("wool.btfmat"));
+    const ReadResult result = readNode(dir.file("wool.btfmat"), "scale=3");
+    MaterialNode* node = asMaterialNode(result);
+    ASSERT_NE(node, nullptr) << result.message();
+    ASSERT_NE(node->getMaterial(), nullptr);
+    EXPECT_EQ(node->getMaterial()->methodName(), "lambert");
+    EXPECT_EQ(node->getMaterialFile(), dir.file("wool.btfmat"));
+    EXPECT_EQ(node->getTextureScale(), 3.0f);
+    // A fitted file with another extension, through the ".btfmat" pseudo-extension.
+    fs::copy_file(dir.file("wool.btfmat"), dir.file("wool.exr"));
+    const ReadResult pseudo = readNode(dir.file("wool.exr.btfmat"));
+    node = asMaterialNode(pseudo);
+    ASSERT_NE(node, nullptr);
+    EXPECT_EQ(node->getMaterialFile(), dir.file("wool.exr"));
+}
+
+TEST(ScenePlugins, PseudoLoaderPutsTheModelUnderTheMaterial) {
+    TempDir dir;
+    saveMaterial(*sampleMaterial(), dir.file("wool.btfmat"));
+    osg::ref_ptr<osg::Geode> model = new osg::Geode;
+    model->setName("the model");
+    ASSERT_TRUE(osgDB::writeNodeFile(*model, dir.file("model.osgt")));
+    const ReadResult result =
+        readNode(dir.file("model.osgt") + ".(" + dir.file("wool.btfmat") + ",scale=4).btfmaterial");
+    MaterialNode* node = asMaterialNode(result);
+    ASSERT_NE(node, nullptr) << result.message();
+    ASSERT_NE(node->getMaterial(), nullptr);
+    EXPECT_EQ(node->getTextureScale(), 4.0f);
+    ASSERT_EQ(node->getNumChildren(), 1u);
+    EXPECT_EQ(node->getChild(0)->getName(), "the model");
+}
+
+TEST(ScenePlugins, MeasuredBtfIsFittedOnceThenReadFromTheCache) {
+    TempDir dir;
+    const std::string zip = writeSampleZip(dir);
+    const std::string cache = dir.file("cache");
+    const std::string options = "method=lambert cache=" + cache;
+    ScopedNotifyCapture capture;
+
+    const ReadResult first = readNode(zip, options);
+    ASSERT_NE(asMaterialNode(first), nullptr) << first.message();
+    const std::vector<std::string> files = filesIn(cache);
+    ASSERT_EQ(files.size(), 1u);
+    const std::string cached = (fs::path(cache) / files[0]).string();
+    EXPECT_EQ(files[0].rfind("sample.zip-lambert-", 0), 0u) << files[0];
+    EXPECT_NE(capture.text().find("osgBTF: " + zip +
+                                  ": fitting method 'lambert', then caching it in " + cached),
+              std::string::npos)
+        << capture.text();
+    EXPECT_EQ(asMaterialNode(first)->getMaterialFile(), cached);
+    const auto writtenAt = fs::last_write_time(cached);
+
+    capture.capture->text.clear();
+    const ReadResult second = readNode(zip, options);
+    ASSERT_NE(asMaterialNode(second), nullptr) << second.message();
+    EXPECT_NE(capture.text().find("osgBTF: " + zip + ": using the cached fit " + cached),
+              std::string::npos)
+        << capture.text();
+    EXPECT_EQ(fs::last_write_time(cached), writtenAt);
+    EXPECT_EQ(filesIn(cache).size(), 1u);
+    const glm::vec3 v(0, 0, 1), l(0.3f, 0.2f, 0.93f);
+    EXPECT_EQ(asMaterialNode(first)->getMaterial()->evaluate(3, 5, v, l),
+              asMaterialNode(second)->getMaterial()->evaluate(3, 5, v, l));
+
+    // Other options, or a changed input, make another fit; no temporary files are left behind.
+    ASSERT_NE(asMaterialNode(readNode(zip, "method=pca components=2 cache=" + cache)), nullptr);
+    EXPECT_EQ(filesIn(cache).size(), 2u);
+    fs::last_write_time(zip, fs::last_write_time(zip) + std::chrono::seconds(5));
+    capture.capture->text.clear();
+    ASSERT_NE(asMaterialNode(readNode(zip, options)), nullptr);
+    EXPECT_NE(capture.text().find("fitting method 'lambert'"), std::string::npos) << capture.text();
+    EXPECT_EQ(filesIn(cache).size(), 3u);
+}
+
+TEST(ScenePlugins, CacheOffFitsWithoutWriting) {
+    TempDir dir;
+    const std::string zip = writeSampleZip(dir);
+    setenv("OSGBTF_CACHE_DIR", dir.file("env-cache").c_str(), 1);
+    const ReadResult result = readNode(zip, "method=lambert cache=off");
+    ASSERT_NE(asMaterialNode(result), nullptr) << result.message();
+    EXPECT_EQ(asMaterialNode(result)->getMaterialFile(), "");  // serialised embedded
+    EXPECT_FALSE(fs::exists(dir.file("env-cache")));
+    // Without cache=, $OSGBTF_CACHE_DIR is the cache.
+    ASSERT_NE(asMaterialNode(readNode(zip, "method=lambert")), nullptr);
+    EXPECT_EQ(filesIn(dir.file("env-cache")).size(), 1u);
+    unsetenv("OSGBTF_CACHE_DIR");
+}

@@ -1,0 +1,195 @@
+// btf compare INPUT --out DIR: fit every method, tabulate error / memory / pass cost, draw the
+// pictures and recommend a method (the library side is harness/Compare.h).
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "core/Error.h"
+#include "harness/Compare.h"
+#include "tools/btf/Commands.h"
+
+namespace osgBTF::tool {
+
+namespace {
+
+std::vector<std::string> splitList(const std::string& text) {
+    std::vector<std::string> items;
+    std::string item;
+    std::istringstream in(text);
+    while (std::getline(in, item, ','))
+        if (!item.empty()) items.push_back(item);
+    return items;
+}
+
+/** "640x480" or "512" (square). */
+void parseResolution(const std::string& text, PassSettings& pass) {
+    const auto x = text.find('x');
+    try {
+        std::size_t used = 0;
+        if (x == std::string::npos) {
+            pass.width = pass.height = std::stoi(text, &used);
+            if (used == text.size() && pass.width > 0) return;
+        } else {
+            pass.width = std::stoi(text.substr(0, x), &used);
+            if (used == x) {
+                const std::string h = text.substr(x + 1);
+                pass.height = std::stoi(h, &used);
+                if (used == h.size() && pass.width > 0 && pass.height > 0) return;
+            }
+        }
+    } catch (const std::exception&) {
+    }
+    throw Error("--resolution: '" + text + "' is not N or WxH (positive integers)");
+}
+
+bool hasOption(const std::string& method, const std::string& key) {
+    for (const auto& option : findMethod(method).options)
+        if (option.first == key) return true;
+    return false;
+}
+
+}  // namespace
+
+Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
+    auto* command = app.add_subcommand(
+        "compare",
+        "Compare compression methods on one measured BTF: fits each method in a `btf fit` child "
+        "process (reusing DIR/fits/<method>.exr when it is newer than INPUT and made with the "
+        "same options), then writes DIR/report.md, results.csv, results.json and pictures/: "
+        "error (CPU evaluator, GPU spot check), memory, pass cost (static ALU/TEX count, time "
+        "per pass against a fetch calibration pass), fit time and peak memory, and a "
+        "recommendation. Definitions: harness/README.md");
+    struct Options {
+        std::string input, output, methods = "all", resolution = "256";
+        std::vector<std::string> settings;
+        int lobes = 0, components = 0, clusters = 0;
+        CompareOptions compare;
+        bool noReuse = false, noGpu = false;
+    };
+    auto options = std::make_shared<Options>();
+    CompareOptions& c = options->compare;
+    command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
+    command
+        ->add_option("-o,--out", options->output,
+                     "Output folder; written as DIR.tmp<pid> and renamed when complete "
+                     "(an existing DIR is replaced)")
+        ->required();
+    std::string methodList;
+    for (const std::string& m : allCompareMethods())
+        methodList += (methodList.empty() ? "" : ",") + m;
+    command
+        ->add_option("--methods", options->methods,
+                     "Comma-separated methods, or 'all' (" + methodList +
+                         "); the plain lit texture baseline 'lambert' is always added")
+        ->capture_default_str();
+    command->add_option("--lobes", options->lobes,
+                        "lobes=N for every compared method that has it (laf, slaf, rf)");
+    command->add_option("--components", options->components,
+                        "components=C for every compared method that has it (pca, lpca, "
+                        "lpca-revised)");
+    command->add_option("--clusters", options->clusters,
+                        "clusters=K for every compared method that has it (lpca, lpca-revised)");
+    command->add_option("--set", options->settings,
+                        "METHOD:KEY=VALUE, one method's option (repeatable; `btf fit --help` "
+                        "lists them), e.g. --set pca:components=8. Invalid values make that "
+                        "method fail, reported in the tables, while the others complete");
+    command
+        ->add_option("--resolution", options->resolution,
+                     "Viewport of the timed passes: N (square) or WxH")
+        ->capture_default_str();
+    command->add_option("--lights", c.pass.lights, "Directional lights in the timed passes (1-8)")
+        ->check(CLI::Range(1, 8))
+        ->capture_default_str();
+    command->add_option("--frames", c.pass.frames, "Timed frames per pass (the median is used)")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    command
+        ->add_option("--calibration-fetches", c.pass.calibrationFetches,
+                     "RGBA32F texelFetch reads per pixel in the calibration pass")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    command
+        ->add_option("--texture-scale", c.pass.textureScale,
+                     "Times the material repeats across the timed viewport")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    command->add_option("--sphere-size", c.sphereSize, "Pixels per sphere render")
+        ->check(CLI::Range(16, 4096))
+        ->capture_default_str();
+    command
+        ->add_option("--max-bytes-per-texel", c.maxBytesPerTexel,
+                     "Memory budget of the recommendation (0: none)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    command
+        ->add_option("--max-ms-per-pass", c.maxMsPerPass,
+                     "Time budget of the recommendation, ms per pass at --resolution and "
+                     "--lights (0: none)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    command->add_flag("--refit", options->noReuse, "Fit every method again, even when DIR has it");
+    command->add_flag("--no-gpu", options->noGpu,
+                      "Skip the OpenGL part (GPU spot check, pass times, sphere renders)");
+    addLoadOptions(*command, common);
+    return [&common, options] {
+        CompareOptions compare = options->compare;
+        compare.input = options->input;
+        compare.outputDir = options->output;
+        compare.reuseFits = !options->noReuse;
+        compare.gpu = !options->noGpu;
+        parseResolution(options->resolution, compare.pass);
+        compare.methods =
+            options->methods == "all" ? allCompareMethods() : splitList(options->methods);
+        if (compare.methods.empty()) throw Error("--methods: no method named");
+        std::vector<std::string> all = compare.methods;
+        all.insert(all.begin(), "lambert");
+        for (const std::string& m : all) {
+            findMethod(m);
+            const std::pair<const char*, int> shortcuts[] = {{"lobes", options->lobes},
+                                                             {"components", options->components},
+                                                             {"clusters", options->clusters}};
+            for (const auto& [key, value] : shortcuts)
+                if (value && hasOption(m, key))
+                    compare.methodOptions[m][key] = std::to_string(value);
+        }
+        for (const std::string& setting : options->settings) {
+            const auto colon = setting.find(':');
+            const auto eq = setting.find('=');
+            if (colon == std::string::npos || colon == 0 || eq == std::string::npos ||
+                eq < colon + 2)
+                throw Error("--set: '" + setting + "' is not METHOD:KEY=VALUE");
+            compare.methodOptions[setting.substr(0, colon)][setting.substr(
+                colon + 1, eq - colon - 1)] = setting.substr(eq + 1);
+        }
+        compare.load = common.loadOptions();
+        compare.fitExtraArguments = {"--storage", common.storage, "--decode", common.decode};
+        if (!common.memoryLimit.empty())
+            compare.fitGlobalArguments = {"--memory-limit", common.memoryLimit};
+
+        const CompareResult result = runCompare(compare);
+
+        std::cout << "compared " << result.methods.size() << " methods on " << result.input << " ("
+                  << result.width << "x" << result.height << " texels, " << result.views << "x"
+                  << result.lights << " directions); " << result.gpuNote << "\n";
+        std::cout << std::left << std::setw(14) << "method" << std::right << std::setw(10)
+                  << "avg error" << std::setw(12) << "bytes/tex" << std::setw(12) << "ms/pass"
+                  << std::setw(10) << "x floor"
+                  << "\n";
+        for (const MethodResult& m : result.methods) {
+            std::cout << std::left << std::setw(14) << m.method << std::right;
+            if (m.failed) {
+                std::cout << "  " << m.failure << "\n";
+                continue;
+            }
+            std::cout << std::fixed << std::setprecision(5) << std::setw(10) << m.error.average
+                      << std::setprecision(1) << std::setw(12) << m.memory.bytesPerTexel
+                      << std::setprecision(3) << std::setw(12) << m.pass.ms << std::setprecision(2)
+                      << std::setw(10) << m.floorRatio << std::defaultfloat << "\n";
+        }
+        std::cout << result.recommendation << "\n"
+                  << "wrote " << options->output << "/report.md\n";
+    };
+}
+
+}  // namespace osgBTF::tool
