@@ -17,6 +17,7 @@
 #include "core/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
+#include "tests/NotifyCapture.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
@@ -25,19 +26,7 @@ using osgBTF::test::TempDir;
 
 namespace {
 
-/** Collects OSG notifications while alive (then restores the standard handler). */
-class NotifyCapture : public osg::NotifyHandler {
-public:
-    void notify(osg::NotifySeverity, const char* message) override { text += message; }
-    std::string text;
-};
-
-struct ScopedNotifyCapture {
-    osg::ref_ptr<NotifyCapture> capture = new NotifyCapture;
-    ScopedNotifyCapture() { osg::setNotifyHandler(capture.get()); }
-    ~ScopedNotifyCapture() { osg::setNotifyHandler(new osg::StandardNotifyHandler); }
-    const std::string& text() const { return capture->text; }
-};
+using test::ScopedNotifyCapture;
 
 osg::ref_ptr<LambertMaterial> sampleMaterial() {
     SampleOptions options;

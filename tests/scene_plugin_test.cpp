@@ -17,6 +17,7 @@
 #include "core/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
+#include "tests/NotifyCapture.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
@@ -43,18 +44,7 @@ ReadResult readNode(const std::string& file, const std::string& optionString = {
     return osgDB::Registry::instance()->readNode(file, options.get());
 }
 
-class NotifyCapture : public osg::NotifyHandler {
-public:
-    void notify(osg::NotifySeverity, const char* message) override { text += message; }
-    std::string text;
-};
-
-struct ScopedNotifyCapture {
-    osg::ref_ptr<NotifyCapture> capture = new NotifyCapture;
-    ScopedNotifyCapture() { osg::setNotifyHandler(capture.get()); }
-    ~ScopedNotifyCapture() { osg::setNotifyHandler(new osg::StandardNotifyHandler); }
-    const std::string& text() const { return capture->text; }
-};
+using test::ScopedNotifyCapture;
 
 osg::ref_ptr<LambertMaterial> sampleMaterial() {
     SampleOptions options;

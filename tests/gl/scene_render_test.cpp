@@ -27,6 +27,7 @@
 #include "core/SampleBtf.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
+#include "tests/NotifyCapture.h"
 #include "tests/gl/GlTestEnv.h"
 
 namespace fs = std::filesystem;
@@ -64,21 +65,6 @@ void usePluginsFromBuild() {
     (void)done;
 }
 
-class NotifyCapture : public osg::NotifyHandler {
-public:
-    void notify(osg::NotifySeverity, const char* message) override {
-        text += message;
-        std::fputs(message, stderr);
-    }
-    std::string text;
-};
-
-struct ScopedNotifyCapture {
-    osg::ref_ptr<NotifyCapture> capture = new NotifyCapture;
-    ScopedNotifyCapture() { osg::setNotifyHandler(capture.get()); }
-    ~ScopedNotifyCapture() { osg::setNotifyHandler(new osg::StandardNotifyHandler); }
-    const std::string& text() const { return capture->text; }
-};
 
 osg::ref_ptr<PcaMaterial> fitSample() {
     SampleOptions sample;
@@ -293,14 +279,14 @@ TEST(SceneRender, BadMaterialsWarnAndTheRestOfTheSceneRenders) {
     const Camera camera = cameraFrom(20, 30);
     osg::ref_ptr<osg::Group> group = new osg::Group;
     {
-        ScopedNotifyCapture quiet;
+        ScopedNotifyCapture quiet(true);
         group->addChild(materialNodeNaming("missing.btfmat").get());
         group->addChild(materialNodeNaming(dir.file("mystery.btfmat")).get());
     }
     LitScene scene = litScene(group.get(), camera);
     ASSERT_TRUE(osgDB::writeNodeFile(*scene.root, dir.file("bad.osgt")));
 
-    ScopedNotifyCapture capture;
+    ScopedNotifyCapture capture(true);
     osg::ref_ptr<osg::Node> read = osgDB::readRefNodeFile(dir.file("bad.osgt"));
     ASSERT_TRUE(read.valid());
     EXPECT_NE(capture.text().find("osgBTF::MaterialNode: missing.btfmat: no such file"),
@@ -342,7 +328,7 @@ TEST(SceneRender, ShaderThatFailsToCompileIsReportedByFileAndTheRestRenders) {
     osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
     node->addChild(patch().get());
     LitScene scene = litScene(node.get(), camera);
-    ScopedNotifyCapture capture;
+    ScopedNotifyCapture capture(true);
     osg::ref_ptr<osg::Image> image = sharedRenderer().render(scene.root.get(), camera.setup);
     EXPECT_NE(capture.text().find("glCompileShader \"" + broken + "\" FAILED"), std::string::npos)
         << capture.text();
