@@ -10,45 +10,27 @@
 #include <iostream>
 #include <string>
 
-#include <osg/Uniform>
-
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "core/Progress.h"
 #include "core/SampleBtf.h"
 #include "core/headless/HeadlessRenderer.h"
+#include "harness/PassCost.h"
 #include "materials/Material.h"
 
 namespace {
 
 void timeGpuPass(const osgBTF::Material& material, int frames, int lights) {
     osgBTF::HeadlessRenderer renderer;
-    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
-    osg::ref_ptr<osg::Geode> quad = osgBTF::createFullScreenQuad(stateSet.get());
-    auto* geometry = quad->getDrawable(0)->asGeometry();
-    osg::ref_ptr<osg::Vec4Array> tangents =
-        new osg::Vec4Array(geometry->getVertexArray()->getNumElements());
-    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
-    geometry->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
-    stateSet->addUniform(new osg::Uniform("osgBTF_lightCount", lights));
-    osg::ref_ptr<osg::Uniform> position =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
-    osg::ref_ptr<osg::Uniform> colour =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", 8);
-    for (int i = 0; i < 8; ++i) {
-        position->setElement(i, osg::Vec4(0.3f * float(i % 3) - 0.3f, 0.2f, 0.9f, 0.0f));
-        colour->setElement(i, osg::Vec3(1, 1, 1));
-    }
-    stateSet->addUniform(position.get());
-    stateSet->addUniform(colour.get());
-    // Texture tiled 16 times so every pixel fetches different texels, as on a real model.
-    stateSet->getOrCreateUniform("osgBTF_textureScale", osg::Uniform::FLOAT)->set(16.0f);
-    renderer.setScene(quad.get());
-    renderer.setCamera(osgBTF::orthoUnitSquare(1024, 1024));
-    const osgBTF::PassTiming t = renderer.timePasses(frames);
-    std::printf("| gpu pass 1024x1024 (%s, %d light%s) | wall %.2f ms, gpu %.2f ms (%d frames) |\n",
-                renderer.glRenderer().c_str(), lights, lights == 1 ? "" : "s", t.wallMs, t.gpuMs,
-                t.frames);
+    osgBTF::PassSettings settings;
+    settings.width = settings.height = 1024;
+    settings.frames = frames;
+    settings.lights = lights;
+    settings.textureScale = 16;  // every pixel fetches different texels, as on a real model
+    const osgBTF::PassTime t = osgBTF::timeMaterialPass(renderer, material, settings);
+    std::printf("| gpu pass 1024x1024 (%s, %d light%s) | %.2f ms (%s, median of %d frames) |\n",
+                renderer.glRenderer().c_str(), lights, lights == 1 ? "" : "s", t.ms,
+                t.clock.c_str(), frames);
 }
 
 }  // namespace

@@ -9,34 +9,19 @@
 #include <cstdio>
 #include <string>
 
-#include <osg/Uniform>
-
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "core/SampleBtf.h"
 #include "core/headless/HeadlessRenderer.h"
+#include "harness/PassCost.h"
 #include "materials/lpca-revised/LpcaRevised.h"
 #include "materials/lpca/Lpca.h"
 
 namespace {
 
 osg::ref_ptr<osg::Geode> patch(osg::StateSet* stateSet) {
-    osg::ref_ptr<osg::Geode> geode = osgBTF::createFullScreenQuad(stateSet);
-    osg::Geometry* quad = geode->getDrawable(0)->asGeometry();
-    osg::ref_ptr<osg::Vec4Array> tangents =
-        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
-    for (auto& t : *tangents) t.set(1, 0, 0, 1);
-    quad->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
-    stateSet->addUniform(new osg::Uniform("osgBTF_lightCount", 1));
-    osg::ref_ptr<osg::Uniform> position =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
-    position->setElement(0, osg::Vec4(0.4f, 0.3f, 0.866f, 0.0f));
-    stateSet->addUniform(position.get());
-    osg::ref_ptr<osg::Uniform> colour =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", 8);
-    colour->setElement(0, osg::Vec3(1, 1, 1));
-    stateSet->addUniform(colour.get());
-    return geode;
+    osgBTF::setDirectionalLights(*stateSet, {osg::Vec3(0.4f, 0.3f, 0.866f)});
+    return osgBTF::createTangentPatch(stateSet);
 }
 
 double errorAverage(const osgBTF::MeasuredBtf& btf, const osgBTF::Material& m) {
