@@ -11,6 +11,7 @@ PACKAGES=(
   libglm-dev libeigen3-dev libceres-dev libtbb-dev libzip-dev zip unzip
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)
+  xvfb xauth libglx-mesa0     # X server for the viewer tests and xvfb-run (osgviewer, btfviewer)
 )
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi

@@ -1,0 +1,62 @@
+// osgBTF examples: the models and side-by-side scenes that `btf-examples` writes and `btfviewer`
+// shows materials on.
+//
+// Every model is plain OSG geometry (vertices, per-vertex normals, texture coordinates on unit 0;
+// no tangents: osgBTF::MaterialNode adds those), Z up like OSG's sample data, so they are usable
+// without osgBTF too. The scenes put one MaterialNode per material side by side along +X, each
+// with the same (shared) model below a MatrixTransform, a label under each, and two LightSources.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <osg/Geode>
+#include <osg/Geometry>
+#include <osg/Group>
+#include <osg/LightSource>
+#include <osgDB/Options>
+
+namespace osgBTF::examples {
+
+/** A unit sphere, poles on +-Z, s around the equator, t from pole to pole. */
+osg::ref_ptr<osg::Geode> createSphereModel();
+
+/** A square cloth (2 x 2 units before draping) over a round table top of radius 0.6: flat on
+ *  top, bent over the edge, hanging with folds that widen toward the hem; tilted 25 degrees
+ *  toward a viewer on -Y so the top shows. Texture coordinates follow the cloth (0..1 across
+ *  it), so a woven material keeps its threads straight on the top and along the folds.
+ *  `resolution` quads per side. */
+osg::ref_ptr<osg::Geode> createClothModel(int resolution = 64);
+
+/** A turned vase (a lathe around +Z, about 1.6 units tall): foot, belly, neck and a rounded lip
+ *  that continues into the inner wall, plus a bottom disc. s goes around, t up the profile
+ *  (scaled to keep texels roughly square). `segments` around, `profileSamples` along. */
+osg::ref_ptr<osg::Geode> createVaseModel(int segments = 48, int profileSamples = 80);
+
+/** One object of a side-by-side scene: a fitted-material file (a name relative to the scene,
+ *  as the MaterialNode stores it) and the label shown under the object. */
+struct SceneItem {
+    std::string materialFile;
+    std::string label;
+};
+
+/** The two lights of every example scene: a warm directional key light from the upper left
+ *  front (light 0) and a cool point light to the right (light 1), placed for a row of objects
+ *  `rowWidth` wide centred on the origin. */
+std::vector<osg::ref_ptr<osg::LightSource>> createTwoLights(float rowWidth);
+
+/** The side-by-side scene: for each item a MatrixTransform (spaced `spacing` apart along +X)
+ *  holding a MaterialNode (the item's material, `textureScale`) over `model`, a label below,
+ *  and the two lights. The material files are loaded (found through `options`' database paths)
+ *  so tangents exist and problems show now; the nodes keep the names as given. Throws Error
+ *  naming the material file when one cannot be loaded. */
+osg::ref_ptr<osg::Group> createSideBySideScene(osg::Node* model,
+                                               const std::vector<SceneItem>& items, float spacing,
+                                               float textureScale, const osgDB::Options* options);
+
+/** Writes a node with osgDB (the format follows the extension) to a temporary name beside
+ *  `path`, then renames it, so a reader never sees half a file. Throws Error "PATH: ..." on
+ *  failure. */
+void writeNodeAtomically(const osg::Node& node, const std::string& path);
+
+}  // namespace osgBTF::examples

@@ -1,0 +1,580 @@
+// btfviewer: an osgViewer application for BTF materials. Shows scenes, fitted materials and
+// measured BTFs (through osgBTF's osgDB plugins), switches the material of every
+// osgBTF::MaterialNode with keys, orbits a light with keys or Shift + mouse, and shows OSG's
+// frame and GPU times (StatsHandler). `btfviewer --help` documents everything;
+// examples/README.md too.
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <system_error>
+
+#include <osg/ApplicationUsage>
+#include <osg/ArgumentParser>
+#include <osg/Camera>
+#include <osg/GLExtensions>
+#include <osg/Geode>
+#include <osg/GraphicsContext>
+#include <osg/Image>
+#include <osg/LightSource>
+#include <osg/MatrixTransform>
+#include <osg/NodeVisitor>
+#include <osgDB/FileNameUtils>
+#include <osgDB/ReadFile>
+#include <osgDB/Registry>
+#include <osgDB/WriteFile>
+#include <osgGA/GUIEventHandler>
+#include <osgGA/TrackballManipulator>
+#include <osgText/Text>
+#include <osgViewer/Viewer>
+#include <osgViewer/ViewerEventHandlers>
+
+#include "core/Error.h"
+#include "examples/ExampleScenes.h"
+#include "scene/MaterialNode.h"
+
+namespace {
+
+using osgBTF::Material;
+using osgBTF::MaterialNode;
+
+constexpr const char* kKeyHelp =
+    "Keys:\n"
+    "  m / M            next / previous material on every object\n"
+    "  1 .. 9           material N on every object\n"
+    "  0                every object's own material again\n"
+    "  Left / Right     orbit light azimuth -/+ 15 degrees\n"
+    "  Up / Down        orbit light elevation +/- 15 degrees\n"
+    "  Shift + drag     orbit the light with the mouse (left button)\n"
+    "  o                orbit light on / off\n"
+    "  l                the scene's own lights on / off\n"
+    "  s                statistics: frame rate, then frame/event/update/cull/draw/GPU times,\n"
+    "                   then scene counts (press again to cycle, off at the end)\n"
+    "  h                OSG's help overlay;  f  full screen / window;  Space  home view\n"
+    "  Esc              quit\n"
+    "Mouse (without Shift): the trackball: left rotates, middle pans, right zooms.\n";
+
+/** Every MaterialNode below a node, in traversal order, each once. */
+class MaterialNodeCollector : public osg::NodeVisitor {
+public:
+    MaterialNodeCollector() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+    void apply(osg::Group& group) override {
+        if (auto* node = dynamic_cast<MaterialNode*>(&group))
+            if (std::find(nodes.begin(), nodes.end(), node) == nodes.end()) nodes.push_back(node);
+        traverse(group);
+    }
+    std::vector<osg::ref_ptr<MaterialNode>> nodes;
+};
+
+/** Every LightSource below a node. */
+class LightSourceCollector : public osg::NodeVisitor {
+public:
+    LightSourceCollector() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+    void apply(osg::LightSource& light) override {
+        lights.push_back(&light);
+        traverse(light);
+    }
+    std::vector<osg::ref_ptr<osg::LightSource>> lights;
+};
+
+/** One material the keys can put on every object. */
+struct MaterialChoice {
+    osg::ref_ptr<Material> material;
+    std::string label;  // "sample-laf.btfmat (laf)"
+};
+
+/** What the keys and the mouse change: the material on every MaterialNode, the orbit light,
+ *  the scene's own lights; and the HUD line that says so. */
+class ViewerState : public osg::Referenced {
+public:
+    std::vector<osg::ref_ptr<MaterialNode>> nodes;
+    std::vector<osg::ref_ptr<Material>> ownMaterials;  // per node, as loaded
+    std::vector<MaterialChoice> choices;
+    int current = 0;  // 0: every node's own material; k: choices[k - 1] everywhere
+
+    osg::ref_ptr<osg::LightSource> orbitLight;
+    // Degrees. Azimuth 0: from -Y, the side osgViewer's home view looks from; 90: from +X (the
+    // right of that view). Elevation above the XY plane (Z is up).
+    double azimuth = -30, elevation = 40;
+    bool orbitLightOn = true;
+    std::vector<osg::ref_ptr<osg::LightSource>> sceneLights;
+    bool sceneLightsOn = true;
+
+    osg::ref_ptr<osgText::Text> hud;
+
+    void selectMaterial(int index) {
+        if (index < 0 || index > int(choices.size())) return;
+        current = index;
+        for (std::size_t i = 0; i < nodes.size(); ++i)
+            nodes[i]->setMaterial(current == 0 ? ownMaterials[i].get()
+                                               : choices[std::size_t(current - 1)].material.get());
+        updateHud();
+    }
+    void cycleMaterial(int step) {
+        const int count = int(choices.size()) + 1;
+        selectMaterial(((current + step) % count + count) % count);
+    }
+    void orbit(double azimuthDegrees, double elevationDegrees) {
+        azimuth = std::remainder(azimuth + azimuthDegrees, 360.0);
+        elevation = std::clamp(elevation + elevationDegrees, -89.0, 89.0);
+        placeOrbitLight();
+    }
+    void placeOrbitLight() {
+        const double a = osg::DegreesToRadians(azimuth), e = osg::DegreesToRadians(elevation);
+        orbitLight->getLight()->setPosition(osg::Vec4(float(std::cos(e) * std::sin(a)),
+                                                      float(-std::cos(e) * std::cos(a)),
+                                                      float(std::sin(e)), 0.0f));
+        updateHud();
+    }
+    void toggleOrbitLight() {
+        orbitLightOn = !orbitLightOn;
+        orbitLight->setNodeMask(orbitLightOn ? ~0u : 0u);
+        updateHud();
+    }
+    void toggleSceneLights() {
+        sceneLightsOn = !sceneLightsOn;
+        // MaterialNode skips LightSources outside the cull mask, like the CullVisitor does.
+        for (const osg::ref_ptr<osg::LightSource>& light : sceneLights)
+            light->setNodeMask(sceneLightsOn ? ~0u : 0u);
+        updateHud();
+    }
+    void updateHud() {
+        if (!hud) return;
+        std::ostringstream text;
+        text << "material: "
+             << (current == 0 ? std::string("each object's own")
+                              : choices[std::size_t(current - 1)].label)
+             << "  [m, 0-9]\n"
+             << std::fixed << std::setprecision(0)
+             << "orbit light: " << (orbitLightOn ? "on" : "off") << ", azimuth " << azimuth
+             << ", elevation " << elevation << "  [arrows, Shift+drag, o]\n"
+             << "scene lights: " << sceneLights.size()
+             << (sceneLights.empty() ? ""
+                 : sceneLightsOn     ? " on"
+                                     : " off")
+             << "  [l]"
+             << "   stats [s]  help [h]";
+        hud->setText(text.str());
+    }
+};
+
+class ControlHandler : public osgGA::GUIEventHandler {
+public:
+    explicit ControlHandler(ViewerState* state) : _state(state) {}
+
+    bool handle(const osgGA::GUIEventAdapter& ea, osgGA::GUIActionAdapter&) override {
+        using GEA = osgGA::GUIEventAdapter;
+        switch (ea.getEventType()) {
+            case GEA::KEYDOWN:
+                return handleKey(ea.getKey());
+            case GEA::PUSH:
+                if ((ea.getModKeyMask() & GEA::MODKEY_SHIFT) &&
+                    ea.getButtonMask() == GEA::LEFT_MOUSE_BUTTON) {
+                    _dragging = true;
+                    _lastX = ea.getXnormalized();
+                    _lastY = ea.getYnormalized();
+                    return true;  // handled events are ignored by the trackball
+                }
+                return false;
+            case GEA::DRAG:
+                if (!_dragging) return false;
+                // A drag across the whole window turns the light half around.
+                _state->orbit(-90.0 * (ea.getXnormalized() - _lastX),
+                              45.0 * (ea.getYnormalized() - _lastY));
+                _lastX = ea.getXnormalized();
+                _lastY = ea.getYnormalized();
+                return true;
+            case GEA::RELEASE:
+                if (!_dragging) return false;
+                _dragging = false;
+                return true;
+            default:
+                return false;
+        }
+    }
+
+    void getUsage(osg::ApplicationUsage& usage) const override {
+        usage.addKeyboardMouseBinding("m", "Next material on every object (M: previous)");
+        usage.addKeyboardMouseBinding("1-9", "Material N on every object");
+        usage.addKeyboardMouseBinding("0", "Every object's own material");
+        usage.addKeyboardMouseBinding("Left/Right", "Orbit light azimuth");
+        usage.addKeyboardMouseBinding("Up/Down", "Orbit light elevation");
+        usage.addKeyboardMouseBinding("Shift+drag", "Orbit the light with the mouse");
+        usage.addKeyboardMouseBinding("o", "Orbit light on/off");
+        usage.addKeyboardMouseBinding("l", "The scene's own lights on/off");
+    }
+
+private:
+    bool handleKey(int key) {
+        using GEA = osgGA::GUIEventAdapter;
+        if (key == 'm')
+            _state->cycleMaterial(+1);
+        else if (key == 'M')
+            _state->cycleMaterial(-1);
+        else if (key >= '0' && key <= '9')
+            _state->selectMaterial(key - '0');
+        else if (key == GEA::KEY_Left)
+            _state->orbit(-15, 0);
+        else if (key == GEA::KEY_Right)
+            _state->orbit(+15, 0);
+        else if (key == GEA::KEY_Up)
+            _state->orbit(0, +15);
+        else if (key == GEA::KEY_Down)
+            _state->orbit(0, -15);
+        else if (key == 'o')
+            _state->toggleOrbitLight();
+        else if (key == 'l')
+            _state->toggleSceneLights();
+        else
+            return false;
+        return true;
+    }
+
+    osg::ref_ptr<ViewerState> _state;
+    bool _dragging = false;
+    float _lastX = 0, _lastY = 0;
+};
+
+/** Reads back the finished frame (every camera of the window drawn: scene, HUD, statistics)
+ *  just before the buffers swap, on the frame it is armed for. */
+class CaptureSwapCallback : public osg::GraphicsContext::SwapCallback {
+public:
+    void swapBuffersImplementation(osg::GraphicsContext* context) override {
+        if (armed.exchange(false)) {
+            const osg::GraphicsContext::Traits* traits = context->getTraits();
+            osg::ref_ptr<osg::Image> captured = new osg::Image;
+            captured->readPixels(0, 0, traits->width, traits->height, GL_RGB, GL_UNSIGNED_BYTE);
+            image = captured;
+        }
+        context->swapBuffersImplementation();
+    }
+    std::atomic<bool> armed{false};
+    osg::ref_ptr<osg::Image> image;
+};
+
+/** Runs once with the new window's context current: notes the renderer and whether OSG's
+ *  statistics can show GPU times (a timer query extension). */
+class GlInfoOperation : public osg::GraphicsOperation {
+public:
+    GlInfoOperation() : osg::GraphicsOperation("btfviewer GL info", false) {}
+    void operator()(osg::GraphicsContext* context) override {
+        const unsigned id = context->getState()->getContextID();
+        const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+        const bool arb = osg::isGLExtensionSupported(id, "GL_ARB_timer_query");
+        const bool ext = osg::isGLExtensionSupported(id, "GL_EXT_timer_query");
+        std::cout << "btfviewer: OpenGL renderer " << (renderer ? renderer : "(unknown)")
+                  << "; GPU times in the statistics: "
+                  << (arb   ? "yes (GL_ARB_timer_query)"
+                      : ext ? "yes (GL_EXT_timer_query)"
+                            : "no (no GL_ARB_timer_query: the GPU row stays empty)")
+                  << std::endl;
+    }
+};
+
+/** The HUD: status lines at the bottom left, over the scene, never lit or depth-tested. */
+osg::ref_ptr<osg::Camera> createHud(osgText::Text* text) {
+    osg::ref_ptr<osg::Camera> camera = new osg::Camera;
+    camera->setReferenceFrame(osg::Transform::ABSOLUTE_RF);
+    camera->setProjectionMatrixAsOrtho2D(0, 1280, 0, 1024);
+    camera->setViewMatrix(osg::Matrix::identity());
+    camera->setClearMask(GL_DEPTH_BUFFER_BIT);
+    camera->setRenderOrder(osg::Camera::POST_RENDER);
+    camera->setAllowEventFocus(false);
+    text->setCharacterSize(20.0f);
+    // Bottom left: the statistics ('s') take the top of the window.
+    text->setPosition(osg::Vec3(10.0f, 10.0f, 0.0f));
+    text->setAlignment(osgText::Text::LEFT_BOTTOM_BASE_LINE);
+    text->setColor(osg::Vec4(1.0f, 1.0f, 0.8f, 1.0f));
+    text->setDataVariance(osg::Object::DYNAMIC);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(text);
+    geode->getOrCreateStateSet()->setMode(GL_LIGHTING, osg::StateAttribute::OFF);
+    geode->getOrCreateStateSet()->setMode(GL_DEPTH_TEST, osg::StateAttribute::OFF);
+    camera->addChild(geode.get());
+    return camera;
+}
+
+/** Reads one input through osgDB; throws Error "FILE: problem" with osgDB's reason. */
+osg::ref_ptr<osg::Node> readInput(const std::string& file) {
+    osgDB::ReaderWriter::ReadResult result =
+        osgDB::Registry::instance()->readNode(file, osgDB::Registry::instance()->getOptions());
+    if (result.validNode()) return result.getNode();
+    switch (result.status()) {
+        case osgDB::ReaderWriter::ReadResult::FILE_NOT_HANDLED:
+            osgBTF::fail(file,
+                         "no osgDB plugin reads this file (for osgBTF's materials set "
+                         "OSG_LIBRARY_PATH to osgBTF's lib folder)");
+        case osgDB::ReaderWriter::ReadResult::FILE_NOT_FOUND:
+            // A pseudo-loader name: the plugin says which part is missing.
+            if (result.message().empty() || result.message() == file + ": no such file")
+                osgBTF::fail(file, "no such file");
+            osgBTF::fail(file, result.message());
+        default: {
+            std::string message = result.message();
+            // osgBTF's plugins already name the file; OSG's own messages often do not.
+            if (message.rfind(file, 0) == 0) throw osgBTF::Error(message);
+            osgBTF::fail(file, message.empty() ? "cannot be read as a scene" : message);
+        }
+    }
+}
+
+/** Writes an image through osgDB to a temporary name, then renames it. */
+void writeImageAtomically(const osg::Image& image, const std::string& path) {
+    namespace fs = std::filesystem;
+    const fs::path target(path);
+    const fs::path temporary =
+        target.parent_path() / ("." + target.stem().string() + ".tmp-" +
+                                std::to_string(::getpid()) + target.extension().string());
+    if (!osgDB::writeImageFile(image, temporary.string())) {
+        std::error_code ignored;
+        fs::remove(temporary, ignored);
+        osgBTF::fail(path, "cannot write the capture (no osgDB image writer for '" +
+                               target.extension().string() + "' or the folder is not writable)");
+    }
+    std::error_code error;
+    fs::rename(temporary, target, error);
+    if (error) {
+        fs::remove(temporary, error);
+        osgBTF::fail(path, "cannot rename the capture into place: " + error.message());
+    }
+}
+
+int run(osg::ArgumentParser& arguments) {
+    osg::ApplicationUsage* usage = arguments.getApplicationUsage();
+    usage->setApplicationName("btfviewer");
+    usage->setDescription(
+        "btfviewer: views BTF materials with OpenSceneGraph. Each FILE is a scene (.osgt, .osgb, "
+        "any model osgDB reads, e.g. the example scenes of btf-examples), a fitted material "
+        "(.btfmat, shown on a sphere or --model), a measured BTF (.btf, .zip: fitted on load and "
+        "cached by osgBTF's plugins, -O \"method=NAME ...\" chooses the fit) or a pseudo-loader "
+        "name MODEL.(MATERIAL[,scale=S]).btfmaterial. Several files are laid out side by side. "
+        "The keys put any material found on every object. The statistics ('s') show frame, "
+        "cull, draw and GPU times; the GPU times need GL_ARB_timer_query (Mesa and the NVIDIA "
+        "driver have it; without it OSG leaves the GPU bar out).");
+    usage->setCommandLineUsage("btfviewer [options] FILE...");
+    usage->addCommandLineOption("--model FILE",
+                                "Model under material files (default: a sphere, poles on Z)");
+    usage->addCommandLineOption("--scale S",
+                                "Texture scale of materials given as files (default 4)");
+    usage->addCommandLineOption("--material N",
+                                "Start with material N on every object (as key N; 0 = own)");
+    usage->addCommandLineOption(
+        "--light AZ EL",
+        "Orbit light direction in degrees (default -30 40): azimuth 0 lights from -Y, the side "
+        "the home view looks from, 90 from +X (its right); elevation above the XY plane (Z up)");
+    usage->addCommandLineOption("--no-orbit-light", "Start with the orbit light off");
+    usage->addCommandLineOption("--no-scene-lights", "Start with the scene's own lights off");
+    usage->addCommandLineOption("--stats", "Show the frame/GPU time statistics from the start");
+    usage->addCommandLineOption("--no-hud", "No status text");
+    usage->addCommandLineOption("--frames N", "Render N frames, then exit (default: until Esc)");
+    usage->addCommandLineOption(
+        "--capture FILE",
+        "Write the last of --frames frames (default 3) to FILE (.png, .jpg, ... by the "
+        "extension) and exit; runs single-threaded");
+    usage->addCommandLineOption("-O \"OPTIONS\"", "osgDB options for the plugins");
+    usage->addCommandLineOption("-h, --help", "This text and the keys");
+
+    if (arguments.read("-h") || arguments.read("--help")) {
+        std::cout << usage->getDescription() << "\n\n";
+        usage->write(std::cout, osg::ApplicationUsage::COMMAND_LINE_OPTION);  // usage + options
+        std::cout << "\nosgViewer's own options work too: --window X Y W H, --screen N, "
+                     "--run-on-demand, ...\n\n"
+                  << kKeyHelp;
+        return 0;
+    }
+
+    std::string modelFile, captureFile, pluginOptions;
+    float textureScale = 4;
+    int firstMaterial = 0, frames = -1;
+    double azimuth = -30, elevation = 40;
+    while (arguments.read("--model", modelFile)) {
+    }
+    while (arguments.read("--scale", textureScale)) {
+    }
+    while (arguments.read("--material", firstMaterial)) {
+    }
+    while (arguments.read("--light", azimuth, elevation)) {
+    }
+    while (arguments.read("--frames", frames)) {
+    }
+    while (arguments.read("--capture", captureFile)) {
+    }
+    while (arguments.read("-O", pluginOptions)) {
+    }
+    const bool noOrbitLight = arguments.read("--no-orbit-light");
+    const bool noSceneLights = arguments.read("--no-scene-lights");
+    const bool showStats = arguments.read("--stats");
+    const bool noHud = arguments.read("--no-hud");
+    if (!captureFile.empty() && frames < 0) frames = 3;
+    if (!captureFile.empty() && frames < 1)
+        throw osgBTF::Error("--frames: at least 1 frame is needed for --capture");
+    if (!(textureScale > 0)) throw osgBTF::Error("--scale: must be positive");
+
+    // osgViewer::Viewer reads its own options (--window, --screen, ...) from the arguments.
+    osgViewer::Viewer viewer(arguments);
+    if (!pluginOptions.empty()) {
+        osgDB::Registry::instance()->setOptions(new osgDB::Options(pluginOptions));
+    }
+
+    arguments.reportRemainingOptionsAsUnrecognized();
+    if (arguments.errors()) {
+        std::ostringstream text;
+        arguments.writeErrorMessages(text);
+        std::string message = text.str();
+        while (!message.empty() && message.back() == '\n') message.pop_back();
+        throw osgBTF::Error(message + " (btfviewer --help lists the options)");
+    }
+    std::vector<std::string> files;
+    for (int i = 1; i < arguments.argc(); ++i) files.push_back(arguments[i]);
+    if (files.empty()) throw osgBTF::Error("no input files (btfviewer --help)");
+
+    // Inputs: a MaterialNode without children (a material file) gets the model.
+    osg::ref_ptr<osg::Node> model;
+    std::vector<osg::ref_ptr<osg::Node>> inputs;
+    for (const std::string& file : files) {
+        osg::ref_ptr<osg::Node> node = readInput(file);
+        auto* material = dynamic_cast<MaterialNode*>(node.get());
+        if (material && material->getNumChildren() == 0) {
+            if (!model)
+                model = modelFile.empty()
+                            ? osg::ref_ptr<osg::Node>(osgBTF::examples::createSphereModel())
+                            : readInput(modelFile);
+            material->setTextureScale(textureScale);
+            material->addChild(model.get());
+        }
+        inputs.push_back(node);
+    }
+
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    osg::ref_ptr<osg::Group> sceneRoot = new osg::Group;
+    float x = 0;
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+        if (inputs.size() == 1) {
+            sceneRoot->addChild(inputs[i].get());
+            break;
+        }
+        // Side by side along +X, a fifth of a radius apart.
+        const osg::BoundingSphere bound = inputs[i]->getBound();
+        const float radius = bound.valid() ? bound.radius() : 1.0f;
+        x += i == 0 ? 0.0f : radius * 1.1f;
+        osg::ref_ptr<osg::MatrixTransform> place = new osg::MatrixTransform(osg::Matrix::translate(
+            osg::Vec3(x, 0, 0) - (bound.valid() ? bound.center() : osg::Vec3())));
+        place->addChild(inputs[i].get());
+        sceneRoot->addChild(place.get());
+        x += radius * 1.1f;
+    }
+    root->addChild(sceneRoot.get());
+
+    osg::ref_ptr<ViewerState> state = new ViewerState;
+    MaterialNodeCollector materialNodes;
+    sceneRoot->accept(materialNodes);
+    LightSourceCollector lights;
+    sceneRoot->accept(lights);
+    state->sceneLights = lights.lights;
+    for (const osg::ref_ptr<MaterialNode>& node : materialNodes.nodes) {
+        state->nodes.push_back(node);
+        state->ownMaterials.push_back(node->getMaterial());
+        Material* material = node->getMaterial();
+        if (!material) continue;
+        const bool known =
+            std::any_of(state->choices.begin(), state->choices.end(),
+                        [&](const MaterialChoice& choice) { return choice.material == material; });
+        if (known) continue;
+        const std::string name = node->getMaterialFile().empty()
+                                     ? std::string("in memory")
+                                     : osgDB::getSimpleFileName(node->getMaterialFile());
+        state->choices.push_back({material, name + " (" + material->methodName() + ")"});
+    }
+    if (state->nodes.empty())
+        std::cerr << "btfviewer: note: no osgBTF material in the input; the keys that switch "
+                     "materials do nothing\n";
+    std::cout << "btfviewer: " << state->nodes.size() << " object(s) with a BTF material, "
+              << state->choices.size() << " material(s):\n";
+    for (std::size_t i = 0; i < state->choices.size(); ++i)
+        std::cout << "  " << i + 1 << ": " << state->choices[i].label << "\n";
+
+    // The orbit light: directional, in world space (Z up), white.
+    state->orbitLight = new osg::LightSource;
+    state->orbitLight->setName("btfviewer orbit light");
+    state->orbitLight->getLight()->setLightNum(7);  // clear of the scene's usual 0, 1, ...
+    state->orbitLight->getLight()->setDiffuse(osg::Vec4(1, 1, 1, 1));
+    state->orbitLight->getLight()->setSpecular(osg::Vec4(1, 1, 1, 1));
+    state->azimuth = azimuth;
+    state->elevation = std::clamp(elevation, -89.0, 89.0);
+    root->addChild(state->orbitLight.get());
+    if (!noHud) {
+        state->hud = new osgText::Text;
+        root->addChild(createHud(state->hud.get()).get());
+    }
+    state->placeOrbitLight();
+    if (noOrbitLight) state->toggleOrbitLight();
+    if (noSceneLights) state->toggleSceneLights();
+    if (firstMaterial < 0 || firstMaterial > int(state->choices.size()))
+        throw osgBTF::Error("--material " + std::to_string(firstMaterial) + ": there are " +
+                            std::to_string(state->choices.size()) + " materials (0 = own)");
+    state->selectMaterial(firstMaterial);
+
+    viewer.setSceneData(root.get());
+    viewer.setCameraManipulator(new osgGA::TrackballManipulator);
+    viewer.addEventHandler(new ControlHandler(state.get()));
+    viewer.addEventHandler(new osgViewer::StatsHandler);
+    viewer.addEventHandler(new osgViewer::HelpHandler(usage));
+    viewer.addEventHandler(new osgViewer::WindowSizeHandler);
+
+    if (!captureFile.empty())
+        viewer.setThreadingModel(osgViewer::Viewer::SingleThreaded);  // the read-back is in step
+    viewer.setRealizeOperation(new GlInfoOperation);
+    viewer.realize();
+    if (!viewer.isRealized()) throw osgBTF::Error("cannot open a window (is DISPLAY set?)");
+    osg::ref_ptr<CaptureSwapCallback> capture;
+    if (!captureFile.empty()) {
+        osg::GraphicsContext* context = viewer.getCamera()->getGraphicsContext();
+        if (!context) throw osgBTF::Error("--capture: the viewer has no window to read back");
+        capture = new CaptureSwapCallback;
+        context->setSwapCallback(capture.get());
+    }
+    // The StatsHandler cycles on 's'; its second page has the frame and GPU times. The keys are
+    // queued after the first frame: realize() restarts the event clock, and the handler decides
+    // whether to show a GPU row when it first opens, from the extensions of a context that has
+    // drawn.
+    auto pressStatsKeys = [&] {
+        if (!showStats) return;
+        viewer.getEventQueue()->keyPress('s');
+        viewer.getEventQueue()->keyPress('s');
+    };
+    if (frames < 0) {
+        viewer.frame();
+        pressStatsKeys();
+        return viewer.run();
+    }
+    for (int frame = 0; frame < frames && !viewer.done(); ++frame) {
+        if (frame == 1) pressStatsKeys();
+        if (capture && frame == frames - 1) capture->armed = true;
+        viewer.frame();
+    }
+    if (capture) {
+        if (!capture->image) throw osgBTF::Error(captureFile + ": no frame was captured");
+        writeImageAtomically(*capture->image, captureFile);
+        std::cout << "btfviewer: wrote " << captureFile << " (" << capture->image->s() << "x"
+                  << capture->image->t() << ")\n";
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    osg::ArgumentParser arguments(&argc, argv);
+    try {
+        return run(arguments);
+    } catch (const std::exception& e) {
+        std::cerr << "btfviewer: " << e.what() << "\n";
+        return 1;
+    }
+}

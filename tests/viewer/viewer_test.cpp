@@ -1,0 +1,642 @@
+// Viewer tests: the example scenes (btf-examples), `cmake --install` with stock osgconv using the
+// installed plugins, and stock osgviewer and btfviewer showing the examples under Xvfb.
+//
+// Screenshots of stock osgviewer come from Xvfb itself: started with -fbdir, Xvfb keeps its
+// screen in a file (XWD format) that always holds what is on the display, so the test needs no
+// window manager, no key injection and no screenshot tool. osgviewer runs until a frame with the
+// expected content is on screen (or a time limit), then the test stops it and checks that
+// frame. btfviewer writes its own capture (--capture). Every GL test skips when Xvfb is absent.
+//
+// Needs the ctest fixture viewer.make_examples (tests/viewer/CMakeLists.txt), which writes the
+// example scenes (sample 8x8, lambert and pca) into OSGBTF_EXAMPLES_DIR.
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <osg/Geode>
+#include <osg/Geometry>
+#include <osg/LightSource>
+#include <osg/MatrixTransform>
+#include <osg/NodeVisitor>
+#include <osg/ProxyNode>
+#include <osgDB/ReadFile>
+#include <osgDB/WriteFile>
+
+#include "scene/MaterialNode.h"
+#include "tests/TestUtil.h"
+
+namespace fs = std::filesystem;
+using osgBTF::test::CommandResult;
+using osgBTF::test::runCommand;
+using osgBTF::test::shellQuote;
+using osgBTF::test::TempDir;
+
+namespace {
+
+const std::string kBuildDir = OSGBTF_BUILD_DIR;
+const std::string kExamplesDir = OSGBTF_EXAMPLES_DIR;
+const std::string kScreensDir = OSGBTF_SCREENS_DIR;
+const std::string kPluginDir = kBuildDir + "/lib";
+const std::vector<std::string> kMethods = {"lambert", "pca"};  // what the fixture fitted
+
+bool onPath(const std::string& program) {
+    return runCommand("command -v " + program + " >/dev/null").exitCode == 0;
+}
+
+// ---- processes ---------------------------------------------------------------------------
+
+/** A child process: argv, extra environment, working folder; output into a log file. */
+class ChildProcess {
+public:
+    ChildProcess(const std::vector<std::string>& argv, const std::vector<std::string>& environment,
+                 const std::string& workingDir, const std::string& logFile, int keepOpenFd = -1) {
+        _log = logFile;
+        _pid = ::fork();
+        if (_pid == 0) {
+            if (!workingDir.empty() && ::chdir(workingDir.c_str()) != 0) ::_exit(126);
+            for (const std::string& assignment : environment) {
+                const auto equals = assignment.find('=');
+                ::setenv(assignment.substr(0, equals).c_str(),
+                         assignment.substr(equals + 1).c_str(), 1);
+            }
+            const int log = ::open(logFile.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            if (log >= 0) {
+                ::dup2(log, STDOUT_FILENO);
+                ::dup2(log, STDERR_FILENO);
+            }
+            for (int fd = 3; fd < 256; ++fd)
+                if (fd != keepOpenFd) ::close(fd);
+            std::vector<char*> args;
+            for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
+            args.push_back(nullptr);
+            ::execvp(args[0], args.data());
+            ::_exit(127);
+        }
+    }
+    ~ChildProcess() { stop(); }
+    ChildProcess(const ChildProcess&) = delete;
+    ChildProcess& operator=(const ChildProcess&) = delete;
+
+    bool running() {
+        if (_pid <= 0) return false;
+        int status = 0;
+        if (::waitpid(_pid, &status, WNOHANG) == _pid) {
+            _exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+            _pid = -1;
+            return false;
+        }
+        return true;
+    }
+    /** Stops it (SIGTERM, then SIGKILL after 3 s) if it still runs. */
+    void stop() {
+        if (!running()) return;
+        ::kill(_pid, SIGTERM);
+        for (int i = 0; i < 30 && running(); ++i)
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        if (running()) {
+            ::kill(_pid, SIGKILL);
+            ::waitpid(_pid, nullptr, 0);
+            _pid = -1;
+        }
+    }
+    int exitCode() const { return _exitCode; }
+    std::string output() const { return osgBTF::test::readTextFile(_log); }
+
+private:
+    pid_t _pid = -1;
+    int _exitCode = -1;
+    std::string _log;
+};
+
+// ---- screenshots -------------------------------------------------------------------------
+
+struct RgbImage {
+    int width = 0, height = 0;
+    std::vector<std::uint8_t> rgb;  // rows top-down
+    const std::uint8_t* at(int x, int y) const { return &rgb[3 * (std::size_t(y) * width + x)]; }
+};
+
+/** Reads the XWD file Xvfb keeps its screen in (-fbdir): a big-endian header of 25 CARD32,
+ *  the window name, the colour map, then the pixels (TrueColor, 32 bits per pixel at depth 24,
+ *  in the header's byte order). Returns an empty image if the file is not such a file. */
+RgbImage readXvfbScreen(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::vector<std::uint8_t> data((std::istreambuf_iterator<char>(in)),
+                                   std::istreambuf_iterator<char>());
+    RgbImage image;
+    if (data.size() < 100) return image;
+    auto card32 = [&](std::size_t index) {
+        const std::uint8_t* p = &data[4 * index];
+        return std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 | std::uint32_t(p[2]) << 8 |
+               p[3];
+    };
+    const std::uint32_t headerSize = card32(0), version = card32(1), width = card32(4),
+                        height = card32(5), byteOrder = card32(7), bitsPerPixel = card32(11),
+                        bytesPerLine = card32(12), redMask = card32(14), greenMask = card32(15),
+                        blueMask = card32(16), colours = card32(19);
+    const std::size_t pixelsAt = std::size_t(headerSize) + std::size_t(colours) * 12;
+    if (version != 7 || bitsPerPixel != 32 || redMask != 0xff0000 || greenMask != 0xff00 ||
+        blueMask != 0xff || data.size() < pixelsAt + std::size_t(bytesPerLine) * height)
+        return image;
+    image.width = int(width);
+    image.height = int(height);
+    image.rgb.resize(std::size_t(width) * height * 3);
+    for (std::uint32_t y = 0; y < height; ++y)
+        for (std::uint32_t x = 0; x < width; ++x) {
+            const std::uint8_t* p = &data[pixelsAt + std::size_t(y) * bytesPerLine + 4 * x];
+            const std::uint32_t littleEndian = std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 |
+                                               std::uint32_t(p[2]) << 16 |
+                                               std::uint32_t(p[3]) << 24;
+            const std::uint32_t bigEndian = std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 |
+                                            std::uint32_t(p[2]) << 8 | p[3];
+            const std::uint32_t value = byteOrder == 0 ? littleEndian : bigEndian;  // 0: LSBFirst
+            std::uint8_t* out = &image.rgb[3 * (std::size_t(y) * width + x)];
+            out[0] = std::uint8_t(value >> 16);
+            out[1] = std::uint8_t(value >> 8);
+            out[2] = std::uint8_t(value);
+        }
+    return image;
+}
+
+RgbImage crop(const RgbImage& image, int width, int height) {
+    RgbImage out;
+    out.width = std::min(width, image.width);
+    out.height = std::min(height, image.height);
+    for (int y = 0; y < out.height; ++y)
+        out.rgb.insert(out.rgb.end(), image.at(0, y), image.at(0, y) + 3 * out.width);
+    return out;
+}
+
+/** An osg::Image (rows bottom-up, RGB or RGBA bytes, as the png plugin reads) as RgbImage. */
+RgbImage fromOsgImage(const osg::Image& image) {
+    RgbImage out;
+    out.width = image.s();
+    out.height = image.t();
+    const unsigned components = osg::Image::computeNumComponents(image.getPixelFormat());
+    for (int y = out.height - 1; y >= 0; --y)
+        for (int x = 0; x < out.width; ++x) {
+            const unsigned char* p = image.data(x, y);
+            out.rgb.insert(out.rgb.end(), p, p + std::min(3u, components));
+        }
+    return out;
+}
+
+/** What the checks look at: spread of the luminance, the share of pixels that differ from the
+ *  most common colour (the background), and the share of "material-coloured" pixels: the
+ *  sample's red and gold threads, lit, are warm (red clearly above blue); osgviewer's
+ *  background is blue, a model without the material grey, labels white. */
+struct ScreenStats {
+    double luminanceStdDev = 0;
+    double foregroundShare = 0;
+    double warmShare = 0;
+};
+
+ScreenStats analyse(const RgbImage& image) {
+    ScreenStats stats;
+    const std::size_t count = std::size_t(image.width) * image.height;
+    if (count == 0) return stats;
+    std::map<std::uint32_t, std::size_t> histogram;
+    double sum = 0, sum2 = 0;
+    std::size_t warm = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        const int r = image.rgb[3 * i], g = image.rgb[3 * i + 1], b = image.rgb[3 * i + 2];
+        ++histogram[std::uint32_t(r) << 16 | std::uint32_t(g) << 8 | std::uint32_t(b)];
+        const double luminance = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+        sum += luminance;
+        sum2 += luminance * luminance;
+        if (r > 50 && r >= g && r > b + 35) ++warm;
+    }
+    const double mean = sum / double(count);
+    stats.luminanceStdDev = std::sqrt(std::max(0.0, sum2 / double(count) - mean * mean));
+    std::uint32_t background = 0;
+    std::size_t most = 0;
+    for (const auto& [colour, n] : histogram)
+        if (n > most) most = n, background = colour;
+    std::size_t foreground = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        const int dr = image.rgb[3 * i] - int(background >> 16 & 255),
+                  dg = image.rgb[3 * i + 1] - int(background >> 8 & 255),
+                  db = image.rgb[3 * i + 2] - int(background & 255);
+        if (std::abs(dr) + std::abs(dg) + std::abs(db) > 30) ++foreground;
+    }
+    stats.foregroundShare = double(foreground) / double(count);
+    stats.warmShare = double(warm) / double(count);
+    return stats;
+}
+
+bool notBlank(const ScreenStats& stats) {
+    return stats.luminanceStdDev > 8.0 && stats.foregroundShare > 0.02;
+}
+bool materialColoured(const ScreenStats& stats) {
+    return stats.warmShare > 0.01;
+}
+
+std::string describe(const ScreenStats& stats) {
+    return "luminance std dev " + std::to_string(stats.luminanceStdDev) + ", foreground " +
+           std::to_string(100 * stats.foregroundShare) + "%, material-coloured " +
+           std::to_string(100 * stats.warmShare) + "%";
+}
+
+/** Keeps a screenshot for people (build/tests/viewer/screens/NAME.png). */
+void keepScreenshot(const RgbImage& image, const std::string& name) {
+    if (image.width == 0) return;
+    osg::ref_ptr<osg::Image> out = new osg::Image;
+    out->allocateImage(image.width, image.height, 1, GL_RGB, GL_UNSIGNED_BYTE);
+    for (int y = 0; y < image.height; ++y)
+        std::memcpy(out->data(0, image.height - 1 - y), image.at(0, y), 3 * image.width);
+    fs::create_directories(kScreensDir);
+    osgDB::writeImageFile(*out, kScreensDir + "/" + name + ".png");
+}
+
+/** Xvfb on a free display (-displayfd), its screen kept in a file (-fbdir). */
+class Xvfb {
+public:
+    static constexpr int kWidth = 480, kHeight = 360;
+
+    Xvfb() : _dir() {
+        int fds[2];
+        if (::pipe(fds) != 0) return;
+        _server = std::make_unique<ChildProcess>(
+            std::vector<std::string>{"Xvfb", "-displayfd", std::to_string(fds[1]), "-screen", "0",
+                                     std::to_string(kWidth) + "x" + std::to_string(kHeight) + "x24",
+                                     "-fbdir", _dir.path().string(), "-nolisten", "tcp", "-br",
+                                     "-noreset"},
+            std::vector<std::string>{}, "", _dir.file("xvfb.log"), fds[1]);
+        ::close(fds[1]);
+        // Xvfb writes the display number once it accepts clients.
+        pollfd waitFor{fds[0], POLLIN, 0};
+        std::string number;
+        char c;
+        while (::poll(&waitFor, 1, 15000) > 0 && ::read(fds[0], &c, 1) == 1 && c != '\n')
+            number += c;
+        ::close(fds[0]);
+        if (!number.empty()) _display = ":" + number;
+    }
+    bool ok() const { return !_display.empty(); }
+    std::string log() const { return osgBTF::test::readTextFile(_dir.file("xvfb.log")); }
+    const std::string& display() const { return _display; }
+    RgbImage screen() const { return readXvfbScreen(_dir.file("Xvfb_screen0")); }
+
+private:
+    TempDir _dir;
+    std::unique_ptr<ChildProcess> _server;
+    std::string _display;
+};
+
+#define REQUIRE_XVFB()                                                                     \
+    if (!onPath("Xvfb"))                                                                   \
+    GTEST_SKIP() << "Xvfb is not installed (Debian package xvfb; tools/setup.sh installs " \
+                    "it): the viewer tests need an X server"
+
+struct OsgviewerRun {
+    RgbImage screen;  // the viewer's window (top left of the display)
+    ScreenStats stats;
+    std::string output;
+    bool exitedEarly = false;
+};
+
+/** Runs stock osgviewer on `arguments` (in `workingDir`, osgBTF's plugins from the build)
+ *  in a 320x240 window until `ready` holds for the screen or 30 s passed, then stops it. */
+OsgviewerRun runOsgviewer(const Xvfb& xvfb, const std::vector<std::string>& arguments,
+                          const std::string& workingDir,
+                          const std::function<bool(const ScreenStats&)>& ready) {
+    std::vector<std::string> argv = {"osgviewer"};
+    argv.insert(argv.end(), arguments.begin(), arguments.end());
+    for (const char* option : {"--window", "0", "0", "320", "240"}) argv.push_back(option);
+    TempDir logDir;
+    ChildProcess viewer(argv, {"DISPLAY=" + xvfb.display(), "OSG_LIBRARY_PATH=" + kPluginDir},
+                        workingDir, logDir.file("osgviewer.log"));
+    OsgviewerRun run;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        if (!viewer.running()) {
+            run.exitedEarly = true;
+            break;
+        }
+        run.screen = crop(xvfb.screen(), 320, 240);
+        run.stats = analyse(run.screen);
+        if (ready(run.stats)) break;
+    }
+    viewer.stop();
+    run.output = viewer.output();
+    return run;
+}
+
+// ---- the example scenes ------------------------------------------------------------------
+
+template <typename T>
+class Collector : public osg::NodeVisitor {
+public:
+    Collector() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+    void apply(osg::Node& node) override {
+        if (auto* found = dynamic_cast<T*>(&node)) nodes.push_back(found);
+        traverse(node);
+    }
+    std::vector<osg::ref_ptr<T>> nodes;
+};
+
+TEST(Examples, AnUnknownMethodFailsBeforeAnythingIsWritten) {
+    TempDir dir;
+    const std::string out = dir.file("out");
+    const CommandResult result = runCommand(std::string(OSGBTF_BTF_EXAMPLES) + " --out " +
+                                            shellQuote(out) + " --size 8 --methods lambert,nosuch");
+    EXPECT_EQ(result.exitCode, 1) << result.output;
+    EXPECT_NE(result.output.find("btf-examples: unknown method 'nosuch' (known: "),
+              std::string::npos)
+        << result.output;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Examples, ScenesPutEachMaterialSideBySideUnderTwoLights) {
+    for (const std::string scene : {"spheres.osgt", "cloth.osgt", "vases.osgt"}) {
+        SCOPED_TRACE(scene);
+        osg::ref_ptr<osg::Node> root = osgDB::readRefNodeFile(kExamplesDir + "/" + scene);
+        ASSERT_TRUE(root.valid()) << "cannot read " << kExamplesDir << "/" << scene;
+
+        Collector<osg::LightSource> lights;
+        root->accept(lights);
+        ASSERT_EQ(lights.nodes.size(), 2u);
+        EXPECT_EQ(lights.nodes[0]->getLight()->getPosition().w(), 0.0f);  // directional
+        EXPECT_EQ(lights.nodes[1]->getLight()->getPosition().w(), 1.0f);  // point
+
+        Collector<osgBTF::MaterialNode> materials;
+        root->accept(materials);
+        ASSERT_EQ(materials.nodes.size(), kMethods.size());
+        std::vector<osg::Vec3d> places;
+        for (std::size_t i = 0; i < kMethods.size(); ++i) {
+            const osgBTF::MaterialNode& node = *materials.nodes[i];
+            // Relative names, found next to the scene: the folder can move.
+            EXPECT_EQ(node.getMaterialFile(), "sample-" + kMethods[i] + ".btfmat");
+            ASSERT_NE(node.getMaterial(), nullptr) << node.getMaterialError();
+            EXPECT_EQ(node.getMaterial()->methodName(), kMethods[i]);
+            ASSERT_EQ(node.getNumParents(), 1u);
+            auto* place = dynamic_cast<const osg::MatrixTransform*>(node.getParent(0));
+            ASSERT_NE(place, nullptr);
+            places.push_back(place->getMatrix().getTrans());
+
+            // The model below: normals and texture coordinates per vertex, tangents added.
+            Collector<osg::Geometry> geometries;
+            const_cast<osgBTF::MaterialNode&>(node).accept(geometries);
+            ASSERT_EQ(geometries.nodes.size(), 1u);
+            const osg::Geometry& geometry = *geometries.nodes[0];
+            const unsigned vertices = geometry.getVertexArray()->getNumElements();
+            EXPECT_GT(vertices, 1000u);
+            ASSERT_NE(geometry.getNormalArray(), nullptr);
+            EXPECT_EQ(geometry.getNormalArray()->getNumElements(), vertices);
+            ASSERT_NE(geometry.getTexCoordArray(0), nullptr);
+            EXPECT_EQ(geometry.getTexCoordArray(0)->getNumElements(), vertices);
+            ASSERT_NE(geometry.getVertexAttribArray(6), nullptr);
+        }
+        // Side by side: along +X, apart.
+        for (std::size_t i = 1; i < places.size(); ++i)
+            EXPECT_GT(places[i].x() - places[i - 1].x(), 1.0) << "object " << i;
+    }
+}
+
+TEST(Examples, TheVaseModelIsPlainOsgGeometryReadThroughAProxyNode) {
+    osg::ref_ptr<osg::Node> model = osgDB::readRefNodeFile(kExamplesDir + "/vase.osgt");
+    ASSERT_TRUE(model.valid());
+    Collector<osgBTF::MaterialNode> materials;
+    model->accept(materials);
+    EXPECT_TRUE(materials.nodes.empty());
+    Collector<osg::Geometry> geometries;
+    model->accept(geometries);
+    ASSERT_EQ(geometries.nodes.size(), 1u);
+    EXPECT_EQ(geometries.nodes[0]->getVertexAttribArray(6), nullptr);  // no tangents stored
+
+    osg::ref_ptr<osg::Node> scene = osgDB::readRefNodeFile(kExamplesDir + "/vases.osgt");
+    ASSERT_TRUE(scene.valid());
+    Collector<osg::ProxyNode> proxies;
+    scene->accept(proxies);
+    ASSERT_EQ(proxies.nodes.size(), kMethods.size());
+    for (const osg::ref_ptr<osg::ProxyNode>& proxy : proxies.nodes) {
+        EXPECT_EQ(proxy->getFileName(0), "vase.osgt");
+        EXPECT_EQ(proxy->getNumChildren(), 1u);  // loaded when the scene was read
+    }
+}
+
+// ---- install -----------------------------------------------------------------------------
+
+TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
+    TempDir prefix;
+    const CommandResult install =
+        runCommand(std::string(OSGBTF_CMAKE_COMMAND) + " --install " + shellQuote(kBuildDir) +
+                   " --prefix " + shellQuote(prefix.path().string()));
+    ASSERT_EQ(install.exitCode, 0) << install.output;
+    const fs::path lib = prefix.path() / "lib";
+    const fs::path plugins = lib / ("osgPlugins-" + std::string(OSGBTF_OSG_VERSION));
+    for (const fs::path& file :
+         {lib / "libosgBTF.so", plugins / "osgdb_btfmat.so", plugins / "osgdb_btf.so",
+          plugins / "osgdb_zip.so", plugins / "osgdb_btfmaterial.so", plugins / "osgdb_exr.so",
+          prefix.path() / "bin" / "btf", prefix.path() / "bin" / "btfviewer",
+          prefix.path() / "bin" / "btf-examples"})
+        EXPECT_TRUE(fs::exists(file)) << file << " was not installed";
+    // Nothing else is needed: no shader files lie around (they are embedded).
+    EXPECT_FALSE(fs::exists(prefix.path() / "share" / "osgBTF" / "shaders"));
+
+    // The installed tools find the installed libosgBTF by themselves (RPATH).
+    const std::string clean = "env -u LD_LIBRARY_PATH -u OSG_LIBRARY_PATH -u OSG_FILE_PATH ";
+    const CommandResult help =
+        runCommand(clean + shellQuote((prefix.path() / "bin" / "btf").string()) + " --help");
+    EXPECT_EQ(help.exitCode, 0) << help.output;
+
+    // Stock osgconv with OSG_LIBRARY_PATH=P/lib reads through the installed plugins: a missing
+    // material first (the plugin's message proves which reader answered), then the real thing.
+    const std::string osgconv = "cd " + shellQuote(kExamplesDir) + " && " + clean +
+                                "OSG_LIBRARY_PATH=" + shellQuote(lib.string()) + " osgconv ";
+    const CommandResult missing = runCommand(osgconv + "'vase.osgt.(nosuch.btfmat).btfmaterial' " +
+                                             shellQuote(prefix.file("missing.osgt")));
+    EXPECT_NE(missing.exitCode, 0) << missing.output;
+    EXPECT_NE(missing.output.find("nosuch.btfmat: no such file"), std::string::npos)
+        << missing.output;
+
+    const CommandResult converted =
+        runCommand(osgconv + "'vase.osgt.(sample-pca.btfmat,scale=3).btfmaterial' " +
+                   shellQuote(prefix.file("converted.osgt")));
+    ASSERT_EQ(converted.exitCode, 0) << converted.output;
+    const std::string text = osgBTF::test::readTextFile(prefix.file("converted.osgt"));
+    EXPECT_NE(text.find("osgBTF::MaterialNode"), std::string::npos);
+    EXPECT_NE(text.find("MaterialFile \"sample-pca.btfmat\""), std::string::npos);
+    EXPECT_NE(text.find("TextureScale 3"), std::string::npos);
+
+    // A scene with MaterialNodes: OSG finds their serializers in the installed libosgBTF.
+    const CommandResult scene =
+        runCommand(osgconv + "spheres.osgt " + shellQuote(prefix.file("spheres.osgt")) + " 2>&1");
+    ASSERT_EQ(scene.exitCode, 0) << scene.output;
+    EXPECT_EQ(scene.output.find("Unsupported wrapper class osgBTF::MaterialNode"),
+              std::string::npos)
+        << scene.output;
+    EXPECT_NE(osgBTF::test::readTextFile(prefix.file("spheres.osgt")).find("osgBTF::MaterialNode"),
+              std::string::npos);
+}
+
+// ---- stock osgviewer under Xvfb ----------------------------------------------------------
+
+TEST(StockOsgviewer, TheScreenshotChecksRejectABlankScreenAndAModelWithoutMaterial) {
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    const ScreenStats blank = analyse(crop(xvfb.screen(), 320, 240));
+    EXPECT_FALSE(notBlank(blank)) << describe(blank);
+
+    // The plain model (no material): osgviewer draws it grey; not material-coloured.
+    const OsgviewerRun run = runOsgviewer(xvfb, {"vase.osgt"}, kExamplesDir, notBlank);
+    keepScreenshot(run.screen, "osgviewer-plain-vase");
+    EXPECT_FALSE(run.exitedEarly) << run.output;
+    EXPECT_TRUE(notBlank(run.stats)) << describe(run.stats) << "\n" << run.output;
+    EXPECT_FALSE(materialColoured(run.stats)) << describe(run.stats);
+}
+
+TEST(StockOsgviewer, ShowsAnExampleScene) {
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    const OsgviewerRun run =
+        runOsgviewer(xvfb, {kExamplesDir + "/spheres.osgt"}, "",
+                     [](const ScreenStats& s) { return notBlank(s) && materialColoured(s); });
+    keepScreenshot(run.screen, "osgviewer-spheres");
+    EXPECT_FALSE(run.exitedEarly) << run.output;
+    EXPECT_TRUE(notBlank(run.stats)) << describe(run.stats) << "\n" << run.output;
+    EXPECT_TRUE(materialColoured(run.stats)) << describe(run.stats) << "\n" << run.output;
+    EXPECT_EQ(run.output.find("osgBTF::MaterialNode:"), std::string::npos) << run.output;
+}
+
+TEST(StockOsgviewer, ShowsAModelThroughThePseudoLoader) {
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    const OsgviewerRun run =
+        runOsgviewer(xvfb, {"vase.osgt.(sample-pca.btfmat,scale=4).btfmaterial"}, kExamplesDir,
+                     [](const ScreenStats& s) { return notBlank(s) && materialColoured(s); });
+    keepScreenshot(run.screen, "osgviewer-pseudo-loader");
+    EXPECT_FALSE(run.exitedEarly) << run.output;
+    EXPECT_TRUE(notBlank(run.stats)) << describe(run.stats) << "\n" << run.output;
+    EXPECT_TRUE(materialColoured(run.stats)) << describe(run.stats) << "\n" << run.output;
+}
+
+// ---- btfviewer ---------------------------------------------------------------------------
+
+const std::string kBtfviewer = OSGBTF_BTFVIEWER;
+
+CommandResult runBtfviewer(const std::string& display, const std::string& arguments) {
+    return runCommand("cd " + shellQuote(kExamplesDir) + " && DISPLAY=" + display +
+                      " OSG_LIBRARY_PATH=" + shellQuote(kPluginDir) + " " + shellQuote(kBtfviewer) +
+                      " " + arguments);
+}
+
+TEST(Btfviewer, BadInputFailsWithAClearMessage) {
+    // All of these fail before a window opens: no X server needed.
+    CommandResult result = runBtfviewer(":none", "nosuch.osgt");
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(result.output.find("btfviewer: nosuch.osgt: no such file"), std::string::npos)
+        << result.output;
+
+    result = runBtfviewer(":none", "sample-pca.btfmat --bogus");
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(result.output.find("btfviewer: "), std::string::npos) << result.output;
+    EXPECT_NE(result.output.find("--bogus"), std::string::npos) << result.output;
+
+    result = runBtfviewer(":none", "");
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(result.output.find("btfviewer: no input files (btfviewer --help)"), std::string::npos)
+        << result.output;
+
+    result = runBtfviewer(":none", "spheres.osgt --material 5");
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(result.output.find("btfviewer: --material 5: there are 2 materials (0 = own)"),
+              std::string::npos)
+        << result.output;
+
+    result = runBtfviewer(":none", "'vase.osgt.(nosuch.btfmat).btfmaterial'");
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(result.output.find("nosuch.btfmat: no such file"), std::string::npos)
+        << result.output;
+
+    result = runBtfviewer(":none", "--help");
+    EXPECT_EQ(result.exitCode, 0) << result.output;
+    for (const char* documented :
+         {"--capture FILE", "--frames N", "--material N", "Shift + drag", "GL_ARB_timer_query"})
+        EXPECT_NE(result.output.find(documented), std::string::npos) << documented;
+}
+
+RgbImage readCapture(const std::string& path) {
+    osg::ref_ptr<osg::Image> image = osgDB::readRefImageFile(path);
+    return image.valid() ? fromOsgImage(*image) : RgbImage();
+}
+
+TEST(Btfviewer, CapturesAnExampleScene) {
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    TempDir out;
+    const CommandResult result = runBtfviewer(
+        xvfb.display(), "cloth.osgt --window 0 0 320 240 --frames 3 --stats --capture " +
+                            shellQuote(out.file("cloth.png")));
+    ASSERT_EQ(result.exitCode, 0) << result.output;
+    const RgbImage image = readCapture(out.file("cloth.png"));
+    keepScreenshot(image, "btfviewer-cloth");
+    ASSERT_EQ(image.width, 320);
+    ASSERT_EQ(image.height, 240);
+    const ScreenStats stats = analyse(image);
+    EXPECT_TRUE(notBlank(stats)) << describe(stats);
+    EXPECT_TRUE(materialColoured(stats)) << describe(stats);
+}
+
+/** Pixels whose colours differ by more than a small amount (sum over RGB > 12). */
+std::size_t differingPixels(const RgbImage& a, const RgbImage& b) {
+    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size()) / 3;
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < a.rgb.size(); i += 3) {
+        int difference = 0;
+        for (int c = 0; c < 3; ++c) difference += std::abs(a.rgb[i + c] - b.rgb[i + c]);
+        if (difference > 12) ++differing;
+    }
+    return differing;
+}
+
+TEST(Btfviewer, MaterialFilesGoOnSpheresAndTheMaterialKeysSwitchThem) {
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    TempDir out;
+    // Material 1 (lambert) on both spheres, then 2 (pca), then 1 again: the repeat shows how
+    // much two identical runs differ (nothing: the view and lights are fixed), so the
+    // difference between 1 and 2 is the switch.
+    std::vector<RgbImage> images;
+    for (int material : {1, 2, 1}) {
+        const std::string file = out.file("m" + std::to_string(images.size()) + ".png");
+        const CommandResult result = runBtfviewer(
+            xvfb.display(), "sample-lambert.btfmat sample-pca.btfmat --no-hud --material " +
+                                std::to_string(material) +
+                                " --window 0 0 320 240 --frames 2 --capture " + shellQuote(file));
+        ASSERT_EQ(result.exitCode, 0) << result.output;
+        EXPECT_NE(result.output.find("2 object(s) with a BTF material, 2 material(s)"),
+                  std::string::npos)
+            << result.output;
+        images.push_back(readCapture(file));
+        keepScreenshot(images.back(), "btfviewer-material-" + std::to_string(material));
+        const ScreenStats stats = analyse(images.back());
+        EXPECT_TRUE(notBlank(stats)) << describe(stats);
+        EXPECT_TRUE(materialColoured(stats)) << describe(stats);
+    }
+    const std::size_t pixels = images[0].rgb.size() / 3;
+    EXPECT_LE(differingPixels(images[0], images[2]), pixels / 2000) << "runs are not repeatable";
+    EXPECT_GT(differingPixels(images[0], images[1]), pixels / 200)
+        << "material 1 and 2 look the same";
+}
+
+}  // namespace
