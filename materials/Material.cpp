@@ -81,6 +81,11 @@ void Material::evaluateMeasured(std::size_t texel, float* abrdf) const {
     }
 }
 
+void Material::throwMethodMismatch(const Material& other) const {
+    throw Error("cannot assign a " + other.methodName() + " material to a " + methodName() +
+                " material");
+}
+
 osg::StateSet* Material::sharedStateSet() const {
     // One lock for all materials: this runs once per material, the lock only guards the check.
     static std::mutex mutex;

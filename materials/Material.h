@@ -86,6 +86,11 @@ public:
      *  call from several cull threads. */
     osg::StateSet* sharedStateSet() const;
 
+    /** Makes this material a copy of `other`, which must be of the same method (else throws
+     *  Error "cannot assign a X material to a Y material"). What the osgDB serializers need to
+     *  fill an object in place: osg::Object forbids operator=. */
+    virtual void assignFrom(const Material& other) = 0;
+
     /** Free-form facts from fitting (time, iterations, error), saved as parameters "fit.*". */
     std::map<std::string, std::string> fitInfo;
 
@@ -99,11 +104,27 @@ protected:
     void readCommon(const FittedMaterial& file);
     /** A FittedMaterial with method, directions, size and fit info filled in. */
     FittedMaterial writeCommon() const;
+    /** assignFrom's shared part: checks the method, copies size, directions, fit info and source
+     *  file, drops the cached StateSet; returns `other` as the caller's class. */
+    template <typename T>
+    const T& assignCommon(const Material& other) {
+        const T* same = dynamic_cast<const T*>(&other);
+        if (!same) throwMethodMismatch(other);
+        _width = other._width;
+        _height = other._height;
+        _views = other._views;
+        _lights = other._lights;
+        fitInfo = other.fitInfo;
+        sourceFile = other.sourceFile;
+        _sharedStateSet = nullptr;
+        return *same;
+    }
 
     int _width = 0, _height = 0;
     DirectionSet _views, _lights;
 
 private:
+    [[noreturn]] void throwMethodMismatch(const Material& other) const;
     mutable osg::ref_ptr<osg::StateSet> _sharedStateSet;
 };
 

@@ -9,8 +9,10 @@
 //   EmbeddedMaterial  only for a material that has no file (fitted in memory): its whole
 //                     FittedMaterial (method, parameters, direction sets, textures with their
 //                     float bits as hex text, so .osgt is exact too).
-// Materials themselves are not stand-alone serializable objects: a scene refers to them through
-// the MaterialNode, by file or embedded.
+// Every material class (osgBTF::LambertMaterial, LafMaterial, SlafMaterial, RfMaterial,
+// PcaMaterial, LpcaMaterial, LpcaRevisedMaterial; associates osg::Object osgBTF::<class>):
+//   FittedData        the same whole FittedMaterial, so osgDB::writeObjectFile / readObjectFile
+//                     round-trip a material on its own (.osgt exact).
 #include <cstdint>
 #include <cstring>
 #include <sstream>
@@ -21,6 +23,13 @@
 #include <osgDB/Registry>
 
 #include "core/Error.h"
+#include "materials/laf/Laf.h"
+#include "materials/lambert/Lambert.h"
+#include "materials/lpca-revised/LpcaRevised.h"
+#include "materials/lpca/Lpca.h"
+#include "materials/pca/Pca.h"
+#include "materials/rf/Rf.h"
+#include "materials/slaf/Slaf.h"
 #include "scene/MaterialNode.h"
 
 namespace {
@@ -76,8 +85,9 @@ bool checkEmbeddedMaterial(const osgBTF::MaterialNode& node) {
     return node.getMaterial() && node.getMaterialFile().empty();
 }
 
-bool readEmbeddedMaterial(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
-    osgBTF::FittedMaterial fitted;
+/** Reads what writeFitted wrote. Returns false on a stream error; throws Error for data that
+ *  read but make no material. */
+bool readFitted(osgDB::InputStream& is, osgBTF::FittedMaterial& fitted) {
     fitted.source = "material embedded in the scene";
     is.readWrappedString(fitted.method);
     unsigned count = 0;
@@ -107,10 +117,16 @@ bool readEmbeddedMaterial(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
     }
     is >> is.END_BRACKET;
     if (is.getException()) return false;
+    if (!ok) osgBTF::fail(fitted.source, "texture data is damaged");
+    fitted.views = osgBTF::DirectionSet::deserialize(views);
+    fitted.lights = osgBTF::DirectionSet::deserialize(lights);
+    return true;
+}
+
+bool readEmbeddedMaterial(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
     try {
-        if (!ok) osgBTF::fail(fitted.source, "texture data is damaged");
-        fitted.views = osgBTF::DirectionSet::deserialize(views);
-        fitted.lights = osgBTF::DirectionSet::deserialize(lights);
+        osgBTF::FittedMaterial fitted;
+        if (!readFitted(is, fitted)) return false;
         node.setMaterial(osgBTF::materialFromFile(fitted).get());
     } catch (const std::exception& e) {
         OSG_WARN << "osgBTF::MaterialNode: " << e.what()
@@ -119,8 +135,8 @@ bool readEmbeddedMaterial(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
     return true;
 }
 
-bool writeEmbeddedMaterial(osgDB::OutputStream& os, const osgBTF::MaterialNode& node) {
-    const osgBTF::FittedMaterial fitted = node.getMaterial()->toFittedMaterial();
+/** A whole FittedMaterial (method, parameters, direction sets, textures as hex float bits). */
+bool writeFitted(osgDB::OutputStream& os, const osgBTF::FittedMaterial& fitted) {
     os.writeWrappedString(fitted.method);
     os << std::endl;
     os << unsigned(fitted.parameters.size()) << os.BEGIN_BRACKET << std::endl;
@@ -146,6 +162,34 @@ bool writeEmbeddedMaterial(osgDB::OutputStream& os, const osgBTF::MaterialNode& 
     return true;
 }
 
+bool writeEmbeddedMaterial(osgDB::OutputStream& os, const osgBTF::MaterialNode& node) {
+    return writeFitted(os, node.getMaterial()->toFittedMaterial());
+}
+
+// Every material class: one property, FittedData, the material's whole FittedMaterial. Reading
+// rebuilds it through the method registry and copies it into the object OSG created.
+template <typename M>
+bool checkFittedData(const M& material) {
+    return material.texelCount() > 0;
+}
+
+template <typename M>
+bool readFittedData(osgDB::InputStream& is, M& material) {
+    try {
+        osgBTF::FittedMaterial fitted;
+        if (!readFitted(is, fitted)) return false;
+        material.assignFrom(*osgBTF::materialFromFile(fitted));
+    } catch (const std::exception& e) {
+        OSG_WARN << "osgBTF::" << material.className() << ": " << e.what() << std::endl;
+    }
+    return true;
+}
+
+template <typename M>
+bool writeFittedData(osgDB::OutputStream& os, const M& material) {
+    return writeFitted(os, material.toFittedMaterial());
+}
+
 }  // namespace
 
 REGISTER_OBJECT_WRAPPER(osgBTF_MaterialNode, new osgBTF::MaterialNode, osgBTF::MaterialNode,
@@ -154,3 +198,20 @@ REGISTER_OBJECT_WRAPPER(osgBTF_MaterialNode, new osgBTF::MaterialNode, osgBTF::M
     ADD_USER_SERIALIZER(EmbeddedMaterial);
     ADD_FLOAT_SERIALIZER(TextureScale, 1.0f);
 }
+
+// REGISTER_OBJECT_WRAPPER declares a file-scope typedef MyClass: one namespace per wrapper.
+#define OSGBTF_MATERIAL_WRAPPER(CLASS)                                            \
+    namespace wrapper_##CLASS {                                                   \
+        REGISTER_OBJECT_WRAPPER(osgBTF_##CLASS, new osgBTF::CLASS, osgBTF::CLASS, \
+                                "osg::Object osgBTF::" #CLASS) {                  \
+            ADD_USER_SERIALIZER(FittedData);                                      \
+        }                                                                         \
+    }
+
+OSGBTF_MATERIAL_WRAPPER(LambertMaterial)
+OSGBTF_MATERIAL_WRAPPER(LafMaterial)
+OSGBTF_MATERIAL_WRAPPER(SlafMaterial)
+OSGBTF_MATERIAL_WRAPPER(RfMaterial)
+OSGBTF_MATERIAL_WRAPPER(PcaMaterial)
+OSGBTF_MATERIAL_WRAPPER(LpcaMaterial)
+OSGBTF_MATERIAL_WRAPPER(LpcaRevisedMaterial)

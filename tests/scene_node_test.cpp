@@ -243,6 +243,64 @@ TEST_P(SceneSerializer, MaterialWithoutFileIsEmbeddedExactly) {
 
 INSTANTIATE_TEST_SUITE_P(SceneFormats, SceneSerializer, ::testing::Values("osgt", "osgb"));
 
+TEST(SceneMaterialSerializer, AssigningAnotherMethodIsRefusedByName) {
+    osg::ref_ptr<LambertMaterial> lambert = sampleMaterial();
+    osg::ref_ptr<Material> pca = findMethod("pca").fit(makeSampleBtf([] {
+                                                           SampleOptions o;
+                                                           o.width = o.height = 4;
+                                                           return o;
+                                                       }()),
+                                                       FitOptions::parse("components=2"));
+    EXPECT_EQ(test::errorOf([&] { lambert->assignFrom(*pca); }),
+              "cannot assign a pca material to a lambert material");
+    EXPECT_EQ(lambert->methodName(), "lambert");
+}
+
+// Every method's material as a stand-alone object through osgDB (its own object wrapper): the
+// object read back is of the same class and evaluates exactly like the original.
+class MaterialObjectSerializer
+    : public ::testing::TestWithParam<
+          std::tuple<std::tuple<const char*, const char*>, const char*>> {};
+
+TEST_P(MaterialObjectSerializer, RoundTripsExactly) {
+    const auto [method, options] = std::get<0>(GetParam());
+    const char* format = std::get<1>(GetParam());
+    SampleOptions sample;
+    sample.width = 5;
+    sample.height = 4;
+    osg::ref_ptr<Material> material =
+        findMethod(method).fit(makeSampleBtf(sample), FitOptions::parse(options));
+    TempDir dir;
+    const std::string file = dir.file(std::string("material.") + format);
+    ASSERT_TRUE(osgDB::writeObjectFile(*material, file));
+    osg::ref_ptr<osg::Object> read = osgDB::readRefObjectFile(file);
+    ASSERT_NE(read, nullptr);
+    EXPECT_STREQ(read->className(), material->className());
+    auto* readMaterial = dynamic_cast<Material*>(read.get());
+    ASSERT_NE(readMaterial, nullptr);
+    expectSameMaterial(*material, *readMaterial);
+    const FittedMaterial a = material->toFittedMaterial(), b = readMaterial->toFittedMaterial();
+    ASSERT_EQ(a.textures.size(), b.textures.size());
+    for (std::size_t i = 0; i < a.textures.size(); ++i)
+        EXPECT_EQ(a.textures[i].data, b.textures[i].data) << a.textures[i].name;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EveryMethod, MaterialObjectSerializer,
+    ::testing::Combine(::testing::Values(std::make_tuple("lambert", ""), std::make_tuple("laf", ""),
+                                         std::make_tuple("slaf", ""), std::make_tuple("rf", ""),
+                                         std::make_tuple("pca", "components=2"),
+                                         std::make_tuple("lpca", "clusters=2 components=2"),
+                                         std::make_tuple("lpca-revised",
+                                                         "clusters=2 components=2 resolution=4")),
+                       ::testing::Values("osgt", "osgb")),
+    [](const auto& info) {
+        std::string name =
+            std::get<0>(std::get<0>(info.param)) + std::string("_") + std::get<1>(info.param);
+        std::replace(name.begin(), name.end(), '-', '_');
+        return name;
+    });
+
 TEST(SceneMaterialNode, NodesNamingOneFileShareOneMaterialAndStateSet) {
     TempDir dir;
     saveMaterial(*sampleMaterial(), dir.file("shared.btfmat"));

@@ -26,6 +26,15 @@ LafMaterial::LafMaterial(const LafMaterial& other, const osg::CopyOp& copyop)
       _lobes(other._lobes),
       _cosine(other._cosine) {}
 
+void LafMaterial::assignFrom(const Material& other) {
+    const LafMaterial& o = assignCommon<LafMaterial>(other);
+    rhoD = o.rhoD;
+    rhoS = o.rhoS;
+    lobes = o.lobes;
+    _lobes = o._lobes;
+    _cosine = o._cosine;
+}
+
 osg::ref_ptr<LafMaterial> LafMaterial::create(int width, int height, int lobeCount,
                                               const DirectionSet& views,
                                               const DirectionSet& lights) {

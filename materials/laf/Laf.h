@@ -27,6 +27,8 @@ class LafMaterial : public Material {
 public:
     LafMaterial() = default;
     LafMaterial(const LafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    /** Copies `other` (same method) into this material; see Material::assignFrom. */
+    void assignFrom(const Material& other) override;
     META_Object(osgBTF, LafMaterial)
 
         /** Options: lobes (1..8, default 2), iterations (LM iterations per texel, 1..500, default

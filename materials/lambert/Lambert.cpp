@@ -10,6 +10,11 @@ namespace osgBTF {
 LambertMaterial::LambertMaterial(const LambertMaterial& other, const osg::CopyOp& copyop)
     : Material(other, copyop), albedo(other.albedo) {}
 
+void LambertMaterial::assignFrom(const Material& other) {
+    const LambertMaterial& o = assignCommon<LambertMaterial>(other);
+    albedo = o.albedo;
+}
+
 osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const MeasuredBtf& btf, const FitOptions&) {
     osg::ref_ptr<LambertMaterial> m = new LambertMaterial;
     m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());

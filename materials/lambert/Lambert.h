@@ -18,6 +18,8 @@ public:
     LambertMaterial() = default;
     LambertMaterial(const LambertMaterial& other,
                     const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    /** Copies `other` (same method) into this material; see Material::assignFrom. */
+    void assignFrom(const Material& other) override;
     META_Object(osgBTF, LambertMaterial)
 
         static osg::ref_ptr<LambertMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);

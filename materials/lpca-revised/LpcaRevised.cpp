@@ -35,6 +35,19 @@ LpcaRevisedMaterial::LpcaRevisedMaterial(const LpcaRevisedMaterial& other,
       _viewParams(other._viewParams),
       _lightParams(other._lightParams) {}
 
+void LpcaRevisedMaterial::assignFrom(const Material& other) {
+    const LpcaRevisedMaterial& o = assignCommon<LpcaRevisedMaterial>(other);
+    clusterOf = o.clusterOf;
+    weights = o.weights;
+    grid = o.grid;
+    _clusters = o._clusters;
+    _components = o._components;
+    _resolution = o._resolution;
+    _eightBit = o._eightBit;
+    _viewParams = o._viewParams;
+    _lightParams = o._lightParams;
+}
+
 // ---- fit: LPCA, then resampling ----------------------------------------------------------------
 
 osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fit(const MeasuredBtf& btf,

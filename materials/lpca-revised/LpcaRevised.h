@@ -37,6 +37,8 @@ public:
     LpcaRevisedMaterial() = default;
     LpcaRevisedMaterial(const LpcaRevisedMaterial& other,
                         const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    /** Copies `other` (same method) into this material; see Material::assignFrom. */
+    void assignFrom(const Material& other) override;
     META_Object(osgBTF, LpcaRevisedMaterial)
 
         /** Fits LPCA (options clusters, components, iterations, training, seed as "lpca") and

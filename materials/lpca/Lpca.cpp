@@ -23,6 +23,17 @@ LpcaMaterial::LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop)
       _viewTable(other._viewTable),
       _lightTable(other._lightTable) {}
 
+void LpcaMaterial::assignFrom(const Material& other) {
+    const LpcaMaterial& o = assignCommon<LpcaMaterial>(other);
+    clusterOf = o.clusterOf;
+    weights = o.weights;
+    eigenBrdfs = o.eigenBrdfs;
+    _clusters = o._clusters;
+    _components = o._components;
+    _viewTable = o._viewTable;
+    _lightTable = o._lightTable;
+}
+
 osg::ref_ptr<LpcaMaterial> LpcaMaterial::ofShape(int width, int height, const DirectionSet& views,
                                                  const DirectionSet& lights, int clusters,
                                                  int components) {

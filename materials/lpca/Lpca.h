@@ -41,6 +41,8 @@ class LpcaMaterial : public Material {
 public:
     LpcaMaterial() = default;
     LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    /** Copies `other` (same method) into this material; see Material::assignFrom. */
+    void assignFrom(const Material& other) override;
     META_Object(osgBTF, LpcaMaterial)
 
         /** Fits the model (LpcaFit.cpp). Options: see LpcaSettings. Fills fitInfo with "seconds",

@@ -101,6 +101,16 @@ PcaMaterial::PcaMaterial(const PcaMaterial& other, const osg::CopyOp& copyop)
       _viewTable(other._viewTable),
       _lightTable(other._lightTable) {}
 
+void PcaMaterial::assignFrom(const Material& other) {
+    const PcaMaterial& o = assignCommon<PcaMaterial>(other);
+    eigenTextures = o.eigenTextures;
+    weights = o.weights;
+    _components = o._components;
+    _tileColumns = o._tileColumns;
+    _viewTable = o._viewTable;
+    _lightTable = o._lightTable;
+}
+
 void PcaMaterial::setShape(int width, int height, const DirectionSet& views,
                            const DirectionSet& lights, int components,
                            MaterialTexture::PixelKind storage) {

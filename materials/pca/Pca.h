@@ -36,6 +36,8 @@ class PcaMaterial : public Material {
 public:
     PcaMaterial() = default;
     PcaMaterial(const PcaMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    /** Copies `other` (same method) into this material; see Material::assignFrom. */
+    void assignFrom(const Material& other) override;
     META_Object(osgBTF, PcaMaterial)
 
         /** Options: components (default 16), storage (unorm8 | half | float, default unorm8).

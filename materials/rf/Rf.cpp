@@ -84,6 +84,16 @@ RfMaterial::RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop)
       _viewTable(other._viewTable),
       _lightVectors(other._lightVectors) {}
 
+void RfMaterial::assignFrom(const Material& other) {
+    const RfMaterial& o = assignCommon<RfMaterial>(other);
+    rhoD = o.rhoD;
+    rhoV = o.rhoV;
+    lobes = o.lobes;
+    _lobes = o._lobes;
+    _viewTable = o._viewTable;
+    _lightVectors = o._lightVectors;
+}
+
 void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
                           int lobeCount) {
     if (width <= 0 || height <= 0)

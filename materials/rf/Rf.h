@@ -54,6 +54,8 @@ public:
 
     RfMaterial() = default;
     RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    /** Copies `other` (same method) into this material; see Material::assignFrom. */
+    void assignFrom(const Material& other) override;
     META_Object(osgBTF, RfMaterial)
 
         /** Reads and validates "lobes", "iterations", "starts", "max-exponent"; throws Error for an

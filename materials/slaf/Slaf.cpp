@@ -26,6 +26,17 @@ SlafMaterial::SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop)
       _cosine(other._cosine),
       _viewTable(other._viewTable) {}
 
+void SlafMaterial::assignFrom(const Material& other) {
+    const SlafMaterial& o = assignCommon<SlafMaterial>(other);
+    rhoD = o.rhoD;
+    rhoS = o.rhoS;
+    lobes = o.lobes;
+    scale = o.scale;
+    _lobes = o._lobes;
+    _cosine = o._cosine;
+    _viewTable = o._viewTable;
+}
+
 osg::ref_ptr<SlafMaterial> SlafMaterial::create(int width, int height, int lobeCount,
                                                 const DirectionSet& views,
                                                 const DirectionSet& lights) {

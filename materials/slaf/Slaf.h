@@ -24,6 +24,8 @@ class SlafMaterial : public Material {
 public:
     SlafMaterial() = default;
     SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    /** Copies `other` (same method) into this material; see Material::assignFrom. */
+    void assignFrom(const Material& other) override;
     META_Object(osgBTF, SlafMaterial)
 
         /** Options: lobes (1..8, default 2), iterations (LM iterations per texel and round, 1..500,
