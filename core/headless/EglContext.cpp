@@ -23,19 +23,24 @@ namespace {
 
 std::string eglErrorText(EGLint code) {
     static const char* const names[] = {
-        "EGL_SUCCESS",        "EGL_NOT_INITIALIZED", "EGL_BAD_ACCESS",        "EGL_BAD_ALLOC",
-        "EGL_BAD_ATTRIBUTE",  "EGL_BAD_CONFIG",      "EGL_BAD_CONTEXT",       "EGL_BAD_CURRENT_SURFACE",
-        "EGL_BAD_DISPLAY",    "EGL_BAD_MATCH",       "EGL_BAD_NATIVE_PIXMAP", "EGL_BAD_NATIVE_WINDOW",
-        "EGL_BAD_PARAMETER",  "EGL_BAD_SURFACE",     "EGL_CONTEXT_LOST"};
+        "EGL_SUCCESS",       "EGL_NOT_INITIALIZED",     "EGL_BAD_ACCESS",
+        "EGL_BAD_ALLOC",     "EGL_BAD_ATTRIBUTE",       "EGL_BAD_CONFIG",
+        "EGL_BAD_CONTEXT",   "EGL_BAD_CURRENT_SURFACE", "EGL_BAD_DISPLAY",
+        "EGL_BAD_MATCH",     "EGL_BAD_NATIVE_PIXMAP",   "EGL_BAD_NATIVE_WINDOW",
+        "EGL_BAD_PARAMETER", "EGL_BAD_SURFACE",         "EGL_CONTEXT_LOST"};
     char hex[16];
     std::snprintf(hex, sizeof hex, "0x%04X", static_cast<unsigned>(code));
     std::string text = std::string("EGL error ") + hex;
-    if (code >= EGL_SUCCESS && code <= EGL_CONTEXT_LOST) text += std::string(" ") + names[code - EGL_SUCCESS];
+    if (code >= EGL_SUCCESS && code <= EGL_CONTEXT_LOST)
+        text += std::string(" ") + names[code - EGL_SUCCESS];
     return text;
 }
 
-/** "step failed (EGL error 0x3001 EGL_NOT_INITIALIZED)", with the error eglGetError() reports now. */
-std::string failed(const std::string& step) { return step + " failed (" + eglErrorText(eglGetError()) + ")"; }
+/** "step failed (EGL error 0x3001 EGL_NOT_INITIALIZED)", with the error eglGetError() reports now.
+ */
+std::string failed(const std::string& step) {
+    return step + " failed (" + eglErrorText(eglGetError()) + ")";
+}
 
 bool hasExtension(const char* list, const char* name) {
     if (!list) return false;
@@ -84,15 +89,30 @@ public:
         if (!acquireDisplay(display)) return failed("eglInitialize");
         _display = display;
         if (!eglBindAPI(EGL_OPENGL_API)) return failed("eglBindAPI(EGL_OPENGL_API)");
-        const EGLint configAttribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
-                                        EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8, EGL_BLUE_SIZE, 8,
-                                        EGL_ALPHA_SIZE, 8, EGL_DEPTH_SIZE, 24, EGL_STENCIL_SIZE, 8,
+        const EGLint configAttribs[] = {EGL_SURFACE_TYPE,
+                                        EGL_PBUFFER_BIT,
+                                        EGL_RENDERABLE_TYPE,
+                                        EGL_OPENGL_BIT,
+                                        EGL_RED_SIZE,
+                                        8,
+                                        EGL_GREEN_SIZE,
+                                        8,
+                                        EGL_BLUE_SIZE,
+                                        8,
+                                        EGL_ALPHA_SIZE,
+                                        8,
+                                        EGL_DEPTH_SIZE,
+                                        24,
+                                        EGL_STENCIL_SIZE,
+                                        8,
                                         EGL_NONE};
         EGLConfig config = nullptr;
         EGLint numConfigs = 0;
-        if (!eglChooseConfig(display, configAttribs, &config, 1, &numConfigs)) return failed("eglChooseConfig");
+        if (!eglChooseConfig(display, configAttribs, &config, 1, &numConfigs))
+            return failed("eglChooseConfig");
         if (numConfigs < 1)
-            return "eglChooseConfig found no pbuffer config with OpenGL, RGBA8, depth 24 and stencil 8 (" +
+            return "eglChooseConfig found no pbuffer config with OpenGL, RGBA8, depth 24 and "
+                   "stencil 8 (" +
                    eglErrorText(eglGetError()) + ")";
         const EGLint surfaceAttribs[] = {EGL_WIDTH, width, EGL_HEIGHT, height, EGL_NONE};
         _surface = eglCreatePbufferSurface(display, config, surfaceAttribs);
@@ -100,7 +120,8 @@ public:
         const EGLint contextAttribs[] = {EGL_CONTEXT_OPENGL_PROFILE_MASK,
                                          EGL_CONTEXT_OPENGL_COMPATIBILITY_PROFILE_BIT, EGL_NONE};
         _context = eglCreateContext(display, config, EGL_NO_CONTEXT, contextAttribs);
-        if (_context == EGL_NO_CONTEXT) return failed("eglCreateContext (OpenGL compatibility profile)");
+        if (_context == EGL_NO_CONTEXT)
+            return failed("eglCreateContext (OpenGL compatibility profile)");
         return {};
     }
 
@@ -153,11 +174,13 @@ private:
 osg::ref_ptr<HeadlessContext> createEglContext(int width, int height) {
     const std::string what = "EGL headless context: ";
     const char* clientExtensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-    if (!clientExtensions) throw Error(what + failed("eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS)"));
-    const std::string clientList = *clientExtensions
-                                       ? std::string(clientExtensions)
-                                       : "none: glvnd found no EGL vendor library; install libegl-mesa0 or a GPU "
-                                         "driver's EGL, or check __EGL_VENDOR_LIBRARY_FILENAMES";
+    if (!clientExtensions)
+        throw Error(what + failed("eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS)"));
+    const std::string clientList =
+        *clientExtensions
+            ? std::string(clientExtensions)
+            : "none: glvnd found no EGL vendor library; install libegl-mesa0 or a GPU "
+              "driver's EGL, or check __EGL_VENDOR_LIBRARY_FILENAMES";
     if (!hasExtension(clientExtensions, "EGL_EXT_device_enumeration") &&
         !hasExtension(clientExtensions, "EGL_EXT_device_base"))
         throw Error(what + "EGL lacks EGL_EXT_device_enumeration (" + eglErrorText(eglGetError()) +
@@ -166,22 +189,26 @@ osg::ref_ptr<HeadlessContext> createEglContext(int width, int height) {
         throw Error(what + "EGL lacks EGL_EXT_platform_device (" + eglErrorText(eglGetError()) +
                     "; client extensions: " + clientList + ")");
 
-    auto queryDevices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-    auto queryDeviceString =
-        reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
-    auto getPlatformDisplay =
-        reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
+    auto queryDevices =
+        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    auto queryDeviceString = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
+        eglGetProcAddress("eglQueryDeviceStringEXT"));
+    auto getPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+        eglGetProcAddress("eglGetPlatformDisplayEXT"));
     if (!queryDevices || !queryDeviceString || !getPlatformDisplay)
-        throw Error(what + "eglGetProcAddress found no eglQueryDevicesEXT, eglQueryDeviceStringEXT or "
-                           "eglGetPlatformDisplayEXT");
+        throw Error(what +
+                    "eglGetProcAddress found no eglQueryDevicesEXT, eglQueryDeviceStringEXT or "
+                    "eglGetPlatformDisplayEXT");
 
     EGLint numDevices = 0;
     if (!queryDevices(0, nullptr, &numDevices)) throw Error(what + failed("eglQueryDevicesEXT"));
     if (numDevices <= 0)
-        throw Error(what + "eglQueryDevicesEXT found no EGL device (" + eglErrorText(eglGetError()) +
-                    "); install libegl-mesa0 for Mesa's software device or a GPU driver's EGL vendor");
+        throw Error(
+            what + "eglQueryDevicesEXT found no EGL device (" + eglErrorText(eglGetError()) +
+            "); install libegl-mesa0 for Mesa's software device or a GPU driver's EGL vendor");
     std::vector<EGLDeviceEXT> devices(static_cast<size_t>(numDevices));
-    if (!queryDevices(numDevices, devices.data(), &numDevices)) throw Error(what + failed("eglQueryDevicesEXT"));
+    if (!queryDevices(numDevices, devices.data(), &numDevices))
+        throw Error(what + failed("eglQueryDevicesEXT"));
     devices.resize(static_cast<size_t>(numDevices));
 
     // Order of preference: GPU devices in EGL's order, then Mesa's software device.
@@ -201,8 +228,10 @@ osg::ref_ptr<HeadlessContext> createEglContext(int width, int height) {
     std::string failures;
     for (int i : order) {
         const bool isSoftware = std::find(software.begin(), software.end(), i) != software.end();
-        const std::string device = "device " + std::to_string(i) + (isSoftware ? " (software)" : " (GPU)");
-        EGLDisplay display = getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[static_cast<size_t>(i)], nullptr);
+        const std::string device =
+            "device " + std::to_string(i) + (isSoftware ? " (software)" : " (GPU)");
+        EGLDisplay display =
+            getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[static_cast<size_t>(i)], nullptr);
         std::string problem;
         osg::ref_ptr<EglContext> context;
         if (display == EGL_NO_DISPLAY) {

@@ -25,7 +25,9 @@ Registry& registry() {
     return r;
 }
 
-int index(HeadlessBackend backend) { return backend == HeadlessBackend::Egl ? 0 : 1; }
+int index(HeadlessBackend backend) {
+    return backend == HeadlessBackend::Egl ? 0 : 1;
+}
 
 std::string glString(GLenum name) {
     const GLubyte* s = glGetString(name);
@@ -63,10 +65,11 @@ bool isHeadlessBackendAvailable(HeadlessBackend backend) {
     return r.factories[index(backend)] != nullptr;
 }
 
-osg::ref_ptr<HeadlessContext> createHeadlessContext(HeadlessBackend backend, int width, int height) {
+osg::ref_ptr<HeadlessContext> createHeadlessContext(HeadlessBackend backend, int width,
+                                                    int height) {
     if (width <= 0 || height <= 0)
-        throw Error("headless context: size " + std::to_string(width) + "x" + std::to_string(height) +
-                    " is not positive");
+        throw Error("headless context: size " + std::to_string(width) + "x" +
+                    std::to_string(height) + " is not positive");
     HeadlessContextFactory factory;
     {
         Registry& r = registry();
@@ -75,11 +78,14 @@ osg::ref_ptr<HeadlessContext> createHeadlessContext(HeadlessBackend backend, int
     }
     if (!factory) {
         if (backend == HeadlessBackend::OSMesa)
-            throw Error("the OSMesa back end is not linked into this program; use OSGBTF_HEADLESS=egl");
-        throw Error(std::string("the ") + toString(backend) + " headless back end is not registered");
+            throw Error(
+                "the OSMesa back end is not linked into this program; use OSGBTF_HEADLESS=egl");
+        throw Error(std::string("the ") + toString(backend) +
+                    " headless back end is not registered");
     }
     osg::ref_ptr<HeadlessContext> context = factory(width, height);
-    if (!context) throw Error(std::string("the ") + toString(backend) + " back end returned no context");
+    if (!context)
+        throw Error(std::string("the ") + toString(backend) + " back end returned no context");
     return context;
 }
 
@@ -87,7 +93,8 @@ osg::ref_ptr<HeadlessContext> createHeadlessContext(int width, int height) {
     return createHeadlessContext(headlessBackendFromEnvironment(), width, height);
 }
 
-HeadlessContext::HeadlessContext(HeadlessBackend backend, int width, int height) : _backend(backend) {
+HeadlessContext::HeadlessContext(HeadlessBackend backend, int width, int height)
+    : _backend(backend) {
     osg::ref_ptr<Traits> traits = new Traits;
     traits->x = 0;
     traits->y = 0;
@@ -123,8 +130,10 @@ void HeadlessContext::queryGLStrings() {
     const std::string vendor = glString(GL_VENDOR);
     releaseContext();
     if (_glVersion.empty())
-        throw Error(what + ": glGetString(GL_VERSION) returned nothing; the GL calls do not reach the "
-                    "context (with OSMesa, libOSMesa must come before libGL/libOpenGL on the link line)");
+        throw Error(
+            what +
+            ": glGetString(GL_VERSION) returned nothing; the GL calls do not reach the "
+            "context (with OSMesa, libOSMesa must come before libGL/libOpenGL on the link line)");
     OSG_INFO << "osgBTF: " << what << ": GL_RENDERER=\"" << _glRenderer << "\" GL_VERSION=\""
              << _glVersion << "\" GLSL=\"" << _glslVersion << "\" GL_VENDOR=\"" << vendor << "\""
              << std::endl;

@@ -41,9 +41,14 @@ public:
     bool isSoftwareRenderer() const;
 
     // osg::GraphicsContext: a headless context has nothing to realize and no texture binding.
-    bool realizeImplementation() override { _realized = true; return true; }
+    bool realizeImplementation() override {
+        _realized = true;
+        return true;
+    }
     bool isRealizedImplementation() const override { return _realized; }
-    bool makeContextCurrentImplementation(osg::GraphicsContext*) override { return makeCurrentImplementation(); }
+    bool makeContextCurrentImplementation(osg::GraphicsContext*) override {
+        return makeCurrentImplementation();
+    }
     void bindPBufferToTextureImplementation(GLenum) override {}
 
 protected:

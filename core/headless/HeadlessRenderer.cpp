@@ -43,8 +43,9 @@ CameraSetup orthoUnitSquare(int width, int height) {
 }
 
 osg::ref_ptr<osg::Geometry> createFullScreenQuadGeometry() {
-    osg::ref_ptr<osg::Geometry> quad = osg::createTexturedQuadGeometry(
-        osg::Vec3(0.f, 0.f, 0.f), osg::Vec3(1.f, 0.f, 0.f), osg::Vec3(0.f, 1.f, 0.f), 0.f, 0.f, 1.f, 1.f);
+    osg::ref_ptr<osg::Geometry> quad =
+        osg::createTexturedQuadGeometry(osg::Vec3(0.f, 0.f, 0.f), osg::Vec3(1.f, 0.f, 0.f),
+                                        osg::Vec3(0.f, 1.f, 0.f), 0.f, 0.f, 1.f, 1.f);
     quad->setUseDisplayList(false);
     quad->setUseVertexBufferObjects(true);
     return quad;
@@ -112,16 +113,20 @@ void EndFrame::operator()(osg::RenderInfo& info) const {
 
 }  // namespace
 
-HeadlessRenderer::HeadlessRenderer(osg::ref_ptr<HeadlessContext> context) : _context(std::move(context)) {
+HeadlessRenderer::HeadlessRenderer(osg::ref_ptr<HeadlessContext> context)
+    : _context(std::move(context)) {
     if (!_context) throw Error("HeadlessRenderer: no context");
     init();
 }
 
-HeadlessRenderer::HeadlessRenderer(HeadlessBackend backend) : _context(createHeadlessContext(backend, 64, 64)) {
+HeadlessRenderer::HeadlessRenderer(HeadlessBackend backend)
+    : _context(createHeadlessContext(backend, 64, 64)) {
     init();
 }
 
-HeadlessRenderer::HeadlessRenderer() : _context(createHeadlessContext(64, 64)) { init(); }
+HeadlessRenderer::HeadlessRenderer() : _context(createHeadlessContext(64, 64)) {
+    init();
+}
 
 HeadlessRenderer::~HeadlessRenderer() {
     // The viewer closes the context it draws with; then the context is released.
@@ -150,14 +155,18 @@ void HeadlessRenderer::init() {
     _viewer->setSceneData(_root.get());
 }
 
-osg::Camera& HeadlessRenderer::camera() { return *_viewer->getCamera(); }
+osg::Camera& HeadlessRenderer::camera() {
+    return *_viewer->getCamera();
+}
 
 void HeadlessRenderer::setScene(osg::Node* scene) {
     _root->removeChildren(0, _root->getNumChildren());
     if (scene) _root->addChild(scene);
 }
 
-void HeadlessRenderer::setClearColor(const osg::Vec4& colour) { _viewer->getCamera()->setClearColor(colour); }
+void HeadlessRenderer::setClearColor(const osg::Vec4& colour) {
+    _viewer->getCamera()->setClearColor(colour);
+}
 
 void HeadlessRenderer::setCamera(const CameraSetup& setup) {
     if (setup.width <= 0 || setup.height <= 0)
@@ -186,7 +195,8 @@ void HeadlessRenderer::frame() {
     if (!_image) throw Error("HeadlessRenderer: no camera set (call setCamera first)");
     if (!_viewer->isRealized()) {
         _viewer->realize();
-        if (!_viewer->isRealized()) throw Error("HeadlessRenderer: osgViewer could not realize the context");
+        if (!_viewer->isRealized())
+            throw Error("HeadlessRenderer: osgViewer could not realize the context");
     }
     _viewer->frame();
 }
@@ -215,7 +225,8 @@ PassTiming HeadlessRenderer::timePasses(int frames, GpuTimer gpu) {
         frame();
         const auto wall1 = std::chrono::steady_clock::now();
         const double cpu1 = processCpuMs();
-        timing.wallMsPerFrame.push_back(std::chrono::duration<double, std::milli>(wall1 - wall0).count());
+        timing.wallMsPerFrame.push_back(
+            std::chrono::duration<double, std::milli>(wall1 - wall0).count());
         timing.cpuMsPerFrame.push_back(cpu1 - cpu0);
         if (useGpu && _timer->gpuMs >= 0) timing.gpuMsPerFrame.push_back(_timer->gpuMs);
     }

@@ -23,8 +23,15 @@ public:
           _width(width),
           _height(height),
           _buffer(static_cast<size_t>(width) * static_cast<size_t>(height) * 4u) {
-        const int attribs[] = {OSMESA_FORMAT,       OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_STENCIL_BITS, 8,
-                               OSMESA_PROFILE,      OSMESA_COMPAT_PROFILE, 0};
+        const int attribs[] = {OSMESA_FORMAT,
+                               OSMESA_RGBA,
+                               OSMESA_DEPTH_BITS,
+                               24,
+                               OSMESA_STENCIL_BITS,
+                               8,
+                               OSMESA_PROFILE,
+                               OSMESA_COMPAT_PROFILE,
+                               0};
         _context = OSMesaCreateContextAttribs(attribs, nullptr);
     }
 
@@ -71,23 +78,24 @@ private:
      *  glvnd's dispatch current. Redirect every non-null pointer to OSMesa's own entry point. */
     void fixExtensionPointers() {
         _extensionsFixed = true;
-        getState()->initializeExtensionProcs();  // idempotent; GraphicsContext::makeCurrent calls it too
+        getState()
+            ->initializeExtensionProcs();  // idempotent; GraphicsContext::makeCurrent calls it too
         osg::GLExtensions* ext = getState()->get<osg::GLExtensions>();
         if (!ext) {
             OSG_WARN << "osgBTF: OSMesa context has no osg::GLExtensions to fix" << std::endl;
             return;
         }
         int changed = 0, total = 0;
-#define OSGBTF_GLEXT(name)                                                                   \
-    if (ext->name) {                                                                         \
-        ++total;                                                                             \
-        if (OSMESAproc proc = OSMesaGetProcAddress(#name)) {                                 \
-            auto fixed = reinterpret_cast<decltype(ext->name)>(proc);                        \
-            if (fixed != ext->name) {                                                        \
-                ext->name = fixed;                                                           \
-                ++changed;                                                                   \
-            }                                                                                \
-        }                                                                                    \
+#define OSGBTF_GLEXT(name)                                            \
+    if (ext->name) {                                                  \
+        ++total;                                                      \
+        if (OSMESAproc proc = OSMesaGetProcAddress(#name)) {          \
+            auto fixed = reinterpret_cast<decltype(ext->name)>(proc); \
+            if (fixed != ext->name) {                                 \
+                ext->name = fixed;                                    \
+                ++changed;                                            \
+            }                                                         \
+        }                                                             \
     }
 #include "core/headless/OSMesaExtensionNames.inc"
 #undef OSGBTF_GLEXT
@@ -115,8 +123,9 @@ void registerOSMesaBackend() {
 osg::ref_ptr<HeadlessContext> createOSMesaContext(int width, int height) {
     osg::ref_ptr<OSMesaContextImpl> context = new OSMesaContextImpl(width, height);
     if (!context->valid())
-        throw Error("OSMesa headless context: OSMesaCreateContextAttribs (RGBA, depth 24, stencil 8, "
-                    "compatibility profile) failed");
+        throw Error(
+            "OSMesa headless context: OSMesaCreateContextAttribs (RGBA, depth 24, stencil 8, "
+            "compatibility profile) failed");
     context->finishCreation();
     return context;
 }

@@ -42,13 +42,16 @@ HeadlessRenderer& sharedRenderer() {
     if (!slot) {
         slot = std::make_unique<HeadlessRenderer>(glTestBackend());
         // Written to stderr: a sanitizer that fails the process discards buffered stdout.
-        std::cerr << "[gl] backend=" << toString(slot->backend()) << " GL_RENDERER=\"" << slot->glRenderer()
-                  << "\" GL_VERSION=\"" << slot->glVersion() << "\"" << std::endl;
+        std::cerr << "[gl] backend=" << toString(slot->backend()) << " GL_RENDERER=\""
+                  << slot->glRenderer() << "\" GL_VERSION=\"" << slot->glVersion() << "\""
+                  << std::endl;
     }
     return *slot;
 }
 
-bool isLlvmpipe() { return sharedRenderer().glRenderer().find("llvmpipe") != std::string::npos; }
+bool isLlvmpipe() {
+    return sharedRenderer().glRenderer().find("llvmpipe") != std::string::npos;
+}
 
 const char* const kQuadVertexShader = R"(#version 330 compatibility
 out vec2 uv;
@@ -58,7 +61,8 @@ void main() {
 }
 )";
 
-osg::ref_ptr<osg::StateSet> programStateSet(const std::string& vertex, const std::string& fragment) {
+osg::ref_ptr<osg::StateSet> programStateSet(const std::string& vertex,
+                                            const std::string& fragment) {
     osg::ref_ptr<osg::Program> program = new osg::Program;
     if (!vertex.empty()) program->addShader(new osg::Shader(osg::Shader::VERTEX, vertex));
     program->addShader(new osg::Shader(osg::Shader::FRAGMENT, fragment));
@@ -71,7 +75,8 @@ osg::ref_ptr<osg::Texture2D> floatTexture2D(int width, int height, const std::ve
     osg::ref_ptr<osg::Image> image = new osg::Image;
     image->allocateImage(width, height, 1, GL_RGBA, GL_FLOAT);
     image->setInternalTextureFormat(GL_RGBA32F_ARB);  // headless.md pitfall 2
-    std::memcpy(image->data(), rgba.data(), sizeof(float) * 4 * static_cast<size_t>(width * height));
+    std::memcpy(image->data(), rgba.data(),
+                sizeof(float) * 4 * static_cast<size_t>(width * height));
     osg::ref_ptr<osg::Texture2D> texture = new osg::Texture2D(image.get());
     texture->setInternalFormat(GL_RGBA32F_ARB);
     texture->setSourceFormat(GL_RGBA);
@@ -86,7 +91,8 @@ osg::ref_ptr<osg::Texture2D> floatTexture2D(int width, int height, const std::ve
 
 float pixel(const osg::Image& image, int x, int y, int channel) {
     const float* data = reinterpret_cast<const float*>(image.data());
-    return data[4 * (static_cast<size_t>(y) * static_cast<size_t>(image.s()) + static_cast<size_t>(x)) +
+    return data[4 * (static_cast<size_t>(y) * static_cast<size_t>(image.s()) +
+                     static_cast<size_t>(x)) +
                 static_cast<size_t>(channel)];
 }
 

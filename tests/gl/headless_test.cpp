@@ -56,15 +56,18 @@ std::string errorMessage(const std::function<void()>& f) {
 
 /** A W x H RGBA32F pattern with values far outside [0, 1]. */
 std::vector<float> extremeValues(int width, int height) {
-    const float specials[] = {-1000.f, 2.5f, 1e6f, -1e-3f, 65504.5f, -3.25e7f, 1e-30f, 0.f, 1.f, -0.f, 12345.678f};
+    const float specials[] = {-1000.f, 2.5f, 1e6f, -1e-3f, 65504.5f,  -3.25e7f,
+                              1e-30f,  0.f,  1.f,  -0.f,   12345.678f};
     std::vector<float> v(4 * static_cast<size_t>(width * height));
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> any(-2000.f, 2000.f);
-    for (size_t i = 0; i < v.size(); ++i) v[i] = i < std::size(specials) * 3 ? specials[i % std::size(specials)] : any(rng);
+    for (size_t i = 0; i < v.size(); ++i)
+        v[i] = i < std::size(specials) * 3 ? specials[i % std::size(specials)] : any(rng);
     return v;
 }
 
-void expectImageEquals(const osg::Image& image, const std::vector<float>& expected, int width, int height) {
+void expectImageEquals(const osg::Image& image, const std::vector<float>& expected, int width,
+                       int height) {
     ASSERT_EQ(image.s(), width);
     ASSERT_EQ(image.t(), height);
     ASSERT_EQ(image.getPixelFormat(), static_cast<GLenum>(GL_RGBA));
@@ -73,12 +76,13 @@ void expectImageEquals(const osg::Image& image, const std::vector<float>& expect
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x)
             for (int c = 0; c < 4; ++c) {
-                const float want = expected[4 * static_cast<size_t>(y * width + x) + static_cast<size_t>(c)];
+                const float want =
+                    expected[4 * static_cast<size_t>(y * width + x) + static_cast<size_t>(c)];
                 const float got = pixel(image, x, y, c);
                 const double tol = 1e-6 * std::max(1.0, std::fabs(static_cast<double>(want)));
                 if (!(std::fabs(static_cast<double>(got) - want) <= tol) && bad++ < 5)
-                    ADD_FAILURE() << "pixel (" << x << "," << y << ") channel " << c << ": got " << got
-                                  << ", want " << want;
+                    ADD_FAILURE() << "pixel (" << x << "," << y << ") channel " << c << ": got "
+                                  << got << ", want " << want;
             }
     EXPECT_EQ(bad, 0) << "mismatching floats";
 }
@@ -92,7 +96,8 @@ TEST(HeadlessGl, ReportsRendererAndVersion) {
     EXPECT_FALSE(r.glVersion().empty());
     int major = 0, minor = 0;
     ASSERT_EQ(std::sscanf(r.glVersion().c_str(), "%d.%d", &major, &minor), 2) << r.glVersion();
-    EXPECT_GE(major * 10 + minor, 33) << "need OpenGL 3.3 for #version 330 compatibility: " << r.glVersion();
+    EXPECT_GE(major * 10 + minor, 33)
+        << "need OpenGL 3.3 for #version 330 compatibility: " << r.glVersion();
     ::testing::Test::RecordProperty("GL_RENDERER", r.glRenderer());
     ::testing::Test::RecordProperty("GL_VERSION", r.glVersion());
 }
@@ -110,11 +115,13 @@ void main() { gl_FragColor = texelFetch(tex, ivec2(gl_FragCoord.xy), 0); }
 )");
     fetch->setTextureAttributeAndModes(0, texture.get());
     fetch->addUniform(new osg::Uniform("tex", 0));
-    osg::ref_ptr<osg::Image> image = sharedRenderer().render(createFullScreenQuad(fetch.get()), orthoUnitSquare(w, h));
+    osg::ref_ptr<osg::Image> image =
+        sharedRenderer().render(createFullScreenQuad(fetch.get()), orthoUnitSquare(w, h));
     SCOPED_TRACE("texelFetch");
     expectImageEquals(*image, values, w, h);
 
-    osg::ref_ptr<osg::StateSet> sample = programStateSet(kQuadVertexShader, R"(#version 330 compatibility
+    osg::ref_ptr<osg::StateSet> sample =
+        programStateSet(kQuadVertexShader, R"(#version 330 compatibility
 uniform sampler2D tex;
 in vec2 uv;
 void main() { gl_FragColor = texture(tex, uv); }
@@ -148,8 +155,9 @@ double trilinear(const std::vector<float>& v, int nx, int ny, int nz, double s, 
     for (int k = 0; k < 2; ++k)
         for (int j = 0; j < 2; ++j)
             for (int i = 0; i < 2; ++i) {
-                const double value = v[(static_cast<size_t>(z[k]) * ny + static_cast<size_t>(y[j])) * nx +
-                                       static_cast<size_t>(x[i])];
+                const double value =
+                    v[(static_cast<size_t>(z[k]) * ny + static_cast<size_t>(y[j])) * nx +
+                      static_cast<size_t>(x[i])];
                 const double weight = (i ? a : 1 - a) * (j ? b : 1 - b) * (k ? c : 1 - c);
                 sum += weight * value;
                 lo = std::min(lo, value);
@@ -207,7 +215,8 @@ void main() {
     ss->setTextureAttributeAndModes(1, coordTexture.get());
     ss->addUniform(new osg::Uniform("volume", 0));
     ss->addUniform(new osg::Uniform("coords", 1));
-    osg::ref_ptr<osg::Image> image = sharedRenderer().render(createFullScreenQuad(ss.get()), orthoUnitSquare(w, h));
+    osg::ref_ptr<osg::Image> image =
+        sharedRenderer().render(createFullScreenQuad(ss.get()), orthoUnitSquare(w, h));
     ASSERT_EQ(image->s(), w);
     ASSERT_EQ(image->t(), h);
 
@@ -219,15 +228,18 @@ void main() {
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t i = 4 * static_cast<size_t>(y * w + x);
-            ASSERT_EQ(pixel(*image, x, y, 1), coords[i]) << "coordinate did not survive at " << x << "," << y;
+            ASSERT_EQ(pixel(*image, x, y, 1), coords[i])
+                << "coordinate did not survive at " << x << "," << y;
             double range = 0;
-            const double want = trilinear(volume, nx, ny, nz, coords[i], coords[i + 1], coords[i + 2], &range);
+            const double want =
+                trilinear(volume, nx, ny, nz, coords[i], coords[i + 1], coords[i + 2], &range);
             const double got = pixel(*image, x, y, 0);
             const double tol = llvmpipe ? 1e-5 : 1e-5 + range * (2.0 / 256.0);
             maxError = std::max(maxError, std::fabs(got - want));
             if (!(std::fabs(got - want) <= tol) && bad++ < 5)
-                ADD_FAILURE() << "at (" << coords[i] << ", " << coords[i + 1] << ", " << coords[i + 2]
-                              << "): GPU " << got << ", CPU " << want << ", tolerance " << tol;
+                ADD_FAILURE() << "at (" << coords[i] << ", " << coords[i + 1] << ", "
+                              << coords[i + 2] << "): GPU " << got << ", CPU " << want
+                              << ", tolerance " << tol;
         }
     EXPECT_EQ(bad, 0);
     std::cerr << "[gl] Texture3D trilinear: max |GPU - CPU| = " << maxError << " over " << w * h
@@ -249,7 +261,8 @@ void main() { gl_FragColor = colour; }
     constant->addUniform(new osg::Uniform("colour", osg::Vec4(1.5f, -2.f, 1e5f, 0.25f)));
     osg::ref_ptr<osg::Node> sceneA = createFullScreenQuad(constant.get());
 
-    osg::ref_ptr<osg::StateSet> coordinates = programStateSet(kQuadVertexShader, R"(#version 330 compatibility
+    osg::ref_ptr<osg::StateSet> coordinates =
+        programStateSet(kQuadVertexShader, R"(#version 330 compatibility
 in vec2 uv;
 void main() { gl_FragColor = vec4(gl_FragCoord.xy, uv * 100.0); }
 )");
@@ -300,7 +313,8 @@ uniform double d;
 void main() { gl_FragColor = vec4(float(d), float(d * 2.0), 0.0, 1.0); }
 )");
     ss->addUniform(new osg::Uniform("d", 300000.25));
-    osg::ref_ptr<osg::Image> image = sharedRenderer().render(createFullScreenQuad(ss.get()), orthoUnitSquare(4, 4));
+    osg::ref_ptr<osg::Image> image =
+        sharedRenderer().render(createFullScreenQuad(ss.get()), orthoUnitSquare(4, 4));
     EXPECT_EQ(pixel(*image, 1, 2, 0), 300000.25f);
     EXPECT_EQ(pixel(*image, 1, 2, 1), 600000.5f);
 }
@@ -324,8 +338,9 @@ void main() { gl_FragColor = vec4(gl_FragCoord.xy, 0.0, 1.0); }
     EXPECT_GT(timing.gpuMs, 0.0);
     const PassTiming automatic = r.timePasses(3);
     EXPECT_EQ(automatic.gpuMsPerFrame.empty(), r.isSoftwareRenderer());
-    std::cerr << "[gl] 512x512 trivial pass, median of 10: wall " << timing.wallMs << " ms, CPU " << timing.cpuMs
-              << " ms, GL_TIME_ELAPSED " << timing.gpuMs << " ms (" << r.glRenderer() << ")" << std::endl;
+    std::cerr << "[gl] 512x512 trivial pass, median of 10: wall " << timing.wallMs << " ms, CPU "
+              << timing.cpuMs << " ms, GL_TIME_ELAPSED " << timing.gpuMs << " ms ("
+              << r.glRenderer() << ")" << std::endl;
     ::testing::Test::RecordProperty("wall_ms", std::to_string(timing.wallMs));
     ::testing::Test::RecordProperty("cpu_ms", std::to_string(timing.cpuMs));
     osg::ref_ptr<osg::Image> image = r.render();
@@ -338,7 +353,8 @@ void main() { gl_FragColor = vec4(gl_FragCoord.xy, 0.0, 1.0); }
 TEST(HeadlessGl, SecondContextComesAndGoes) {
     HeadlessRenderer& shared = sharedRenderer();
     {
-        ScopedEnv env("OSGBTF_EGL_SOFTWARE", "1");  // Mesa's software device (EGL); ignored by OSMesa
+        ScopedEnv env("OSGBTF_EGL_SOFTWARE",
+                      "1");  // Mesa's software device (EGL); ignored by OSMesa
         osg::ref_ptr<HeadlessContext> second = createHeadlessContext(glTestBackend(), 32, 32);
         ASSERT_TRUE(second.valid());
         EXPECT_TRUE(second->valid());
@@ -348,14 +364,16 @@ TEST(HeadlessGl, SecondContextComesAndGoes) {
         osg::ref_ptr<osg::StateSet> ss = programStateSet("", R"(#version 330 compatibility
 void main() { gl_FragColor = vec4(7.0, -7.0, 0.5, 1e4); }
 )");
-        osg::ref_ptr<osg::Image> image = renderer.render(createFullScreenQuad(ss.get()), orthoUnitSquare(9, 9));
+        osg::ref_ptr<osg::Image> image =
+            renderer.render(createFullScreenQuad(ss.get()), orthoUnitSquare(9, 9));
         EXPECT_EQ(pixel(*image, 4, 4, 0), 7.f);
         EXPECT_EQ(pixel(*image, 4, 4, 3), 1e4f);
     }
     osg::ref_ptr<osg::StateSet> ss = programStateSet("", R"(#version 330 compatibility
 void main() { gl_FragColor = vec4(-3.5, 3.5, 0.0, 2.0); }
 )");
-    osg::ref_ptr<osg::Image> image = shared.render(createFullScreenQuad(ss.get()), orthoUnitSquare(5, 5));
+    osg::ref_ptr<osg::Image> image =
+        shared.render(createFullScreenQuad(ss.get()), orthoUnitSquare(5, 5));
     EXPECT_EQ(pixel(*image, 2, 2, 0), -3.5f);
     EXPECT_EQ(pixel(*image, 2, 2, 3), 2.f);
 }
@@ -389,9 +407,13 @@ TEST(HeadlessGl, BackendNamesInEnvironment) {
 #ifndef OSGBTF_GL_TEST_OSMESA
 TEST(HeadlessGl, OSMesaNotLinkedIsAClearError) {
     EXPECT_FALSE(isHeadlessBackendAvailable(HeadlessBackend::OSMesa));
-    const std::string message = errorMessage([] { createHeadlessContext(HeadlessBackend::OSMesa, 16, 16); });
-    EXPECT_EQ(message, "the OSMesa back end is not linked into this program; use OSGBTF_HEADLESS=egl");
+    const std::string message =
+        errorMessage([] { createHeadlessContext(HeadlessBackend::OSMesa, 16, 16); });
+    EXPECT_EQ(message,
+              "the OSMesa back end is not linked into this program; use OSGBTF_HEADLESS=egl");
 }
 #else
-TEST(HeadlessGl, OSMesaIsRegistered) { EXPECT_TRUE(isHeadlessBackendAvailable(HeadlessBackend::OSMesa)); }
+TEST(HeadlessGl, OSMesaIsRegistered) {
+    EXPECT_TRUE(isHeadlessBackendAvailable(HeadlessBackend::OSMesa));
+}
 #endif

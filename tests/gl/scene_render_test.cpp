@@ -65,7 +65,6 @@ void usePluginsFromBuild() {
     (void)done;
 }
 
-
 osg::ref_ptr<PcaMaterial> fitSample() {
     SampleOptions sample;
     sample.width = 8;
