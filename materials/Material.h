@@ -99,6 +99,7 @@ public:
     std::string sourceFile;
 
 protected:
+    ~Material() override = default;  // reference counted, like every osg::Object
     void setGeometry(int width, int height, DirectionSet views, DirectionSet lights);
     /** Copies width/height/directions/fit info from a file, checking the method name. */
     void readCommon(const FittedMaterial& file);

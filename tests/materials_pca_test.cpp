@@ -111,7 +111,8 @@ TEST(Pca, InvalidOptionsAreRefusedWithClearMessages) {
 }
 
 TEST(Pca, ShapeBeyondGpuTextureLimitsIsRefused) {
-    PcaMaterial m;
+    osg::ref_ptr<PcaMaterial> material = new PcaMaterial;  // reference counted: never on the stack
+    PcaMaterial& m = *material;
     EXPECT_THROW(m.setShape(20000, 4, DirectionSet::bonn81(), DirectionSet::bonn81(), 4,
                             MaterialTexture::Float),
                  Error);
@@ -235,7 +236,8 @@ TEST(Pca, FileWithMismatchedTexturesIsRefused) {
 
 TEST(Pca, MemoryMatchesSeed001Table2) {
     // The standard configuration: Bonn 81 x 81, 256 x 256 texels, 16 components, 8-bit storage.
-    PcaMaterial m;
+    osg::ref_ptr<PcaMaterial> material = new PcaMaterial;  // reference counted: never on the stack
+    PcaMaterial& m = *material;
     m.setShape(256, 256, DirectionSet::bonn81(), DirectionSet::bonn81(), 16,
                MaterialTexture::UNorm8);
     const PcaMaterial::MemoryBreakdown b = m.memoryBreakdown();

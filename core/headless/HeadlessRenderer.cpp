@@ -67,6 +67,9 @@ struct FrameTimer : osg::Referenced {
     bool gpuRunning = false;
     GLuint query = 0;
     double gpuMs = -1;  // result of the last timed frame, -1 if none
+
+protected:
+    ~FrameTimer() override = default;
 };
 }  // namespace detail
 
@@ -76,12 +79,18 @@ struct BeginFrame : osg::Camera::DrawCallback {
     explicit BeginFrame(detail::FrameTimer* s) : state(s) {}
     void operator()(osg::RenderInfo& info) const override;
     osg::observer_ptr<detail::FrameTimer> state;
+
+protected:
+    ~BeginFrame() override = default;
 };
 
 struct EndFrame : osg::Camera::DrawCallback {
     explicit EndFrame(detail::FrameTimer* s) : state(s) {}
     void operator()(osg::RenderInfo& info) const override;
     osg::observer_ptr<detail::FrameTimer> state;
+
+protected:
+    ~EndFrame() override = default;
 };
 
 void BeginFrame::operator()(osg::RenderInfo& info) const {

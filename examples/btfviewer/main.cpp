@@ -162,6 +162,9 @@ public:
              << "   stats [s]  help [h]";
         hud->setText(text.str());
     }
+
+protected:
+    ~ViewerState() override = default;
 };
 
 class ControlHandler : public osgGA::GUIEventHandler {
@@ -210,6 +213,9 @@ public:
         usage.addKeyboardMouseBinding("l", "The scene's own lights on/off");
     }
 
+protected:
+    ~ControlHandler() override = default;
+
 private:
     bool handleKey(int key) {
         using GEA = osgGA::GUIEventAdapter;
@@ -256,6 +262,9 @@ public:
     }
     std::atomic<bool> armed{false};
     osg::ref_ptr<osg::Image> image;
+
+protected:
+    ~CaptureSwapCallback() override = default;
 };
 
 /** Runs once with the new window's context current: notes the renderer and whether OSG's
@@ -275,6 +284,9 @@ public:
                             : "no (no GL_ARB_timer_query: the GPU row stays empty)")
                   << std::endl;
     }
+
+protected:
+    ~GlInfoOperation() override = default;
 };
 
 /** The HUD: status lines at the bottom left, over the scene, never lit or depth-tested. */

@@ -56,6 +56,9 @@ public:
     /** [lobe][y][x][Cx, Cy, Cz, n], half-representable values. */
     std::vector<float> lobes;
 
+protected:
+    ~LafMaterial() override = default;
+
 private:
     int _lobes = 0;
     bool _cosine = true;

@@ -33,6 +33,9 @@ public:
 
     /** RGB per texel, rows bottom-up. */
     std::vector<float> albedo;
+
+protected:
+    ~LambertMaterial() override = default;
 };
 
 }  // namespace osgBTF

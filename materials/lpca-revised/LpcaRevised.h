@@ -74,6 +74,9 @@ public:
     /** The 3D texture, [z][y][x][rgb]; half values, or multiples of 1/255 for unorm8. */
     std::vector<float> grid;
 
+protected:
+    ~LpcaRevisedMaterial() override = default;
+
 private:
     void finishSetup();
     /** Hardware-style trilinear filtering of the grid at texel-unit coordinates. */

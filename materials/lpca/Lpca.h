@@ -82,6 +82,9 @@ public:
     /** Call after changing the arrays' shape by hand: checks sizes, rebuilds direction tables. */
     void finishSetup(int clusters, int components);
 
+protected:
+    ~LpcaMaterial() override = default;
+
 private:
     friend struct LpcaFitter;
     int _clusters = 0, _components = 0;

@@ -88,6 +88,9 @@ public:
     /** Float RGB weights: (components + 1) x lights per view layer; slot `components` = bias. */
     MaterialTexture weights;
 
+protected:
+    ~PcaMaterial() override = default;
+
 private:
     void bakeDirectionTables();
 

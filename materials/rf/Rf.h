@@ -94,6 +94,9 @@ public:
     /** Lobes: [view * lobeCount() + lobe][y][x][a, b, c, n]. */
     std::vector<float> lobes;
 
+protected:
+    ~RfMaterial() override = default;
+
 private:
     /** Sizes the arrays and builds the view interpolation table. */
     void setShape(int width, int height, DirectionSet views, DirectionSet lights, int lobes);

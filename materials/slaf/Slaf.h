@@ -55,6 +55,9 @@ public:
     /** [view][y][x][rgb], half-representable values >= 0. */
     std::vector<float> scale;
 
+protected:
+    ~SlafMaterial() override = default;
+
 private:
     /** Bakes the view interpolation table; called once the views are known. */
     void prepare();
