@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <osg/State>
 #include <osg/Uniform>
 
 #include "core/Error.h"
@@ -70,7 +71,31 @@ void configure(osg::Texture& texture, const MaterialTexture& t, bool linear) {
     texture.setWrap(osg::Texture::WRAP_R, osg::Texture::CLAMP_TO_EDGE);
 }
 
+class ReuploadingTexture2DArray : public osg::Texture2DArray {
+public:
+    void releaseGLObjects(osg::State* state) const override {
+        osg::Texture2DArray::releaseGLObjects(state);
+        // One less than the image's count never matches it, now or after later dirty() calls.
+        for (std::size_t layer = 0; layer < _modifiedCount.size(); ++layer) {
+            const osg::Image* image = layer < _images.size() ? _images[layer].get() : nullptr;
+            if (!image) continue;
+            const unsigned stale = image->getModifiedCount() - 1u;
+            if (state)
+                _modifiedCount[layer][state->getContextID()] = stale;
+            else
+                _modifiedCount[layer].setAllElementsTo(stale);
+        }
+    }
+
+protected:
+    ~ReuploadingTexture2DArray() override = default;
+};
+
 }  // namespace
+
+osg::ref_ptr<osg::Texture2DArray> newTexture2DArray() {
+    return new ReuploadingTexture2DArray;
+}
 
 osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t) {
     if (t.data.size() != t.valueCount())
@@ -81,7 +106,7 @@ osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t) {
         texture->setName(t.name);
         return texture;
     }
-    osg::ref_ptr<osg::Texture2DArray> array = new osg::Texture2DArray;
+    osg::ref_ptr<osg::Texture2DArray> array = newTexture2DArray();
     array->setTextureSize(t.width, t.height, t.depth);
     for (int z = 0; z < t.depth; ++z) array->setImage(z, sliceImage(t, z, 1));
     configure(*array, t, false);

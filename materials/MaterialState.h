@@ -23,6 +23,13 @@ constexpr int kDirectionTableResolution = 65;
 osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& texture);
 osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& texture, bool linear);
 
+/** An empty osg::Texture2DArray that uploads its layers again into a texture object created after
+ *  a release. OSG 3.6.5's Texture2DArray keeps each context's "layer uploaded" counts when its
+ *  texture object is released, so the object it creates next for that context ID (a context
+ *  opened after another closed gets the freed ID) is allocated but never filled. Every material
+ *  array texture is made with this. */
+osg::ref_ptr<osg::Texture2DArray> newTexture2DArray();
+
 /** Two textures for a direction set's baked interpolation (indices, weights), bound to
  *  uniforms "<prefix>Indices" and "<prefix>Weights" on the given units. */
 void addDirectionTable(osg::StateSet& stateSet, const DirectionInterpolator::Baked& baked,

@@ -12,6 +12,8 @@
 #include <osg/View>
 #include <osgDB/FileUtils>
 #include <osgUtil/CullVisitor>
+#include <osgUtil/GLObjectsVisitor>
+#include <osgUtil/IncrementalCompileOperation>
 #include <osgUtil/TangentSpaceGenerator>
 
 #include "core/Error.h"
@@ -346,9 +348,12 @@ std::vector<EyeLight> MaterialNode::collectLights(osgUtil::CullVisitor& cv) {
 
 osg::StateSet* MaterialNode::lightStateSet(osgUtil::CullVisitor& cv) {
     const osg::FrameStamp* stamp = cv.getFrameStamp();
+    osg::Camera* camera = cv.getCurrentCamera();
     std::lock_guard<std::mutex> lock(_lightsMutex);
-    CameraLights& entry = _lightsPerCamera[cv.getCurrentCamera()];
+    pruneCameraLights();
+    CameraLights& entry = _lightsPerCamera[camera];
     if (!entry.stateSet) {
+        entry.camera = camera;
         entry.stateSet = new osg::StateSet;
         entry.stateSet->setDataVariance(osg::Object::DYNAMIC);
         entry.count = new osg::Uniform("osgBTF_lightCount", 0);
@@ -378,6 +383,18 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
     osgUtil::CullVisitor* cv =
         nv.getVisitorType() == osg::NodeVisitor::CULL_VISITOR ? nv.asCullVisitor() : nullptr;
     if (!cv || !_material) {
+        // OSG's compile passes see only the StateSets of nodes and drawables; the material's are
+        // pushed at cull, outside the graph, so they are shown here or never compiled ahead.
+        osg::StateSet* material = cv ? nullptr : materialStateSet();
+        if (material) {
+            if (auto* compile = dynamic_cast<osgUtil::GLObjectsVisitor*>(&nv)) {
+                compile->apply(*material);
+                compile->apply(*_nodeStateSet);
+            } else if (auto* collect = dynamic_cast<osgUtil::StateToCompile*>(&nv)) {
+                collect->apply(*material);
+                collect->apply(*_nodeStateSet);
+            }
+        }
         osg::Group::traverse(nv);
         return;
     }
@@ -388,6 +405,46 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
     cv->popStateSet();
     cv->popStateSet();
     cv->popStateSet();
+}
+
+osg::StateSet* MaterialNode::materialStateSet() const {
+    if (!_material) return nullptr;
+    try {
+        return _material->sharedStateSet();
+    } catch (const std::exception&) {
+        return nullptr;  // reported by setMaterial; GL passes must not throw
+    }
+}
+
+void MaterialNode::pruneCameraLights() const {
+    for (auto it = _lightsPerCamera.begin(); it != _lightsPerCamera.end();)
+        // A null key (a cull without a camera) has nothing to observe: kept, as its StateSet
+        // may still be in a render graph.
+        it = !it->first || it->second.camera.valid() ? std::next(it) : _lightsPerCamera.erase(it);
+}
+
+std::size_t MaterialNode::getNumCameraLightStates() const {
+    std::lock_guard<std::mutex> lock(_lightsMutex);
+    return _lightsPerCamera.size();
+}
+
+void MaterialNode::resizeGLObjectBuffers(unsigned int maxSize) {
+    osg::Group::resizeGLObjectBuffers(maxSize);
+    if (osg::StateSet* material = materialStateSet()) material->resizeGLObjectBuffers(maxSize);
+    _nodeStateSet->resizeGLObjectBuffers(maxSize);
+    std::lock_guard<std::mutex> lock(_lightsMutex);
+    for (auto& [camera, entry] : _lightsPerCamera)
+        if (entry.stateSet) entry.stateSet->resizeGLObjectBuffers(maxSize);
+}
+
+void MaterialNode::releaseGLObjects(osg::State* state) const {
+    osg::Group::releaseGLObjects(state);
+    if (const osg::StateSet* material = materialStateSet()) material->releaseGLObjects(state);
+    _nodeStateSet->releaseGLObjects(state);
+    std::lock_guard<std::mutex> lock(_lightsMutex);
+    pruneCameraLights();
+    for (const auto& [camera, entry] : _lightsPerCamera)
+        if (entry.stateSet) entry.stateSet->releaseGLObjects(state);
 }
 
 }  // namespace osgBTF

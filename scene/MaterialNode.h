@@ -18,15 +18,19 @@
 // draws its children with their own state, so the rest of the scene is unaffected.
 #pragma once
 
+#include <cstddef>
 #include <map>
 #include <mutex>
 #include <string>
+#include <vector>
 
+#include <osg/Camera>
 #include <osg/Group>
 #include <osg/Light>
 #include <osg/Matrixd>
 #include <osg/StateSet>
 #include <osg/Uniform>
+#include <osg/observer_ptr>
 #include <osgDB/Options>
 
 #include "materials/Material.h"
@@ -91,11 +95,34 @@ public:
     bool replaceChild(osg::Node* origChild, osg::Node* newChild) override;
     bool setChild(unsigned int index, osg::Node* node) override;
 
+    /** Cull pushes the material's state; OSG's compile visitors (osgUtil::GLObjectsVisitor as
+     *  osgViewer's first frame runs it, osgUtil::StateToCompile of the incremental compile) get
+     *  the material's and this node's StateSets before the children. */
     void traverse(osg::NodeVisitor& nv) override;
+
+    /** Forwarded, beyond osg::Group's, to every StateSet this node applies that is not in the
+     *  scene graph: the material's shared StateSet (its textures and program), the per-node
+     *  StateSet and the per-camera light StateSets. Lets OSG size their per-context buffers
+     *  (osgViewer does it when contexts are added) and drop their GL objects when a context
+     *  closes (osg::GraphicsContext::close releases every camera's subgraph). Releasing the shared
+     *  StateSet releases it for every node using the material (OSG's rule for any shared
+     *  StateSet); they recompile in that context when drawn again. */
+    void resizeGLObjectBuffers(unsigned int maxSize) override;
+    void releaseGLObjects(osg::State* state = nullptr) const override;
+
+    /** How many cameras' light StateSets this node holds, for tests and diagnostics. An entry
+     *  goes when its camera is deleted: at the next cull of this node by any camera, or at
+     *  releaseGLObjects. */
+    std::size_t getNumCameraLightStates() const;
 
 protected:
     ~MaterialNode() override = default;
     void createNodeState();
+    /** The material's shared StateSet; null without a material or when it cannot be built (the
+     *  failure is reported where the material is set). */
+    osg::StateSet* materialStateSet() const;
+    /** Drops the light state of cameras that no longer exist; _lightsMutex held. */
+    void pruneCameraLights() const;
 
     /** The per-camera light uniforms, refilled once per frame. */
     osg::StateSet* lightStateSet(osgUtil::CullVisitor& cv);
@@ -108,12 +135,15 @@ protected:
     osg::ref_ptr<osg::Uniform> _textureScaleUniform;
 
     struct CameraLights {
+        // Tells when the camera is gone (pruneCameraLights), so a camera allocated later at a
+        // deleted one's address never gets the old entry.
+        osg::observer_ptr<osg::Camera> camera;
         unsigned frameNumber = ~0u;
         osg::ref_ptr<osg::StateSet> stateSet;
         osg::ref_ptr<osg::Uniform> count, positions, colors;
     };
-    std::mutex _lightsMutex;  // cull threads of several cameras may share this node
-    std::map<const void*, CameraLights> _lightsPerCamera;
+    mutable std::mutex _lightsMutex;  // cull threads of several cameras may share this node
+    mutable std::map<const osg::Camera*, CameraLights> _lightsPerCamera;
 };
 
 /** Loads a fitted-material file, sharing the Material with every earlier load of the same file

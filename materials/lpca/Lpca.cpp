@@ -112,7 +112,7 @@ osg::ref_ptr<osg::Texture> createTextureArray(const MaterialTexture& t) {
     if (t.depth > 1) return createFloatTexture(t);
     osg::ref_ptr<osg::Texture> single = createFloatTexture(t);
     osg::Texture2D* texture2D = static_cast<osg::Texture2D*>(single.get());
-    osg::ref_ptr<osg::Texture2DArray> array = new osg::Texture2DArray;
+    osg::ref_ptr<osg::Texture2DArray> array = newTexture2DArray();
     array->setTextureSize(t.width, t.height, 1);
     array->setImage(0, texture2D->getImage());
     array->setInternalFormat(texture2D->getInternalFormat());
