@@ -13,9 +13,9 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "core/Progress.h"
-#include "core/SampleBtf.h"
-#include "core/headless/HeadlessRenderer.h"
 #include "harness/PassCost.h"
+#include "harness/headless/HeadlessRenderer.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 
 namespace {

@@ -12,7 +12,7 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "core/Progress.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lpca/Lpca.h"
 
 namespace {

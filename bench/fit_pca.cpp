@@ -13,7 +13,7 @@
 
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/pca/Pca.h"
 
 namespace {

@@ -16,8 +16,8 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "core/Progress.h"
-#include "core/SampleBtf.h"
-#include "core/headless/HeadlessRenderer.h"
+#include "harness/headless/HeadlessRenderer.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/rf/Rf.h"
 
 int main(int argc, char** argv) {

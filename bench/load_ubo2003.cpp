@@ -16,8 +16,8 @@
 
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
+#include "harness/sample/Ubo2003Writer.h"
 #include "loaders/Ubo2003.h"
-#include "loaders/Ubo2003Writer.h"
 
 namespace {
 

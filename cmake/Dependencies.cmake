@@ -1,9 +1,15 @@
 # Every dependency comes from Debian 12 packages (see .ci/run for the package list).
 find_package(OpenSceneGraph 3.6 REQUIRED COMPONENTS osgDB osgUtil osgGA osgViewer osgText)
+# osgbtf::osg: what libosgBTF's headers and code use (osg, osgDB, osgUtil, OpenThreads); the
+# installed osgBTFConfig.cmake defines the same target. osgbtf::osgviewer adds the rest for the
+# tools, examples and tests.
 add_library(osgbtf::osg INTERFACE IMPORTED)
 set_target_properties(osgbtf::osg PROPERTIES
   INTERFACE_INCLUDE_DIRECTORIES "${OPENSCENEGRAPH_INCLUDE_DIRS}"
-  INTERFACE_LINK_LIBRARIES "${OPENSCENEGRAPH_LIBRARIES}")
+  INTERFACE_LINK_LIBRARIES "${OSGUTIL_LIBRARY};${OSGDB_LIBRARY};${OSG_LIBRARY};${OPENTHREADS_LIBRARY}")
+add_library(osgbtf::osgviewer INTERFACE IMPORTED)
+set_target_properties(osgbtf::osgviewer PROPERTIES
+  INTERFACE_LINK_LIBRARIES "${OPENSCENEGRAPH_LIBRARIES};osgbtf::osg")
 
 set(OpenGL_GL_PREFERENCE GLVND)
 find_package(OpenGL REQUIRED COMPONENTS OpenGL EGL)

@@ -12,10 +12,10 @@
 #include "core/Error.h"
 #include "core/FloatImage.h"
 #include "core/Progress.h"
+#include "harness/MaterialImage.h"
 #include "harness/Pictures.h"
 #include "harness/Report.h"
 #include "loaders/LoadBtf.h"
-#include "materials/MaterialImage.h"
 
 namespace osgBTF {
 

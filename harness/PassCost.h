@@ -8,7 +8,7 @@
 #include <osg/Geode>
 #include <osg/StateSet>
 
-#include "core/headless/HeadlessRenderer.h"
+#include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
 
 namespace osgBTF {

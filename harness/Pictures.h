@@ -9,7 +9,7 @@
 #include <osg/Geometry>
 
 #include "core/FloatImage.h"
-#include "core/headless/HeadlessRenderer.h"
+#include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
 
 namespace osgBTF {

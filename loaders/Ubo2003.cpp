@@ -443,6 +443,20 @@ bool parseUbo2003Name(const std::string& memberPath, Ubo2003Name& name) {
     return true;
 }
 
+bool mayBeUbo2003(const std::string& path) {
+    try {
+        Source source(path);
+        for (const auto& entry : source.names()) {
+            Ubo2003Name parsed;
+            const std::string& name = entry.first;
+            if (parseUbo2003Name(name, parsed) || looksLikeBtfName(basenameOf(name))) return true;
+        }
+        return false;
+    } catch (const Error&) {
+        return true;  // cannot be opened: loadUbo2003 says why
+    }
+}
+
 MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options) {
     Source source(path);
 

@@ -6,7 +6,7 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "core/MeasuredBtf.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 
 using namespace osgBTF;
 

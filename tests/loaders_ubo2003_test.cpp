@@ -14,9 +14,9 @@
 
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
+#include "harness/sample/Ubo2003Writer.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2003.h"
-#include "loaders/Ubo2003Writer.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;

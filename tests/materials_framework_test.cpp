@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "core/Error.h"
-#include "core/SampleBtf.h"
 #include "core/ShaderSource.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/lambert/Lambert.h"
 #include "tests/TestUtil.h"

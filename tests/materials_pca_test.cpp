@@ -10,7 +10,7 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "core/LowRank.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/pca/Pca.h"
 #include "tests/TestUtil.h"

@@ -9,7 +9,7 @@
 
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/rf/Rf.h"
 #include "tests/TestUtil.h"

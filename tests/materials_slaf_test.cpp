@@ -8,7 +8,7 @@
 
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/laf/Laf.h"
 #include "materials/laf/Lobes.h"
 #include "materials/slaf/Slaf.h"

@@ -14,7 +14,7 @@
 #include <osgDB/WriteFile>
 
 #include "core/Error.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
 #include "tests/NotifyCapture.h"

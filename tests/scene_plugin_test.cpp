@@ -14,7 +14,7 @@
 #include <osgDB/Registry>
 #include <osgDB/WriteFile>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
 #include "tests/NotifyCapture.h"

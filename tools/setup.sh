@@ -12,6 +12,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)
   xvfb xauth libglx-mesa0     # X server for the viewer tests and xvfb-run (osgviewer, btfviewer)
+  dpkg-dev file               # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
 )
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi

@@ -16,8 +16,8 @@
 
 #include "core/Error.h"
 #include "core/Progress.h"
-#include "core/SampleBtf.h"
 #include "examples/ExampleScenes.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 
 namespace {

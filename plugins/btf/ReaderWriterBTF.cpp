@@ -14,6 +14,7 @@
 
 #include "core/Error.h"
 #include "loaders/LoadBtf.h"
+#include "loaders/Ubo2003.h"
 #include "materials/Material.h"
 #include "scene/MaterialNode.h"
 
@@ -272,6 +273,8 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
             if (!osgDB::getFileExtension(inner).empty()) path = osgDB::findDataFile(inner, options);
         }
         if (path.empty()) return notFound(file);
+        // A zip that is no BTF (a model archive, say) is some other plugin's: let osgDB go on.
+        if (ext == "zip" && !mayBeUbo2003(path)) return ReadResult::FILE_NOT_HANDLED;
         osg::ref_ptr<Material> material =
             ext == "btfmat" ? loadSharedMaterial(path) : fitMeasured(path, settings);
         osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());

@@ -10,7 +10,7 @@
 #include <memory>
 
 #ifdef OSGBTF_GL_TEST_OSMESA
-#include "core/headless/OSMesaContext.h"
+#include "harness/headless/OSMesaContext.h"
 #endif
 
 namespace osgBTF::test {

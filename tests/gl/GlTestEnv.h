@@ -2,7 +2,7 @@
 // osgBTF_osmesa_tests (OSMesa, compile definition OSGBTF_GL_TEST_OSMESA).
 #pragma once
 
-#include "core/headless/HeadlessRenderer.h"
+#include "harness/headless/HeadlessRenderer.h"
 
 #include <osg/StateSet>
 #include <osg/Texture2D>

@@ -1,7 +1,7 @@
 // LAF and its GPU twin: the fragment shader equals LafMaterial::evaluate.
 #include <gtest/gtest.h>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/laf/Laf.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

@@ -1,7 +1,7 @@
 // The material framework end to end on its simplest method: fit, CPU reference, GPU == CPU.
 #include <gtest/gtest.h>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lpca-revised/LpcaRevised.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

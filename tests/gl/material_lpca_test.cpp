@@ -1,7 +1,7 @@
 // LPCA on the GPU (shaders/lpca.frag) equals LpcaMaterial::evaluate on the CPU.
 #include <gtest/gtest.h>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lpca/Lpca.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

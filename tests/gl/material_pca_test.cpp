@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/pca/Pca.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

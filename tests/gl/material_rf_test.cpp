@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <iostream>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/rf/Rf.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

@@ -2,7 +2,7 @@
 // SlafMaterial::evaluate.
 #include <gtest/gtest.h>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/slaf/Slaf.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

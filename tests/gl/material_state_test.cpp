@@ -3,8 +3,8 @@
 
 #include <gtest/gtest.h>
 
-#include "core/SampleBtf.h"
-#include "materials/MaterialImage.h"
+#include "harness/MaterialImage.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "tests/gl/GlTestEnv.h"
 

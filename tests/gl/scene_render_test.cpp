@@ -24,7 +24,7 @@
 #include <osgViewer/Viewer>
 
 #include "core/Directions.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
 #include "tests/NotifyCapture.h"

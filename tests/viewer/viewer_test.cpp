@@ -437,14 +437,27 @@ TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
         runCommand(std::string(OSGBTF_CMAKE_COMMAND) + " --install " + shellQuote(kBuildDir) +
                    " --prefix " + shellQuote(prefix.path().string()));
     ASSERT_EQ(install.exitCode, 0) << install.output;
-    const fs::path lib = prefix.path() / "lib";
+    const fs::path lib = prefix.path() / OSGBTF_INSTALL_LIBDIR;  // lib, or lib/<multiarch>
     const fs::path plugins = lib / ("osgPlugins-" + std::string(OSGBTF_OSG_VERSION));
+    const fs::path include = prefix.path() / "include" / "osgBTF";
     for (const fs::path& file :
          {lib / "libosgBTF.so", plugins / "osgdb_btfmat.so", plugins / "osgdb_btf.so",
           plugins / "osgdb_zip.so", plugins / "osgdb_btfmaterial.so", plugins / "osgdb_exr.so",
-          prefix.path() / "bin" / "btf", prefix.path() / "bin" / "btfviewer",
-          prefix.path() / "bin" / "btf-examples"})
+          plugins / "osgdb_serializers_osgbtf.so", prefix.path() / "bin" / "btf",
+          prefix.path() / "bin" / "btfviewer", prefix.path() / "bin" / "btf-examples",
+          include / "MaterialNode", include / "scene" / "MaterialNode.h", include / "Version",
+          lib / "cmake" / "osgBTF" / "osgBTFConfig.cmake",
+          lib / "cmake" / "osgBTF" / "osgBTFConfigVersion.cmake",
+          lib / "cmake" / "osgBTF" / "osgBTFTargets.cmake", lib / "pkgconfig" / "osgBTF.pc"})
         EXPECT_TRUE(fs::exists(file)) << file << " was not installed";
+    // The SDK is the runtime only: the harness (static, inside the tools) is not installed.
+    EXPECT_FALSE(fs::exists(include / "harness"));
+    EXPECT_FALSE(fs::exists(lib / "libosgBTFHarness.a"));
+    // Installed headers refer to each other as <osgBTF/...>, never by source-tree paths.
+    const std::string node =
+        osgBTF::test::readTextFile((include / "scene" / "MaterialNode.h").string());
+    EXPECT_NE(node.find("#include <osgBTF/materials/Material.h>"), std::string::npos);
+    EXPECT_EQ(node.find("#include \""), std::string::npos);
     // Nothing else is needed: no shader files lie around (they are embedded).
     EXPECT_FALSE(fs::exists(prefix.path() / "share" / "osgBTF" / "shaders"));
 
@@ -482,6 +495,15 @@ TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
         << scene.output;
     EXPECT_NE(osgBTF::test::readTextFile(prefix.file("spheres.osgt")).find("osgBTF::MaterialNode"),
               std::string::npos);
+
+    // Where OSG cannot find "libosgBTF.so" by name (Debian's OSG does not search
+    // /usr/lib/<multiarch>, where the .deb puts it), osgdb_serializers_osgbtf brings it in.
+    fs::remove(lib / "libosgBTF.so");
+    const CommandResult shim =
+        runCommand(osgconv + "spheres.osgt " + shellQuote(prefix.file("shim.osgt")) + " 2>&1");
+    ASSERT_EQ(shim.exitCode, 0) << shim.output;
+    EXPECT_EQ(shim.output.find("Unsupported wrapper class osgBTF::MaterialNode"), std::string::npos)
+        << shim.output;
 }
 
 // ---- stock osgviewer under Xvfb ----------------------------------------------------------

@@ -5,9 +5,9 @@
 
 #include "core/Error.h"
 #include "core/FloatImage.h"
-#include "core/headless/HeadlessRenderer.h"
+#include "harness/MaterialImage.h"
+#include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
-#include "materials/MaterialImage.h"
 #include "tools/btf/Commands.h"
 
 namespace osgBTF::tool {

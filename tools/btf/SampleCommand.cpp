@@ -5,8 +5,8 @@
 
 #include "core/Error.h"
 #include "core/Progress.h"
-#include "core/SampleBtf.h"
-#include "loaders/Ubo2003Writer.h"
+#include "harness/sample/SampleBtf.h"
+#include "harness/sample/Ubo2003Writer.h"
 #include "tools/btf/Commands.h"
 
 namespace osgBTF::tool {

@@ -1,4 +1,4 @@
-#include "core/headless/HeadlessContext.h"
+#include "harness/headless/HeadlessContext.h"
 
 #include "core/Error.h"
 

@@ -5,7 +5,7 @@
 #include <glm/vec3.hpp>
 
 #include "core/FloatImage.h"
-#include "core/headless/HeadlessRenderer.h"
+#include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
 
 namespace osgBTF {

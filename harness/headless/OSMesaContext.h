@@ -3,7 +3,7 @@
 // OpenGL library on its link line, and must never be run on a GPU (docs/headless.md 2.3).
 #pragma once
 
-#include "core/headless/HeadlessContext.h"
+#include "harness/headless/HeadlessContext.h"
 
 namespace osgBTF {
 

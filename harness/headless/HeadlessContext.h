@@ -2,7 +2,7 @@
 //
 // libosgBTF contains the EGL back end only. OSMesa lives in the static library osgBTF_osmesa,
 // which a program links explicitly (with PkgConfig::OSMesa FIRST on its link line) and enables
-// with registerOSMesaBackend() from core/headless/OSMesaContext.h: a binary that may render on a
+// with registerOSMesaBackend() from harness/headless/OSMesaContext.h: a binary that may render on a
 // GPU must never link libOSMesa (docs/headless.md 2.3 Rule 3).
 #pragma once
 

@@ -1,4 +1,4 @@
-#include "loaders/Ubo2003Writer.h"
+#include "harness/sample/Ubo2003Writer.h"
 
 #include <unistd.h>
 #include <algorithm>

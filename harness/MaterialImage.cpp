@@ -1,4 +1,4 @@
-#include "materials/MaterialImage.h"
+#include "harness/MaterialImage.h"
 
 #include <algorithm>
 #include <cmath>

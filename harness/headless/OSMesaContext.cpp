@@ -1,6 +1,6 @@
 // OSMesa back end of the headless context (docs/headless.md 2.3). Compiled into the static
 // library osgBTF_osmesa only; see OSMesaContext.h for the link-order rule.
-#include "core/headless/OSMesaContext.h"
+#include "harness/headless/OSMesaContext.h"
 
 #include "core/Error.h"
 
@@ -97,7 +97,7 @@ private:
             }                                                         \
         }                                                             \
     }
-#include "core/headless/OSMesaExtensionNames.inc"
+#include "harness/headless/OSMesaExtensionNames.inc"
 #undef OSGBTF_GLEXT
         _fixedPointers = changed;
         OSG_INFO << "osgBTF: OSMesa: redirected " << changed << " of " << total

@@ -1,4 +1,4 @@
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 
 #include <cmath>
 

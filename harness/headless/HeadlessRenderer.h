@@ -1,7 +1,7 @@
 // osgBTF: render an OSG subgraph headless into a float image, and time passes.
 #pragma once
 
-#include "core/headless/HeadlessContext.h"
+#include "harness/headless/HeadlessContext.h"
 
 #include <osg/Camera>
 #include <osg/Geode>

@@ -1,6 +1,6 @@
 // EGL back end of the headless context: EGL device platform + pbuffer + compatibility profile
 // (docs/headless.md 2.1, docs/gpu.md). Links only libEGL and libOpenGL (glvnd).
-#include "core/headless/HeadlessContext.h"
+#include "harness/headless/HeadlessContext.h"
 
 #include "core/Error.h"
 

@@ -1,4 +1,4 @@
-#include "core/headless/HeadlessRenderer.h"
+#include "harness/headless/HeadlessRenderer.h"
 
 #include "core/Error.h"
 

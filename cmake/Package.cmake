@@ -1,0 +1,36 @@
+# `cpack -G DEB` in a build configured with -DCMAKE_INSTALL_PREFIX=/usr: the package osgbtf
+# (osgbtf_<version>_<arch>.deb) with everything `cmake --install` puts in place, under /usr:
+# libosgBTF in /usr/lib/<multiarch>, the plugins in /usr/lib/<multiarch>/osgPlugins-<OSG version>
+# (where Debian's OSG looks first, so stock osgviewer needs no OSG_LIBRARY_PATH), the tools in
+# /usr/bin, the SDK (headers, CMake package, pkg-config file). Library dependencies come from
+# dpkg-shlibdeps (package dpkg-dev); the -dev packages the SDK's headers need are recommended.
+# cpack installs from this build: it builds nothing that is not built already.
+set(CPACK_PACKAGE_NAME osgbtf)
+set(CPACK_PACKAGE_VENDOR osgBTF)
+set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
+    "measured BTF materials for OpenSceneGraph: plugins, library, SDK and the btf tool")
+set(CPACK_PACKAGE_DESCRIPTION
+    "osgBTF renders measured Bidirectional Texture Functions in OpenSceneGraph: osgDB plugins for
+fitted and measured BTFs (stock osgviewer and osgconv read them), libosgBTF with
+osgBTF::MaterialNode and its headers, CMake package and pkg-config file, and the btf,
+btfviewer and btf-examples tools.")
+set(CPACK_PACKAGE_CONTACT "osgBTF maintainers <osgbtf@localhost>")
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_SECTION graphics)
+set(CPACK_STRIP_FILES ON)  # as Debian packages are (debug info would triple the size)
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+# libosgBTF is in the package itself: dpkg-shlibdeps finds it there for the tools and plugins.
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${CMAKE_INSTALL_LIBDIR})
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
+    "libopenscenegraph-dev, libglm-dev, libimath-dev, libeigen3-dev, openscenegraph")
+set(CPACK_GENERATOR DEB)
+set(CPACK_SOURCE_GENERATOR TGZ)
+# The .deb must follow Debian's layout; a build for another prefix would put the library in
+# /usr/lib, outside the multiarch folder (GNUInstallDirs picks the libdir from the prefix).
+set(OSGBTF_PACKAGE_LIBDIR ${CMAKE_INSTALL_LIBDIR})
+configure_file(${CMAKE_SOURCE_DIR}/cmake/CPackProjectConfig.cmake.in
+               ${CMAKE_BINARY_DIR}/CPackProjectConfig.cmake @ONLY)
+set(CPACK_PROJECT_CONFIG_FILE ${CMAKE_BINARY_DIR}/CPackProjectConfig.cmake)
+include(CPack)

@@ -1,0 +1,51 @@
+# cmake -DWORK=<empty folder> -P CheckLayersTest.cmake: runs the layer checker on small fake trees
+# and compares its messages with the expected ones exactly, so a checker that finds nothing (or
+# the wrong thing) fails here.
+cmake_minimum_required(VERSION 3.22)  # policies as in the build (IN_LIST)
+include(${CMAKE_CURRENT_LIST_DIR}/../../cmake/LayerRules.cmake)
+file(REMOVE_RECURSE ${WORK})
+
+function(write_tree root)  # pairs: file, its contents
+  set(args ${ARGN})
+  while(args)
+    list(POP_FRONT args file content)
+    file(WRITE ${root}/${file} "${content}\n")
+  endwhile()
+endfunction()
+
+function(expect root)
+  osgbtf_layer_violations(${root} got)
+  if(NOT "${got}" STREQUAL "${ARGN}")
+    list(JOIN got "\n  " got_text)
+    list(JOIN ARGN "\n  " want_text)
+    message(FATAL_ERROR "${root}: expected\n  ${want_text}\ngot\n  ${got_text}")
+  endif()
+endfunction()
+
+# Downward includes, same-folder includes and system headers are fine.
+write_tree(${WORK}/good
+  core/A.h "#pragma once\n#include <vector>\n#include \"core/B.h\""
+  core/B.h "#pragma once"
+  loaders/L.cpp "#include \"core/A.h\""
+  materials/pca/M.cpp "#include \"core/A.h\"\n#include \"Local.h\""
+  scene/S.cpp "#include \"materials/pca/M.h\"\n#include \"loaders/L.h\""
+  harness/headless/H.cpp "#include \"scene/S.h\""
+  plugins/btf/P.cpp "#include \"scene/S.h\"\n#include \"plugins/btf/P.h\""
+  tools/btf/T.cpp "#include \"harness/H.h\""
+  tests/x_test.cpp "#include \"harness/H.h\"\n#include \"plugins/btf/P.h\"")
+expect(${WORK}/good)
+
+# Upward includes: each one reported once, with the file, the include and the rule.
+write_tree(${WORK}/bad
+  core/A.h "#pragma once\n#include \"loaders/L.h\""
+  loaders/L.cpp "#include \"materials/Material.h\""
+  materials/M.cpp "  #  include \"harness/headless/HeadlessRenderer.h\""
+  scene/S.cpp "#include \"harness/MaterialImage.h\""
+  plugins/btf/P.cpp "#include \"core/A.h\"\n#include \"harness/Compare.h\"")
+expect(${WORK}/bad
+  "core/A.h: includes \"loaders/L.h\", but core/ may include only core/"
+  "loaders/L.cpp: includes \"materials/Material.h\", but loaders/ may include only core/, loaders/"
+  "materials/M.cpp: includes \"harness/headless/HeadlessRenderer.h\", but materials/ may include only core/, materials/"
+  "scene/S.cpp: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, scene/"
+  "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, scene/, plugins/")
+message(STATUS "layer checker: fake trees give the expected messages")
