@@ -15,7 +15,7 @@
 #include <osgUtil/IncrementalCompileOperation>
 #include <osgUtil/SceneView>
 
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
 

@@ -21,7 +21,7 @@
 #include <osgUtil/GLObjectsVisitor>
 
 #include "core/Directions.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
 #include "tests/gl/GlTestEnv.h"
