@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <Eigen/Cholesky>
@@ -52,14 +53,22 @@ TruncatedSvd truncatedSvd(const float* matrix, std::size_t rows, std::size_t col
                     std::to_string(small));
     const ConstMapF a(matrix, Eigen::Index(rows), Eigen::Index(cols));
     const bool wide = rows < cols;  // Gram over the rows instead of the columns
-    const Eigen::Index n = Eigen::Index(small);
+    const Eigen::Index n = Eigen::Index(small), length = Eigen::Index(std::max(rows, cols));
+    // The slices of A along its long dimension, as an n x b double block: rows of A (transposed)
+    // or columns of A. Blocks bound the double copy's memory for the 3 * 65536-row PCA matrices.
+    const Eigen::Index block = 4096;
+    auto slice = [&](Eigen::Index first, Eigen::Index count) -> MatrixD {
+        return wide ? MatrixD(a.middleCols(first, count).cast<double>())
+                    : MatrixD(a.middleRows(first, count).transpose().cast<double>());
+    };
 
-    MatrixF gramF = MatrixF::Zero(n, n);
-    if (wide)
-        gramF.selfadjointView<Eigen::Lower>().rankUpdate(a);
-    else
-        gramF.selfadjointView<Eigen::Lower>().rankUpdate(a.transpose());
-    const MatrixD gram = gramF.cast<double>();
+    // Double: a float Gram matrix carries rounding of ~1e-7 * sqrt(length) of its largest
+    // eigenvalue, which on rank-deficient data (constant or duplicate texels) became "singular
+    // values" far above any cut-off, and their vectors, divided by them, amplified noise.
+    MatrixD gram = MatrixD::Zero(n, n);
+    for (Eigen::Index first = 0; first < length; first += block)
+        gram.selfadjointView<Eigen::Lower>().rankUpdate(
+            slice(first, std::min(block, length - first)));
     const SymmetricEigen eigen = symmetricEigen(gram.data(), int(n));
 
     TruncatedSvd svd;
@@ -70,24 +79,45 @@ TruncatedSvd truncatedSvd(const float* matrix, std::size_t rows, std::size_t col
     for (std::size_t i = 0; i < small; ++i)
         svd.singularValues[i] = std::sqrt(std::max(0.0, eigen.values[i]));
 
+    // Eigenvalues below this are zero up to rounding: each Gram entry is a dot product of `length`
+    // terms, off by up to length * eps * |a_i| |a_j|, and the n x n eigensolver adds n * eps *
+    // ||G||; over n rows that is at most about n * length * eps of the largest eigenvalue (for a
+    // 256x256 Bonn PCA view ~1e-8, a singular value of 1e-4 of the largest: a real component that
+    // small carries less than 1e-8 of the data's energy, so dropping it costs nothing).
+    const double cutoff = std::max(0.0, eigen.values[0]) * double(n) * double(length) *
+                          std::numeric_limits<double>::epsilon();
+    int kept = 0;
+    while (kept < rank && eigen.values[std::size_t(kept)] > cutoff) ++kept;
+
     // Eigenvectors of the Gram matrix are one side; the other is A (or A^T) times them over S.
-    MatrixF gramSide(n, rank);
-    for (int k = 0; k < rank; ++k)
+    MatrixD gramSide = MatrixD::Zero(n, rank), otherSide = MatrixD::Zero(length, rank);
+    for (int k = 0; k < kept; ++k)
         for (Eigen::Index r = 0; r < n; ++r)
-            gramSide(r, k) = float(eigen.vectors[std::size_t(k) * small + std::size_t(r)]);
-    MatrixF otherSide = wide ? MatrixF(a.transpose() * gramSide) : MatrixF(a * gramSide);
-    const double tiny = 1e-6 * svd.singularValues[0];
-    for (int k = 0; k < rank; ++k) {
-        const double s = svd.singularValues[std::size_t(k)];
-        if (s > tiny && s > 0) {
-            otherSide.col(k) /= float(s);
-        } else {
-            otherSide.col(k).setZero();
-            gramSide.col(k).setZero();
-        }
+            gramSide(r, k) = eigen.vectors[std::size_t(k) * small + std::size_t(r)];
+    for (Eigen::Index first = 0; first < length; first += block) {
+        const Eigen::Index count = std::min(block, length - first);
+        otherSide.middleRows(first, count) = slice(first, count).transpose() * gramSide;
     }
-    const MatrixF& u = wide ? gramSide : otherSide;
-    const MatrixF& v = wide ? otherSide : gramSide;
+    // Re-orthogonalised (modified Gram-Schmidt, two passes): a column that loses most of its
+    // length s to the earlier ones was no new direction; it and all smaller ones are dropped.
+    for (int k = 0; k < kept; ++k) {
+        const double s = svd.singularValues[std::size_t(k)];
+        auto column = otherSide.col(k);
+        for (int pass = 0; pass < 2; ++pass)
+            for (int j = 0; j < k; ++j) column -= otherSide.col(j).dot(column) * otherSide.col(j);
+        const double norm = column.norm();
+        if (!(norm > 0.5 * s)) {
+            kept = k;
+            break;
+        }
+        column /= norm;
+    }
+    for (int k = kept; k < rank; ++k) {
+        otherSide.col(k).setZero();
+        gramSide.col(k).setZero();
+    }
+    const MatrixF u = (wide ? gramSide : otherSide).cast<float>();
+    const MatrixF v = (wide ? otherSide : gramSide).cast<float>();
     svd.u.assign(u.data(), u.data() + u.size());
     svd.v.assign(v.data(), v.data() + v.size());
     return svd;

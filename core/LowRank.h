@@ -6,9 +6,9 @@
 //
 // Truncated SVD through the Gram matrix: for A (m x n) with n <= m, A^T A = V S^2 V^T, so the top
 // singular values and right vectors come from the eigen decomposition of the small n x n Gram
-// matrix, and U = A V S^-1. The Gram matrix is accumulated in float by Eigen's GEMM (fast, and its
-// rounding ~1e-7 ||A||^2 is far below the truncation error of any useful rank), then decomposed
-// in double. When m < n the roles of rows and columns are swapped.
+// matrix, and U = A V S^-1. The Gram matrix is accumulated and decomposed in double: in float its
+// rounding (~1e-7 ||A||^2) turned the zero singular values of rank-deficient data into noise that
+// was kept as components. When m < n the roles of rows and columns are swapped.
 #pragma once
 
 #include <cstddef>
@@ -40,7 +40,8 @@ struct TruncatedSvd {
 
 /** Truncated SVD of the column-major rows x cols matrix through its Gram matrix (see above).
  *  1 <= rank <= min(rows, cols). Columns of U (or V) for singular values that are zero up to
- *  rounding (relative 1e-6 of the largest) are set to zero rather than made up. Single-threaded:
+ *  rounding (squared, below min(rows, cols) * max(rows, cols) * DBL_EPSILON of the largest squared
+ *  one) are set to zero rather than made up; the kept ones are re-orthogonalised. Single-threaded:
  *  callers parallelise over independent matrices. Throws Error on invalid sizes. */
 TruncatedSvd truncatedSvd(const float* matrix, std::size_t rows, std::size_t cols, int rank);
 

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <set>
@@ -101,22 +102,46 @@ void fitSubspace(const RowMatrix& rows, const std::vector<std::size_t>& members,
                  Eigen::Ref<ColMatrix> basis) {
     basis.setZero();
     if (members.empty()) return;
-    RowMatrix x(Eigen::Index(members.size()), rows.cols());
+    using RowMatrixD = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    RowMatrixD x(Eigen::Index(members.size()), rows.cols());
     for (std::size_t j = 0; j < members.size(); ++j)
-        x.row(Eigen::Index(j)) = rows.row(Eigen::Index(members[j]));
-    const Eigen::MatrixXd gram = (x * x.transpose()).cast<double>();
+        x.row(Eigen::Index(j)) = rows.row(Eigen::Index(members[j])).cast<double>();
+    // Double, not float: a float Gram matrix of length-D dot products carries rounding of about
+    // 1e-7 * sqrt(D) of its largest eigenvalue, so on rank-deficient members (identical or
+    // proportional texels) the "small" eigenvalues were rounding noise far above any cut-off, and
+    // their eigenvectors, divided by sqrt(noise), became large non-orthogonal junk Eigen-BRDFs.
+    // Only the lower triangle is formed (the solver reads no more), half the work of x x^T.
+    Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(x.rows(), x.rows());
+    gram.selfadjointView<Eigen::Lower>().rankUpdate(x);
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram);
     const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
     const Eigen::Index m = values.size();
     const double largest = std::max(values[m - 1], 0.0);
+    // Eigenvalues below this are indistinguishable from zero: each Gram entry is a length-D dot
+    // product, off by up to about D * eps * |x_i| |x_j| in double, and the m x m eigensolver adds
+    // m * eps * ||G||; summed over the m rows that is at most about m * D * eps * largest. With
+    // D = 19683 (Bonn) and m = 256 this is ~1e-9 of the largest eigenvalue, a singular value of
+    // ~3e-5 of the largest: a real component that small changes the squared error by less than
+    // 1e-9 of the data's energy, so dropping it costs nothing, while keeping noise is what broke.
+    const double cutoff =
+        largest * double(m) * double(x.cols()) * std::numeric_limits<double>::epsilon();
+    Eigen::MatrixXd kept(x.cols(), components);
+    int count = 0;
     for (int i = 0; i < components && i < m; ++i) {
         const double value = values[m - 1 - i];
-        if (!(value > largest * 1e-10) || value <= 0) break;
-        const Eigen::VectorXf u =
-            (solver.eigenvectors().col(m - 1 - i) / std::sqrt(value)).cast<float>();
-        basis.col(i).noalias() = x.transpose() * u;
-        basis.col(i).normalize();  // removes the float rounding of the Gram route
+        if (!(value > cutoff) || value <= 0) break;
+        Eigen::VectorXd e = x.transpose() * solver.eigenvectors().col(m - 1 - i);
+        const double expected = std::sqrt(value);  // |X^T u| = s for an exact eigenpair
+        // Re-orthogonalise against the kept ones (twice: one modified Gram-Schmidt pass can leave
+        // rounding of the order of what it removed). A direction that loses most of its length
+        // here was not a new one, so it and everything smaller are dropped (left zero).
+        for (int pass = 0; pass < 2; ++pass)
+            for (int j = 0; j < count; ++j) e -= kept.col(j).dot(e) * kept.col(j);
+        const double norm = e.norm();
+        if (!(norm > 0.5 * expected)) break;
+        kept.col(count++) = e / norm;
     }
+    for (int i = 0; i < count; ++i) basis.col(i) = kept.col(i).cast<float>();
 }
 
 }  // namespace
