@@ -11,7 +11,7 @@
 
 #include "core/ErrorMetrics.h"
 #include "core/LowRank.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/lpca/Lpca.h"
