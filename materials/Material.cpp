@@ -8,6 +8,8 @@
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
+#include "materials/MaterialSerializer.h"
+#include "materials/ShaderInterface.h"
 
 namespace osgBTF {
 
@@ -139,13 +141,23 @@ std::map<std::string, MethodInfo>& registry() {
 
 bool registerMethod(MethodInfo info) {
     const std::string name = info.name;
-    registry()[name] = std::move(info);
+    if (!info.fragmentShader.empty()) addShaderSource(name + ".frag", info.fragmentShader);
+    const MethodInfo& stored = registry()[name] = std::move(info);
+    addMaterialWrapper(stored);
     return true;
 }
 
 std::vector<std::string> methodNames() {
     std::vector<std::string> names;
     for (const auto& entry : registry()) names.push_back(entry.first);
+    return names;
+}
+
+std::vector<std::string> methodNamesInOrder() {
+    std::vector<std::string> names = methodNames();
+    std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+        return registry().at(a).order < registry().at(b).order;
+    });
     return names;
 }
 
@@ -196,7 +208,7 @@ osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
         fs->setName(shaderOrigin(frag));
         created->addShader(vs);
         created->addShader(fs);
-        created->addBindAttribLocation("osgBTF_tangent", 6);
+        created->addBindAttribLocation(shader::kTangentAttributeName, shader::kTangentAttribute);
         program = created;
     }
     return program;
