@@ -30,35 +30,6 @@ FitOptions FitOptions::parse(const std::string& text) {
     return options;
 }
 
-int FitOptions::getInt(const std::string& key, int fallback) const {
-    const auto it = _values.find(key);
-    if (it == _values.end()) return fallback;
-    std::size_t used = 0;
-    try {
-        const int value = std::stoi(it->second, &used);
-        if (used == it->second.size()) return value;
-    } catch (const std::exception&) {
-    }
-    throw Error("option " + key + ": '" + it->second + "' is not an integer");
-}
-
-double FitOptions::getDouble(const std::string& key, double fallback) const {
-    const auto it = _values.find(key);
-    if (it == _values.end()) return fallback;
-    std::size_t used = 0;
-    try {
-        const double value = std::stod(it->second, &used);
-        if (used == it->second.size()) return value;
-    } catch (const std::exception&) {
-    }
-    throw Error("option " + key + ": '" + it->second + "' is not a number");
-}
-
-std::string FitOptions::getString(const std::string& key, const std::string& fallback) const {
-    const auto it = _values.find(key);
-    return it == _values.end() ? fallback : it->second;
-}
-
 // ---- Material --------------------------------------------------------------------------------
 
 Material::Material(const Material& other, const osg::CopyOp& copyop)

@@ -42,10 +42,8 @@ public:
 
     void set(const std::string& key, const std::string& value) { _values[key] = value; }
     bool has(const std::string& key) const { return _values.count(key) != 0; }
-    /** Typed access; throws Error "option KEY: 'VALUE' is not an integer" etc. */
-    int getInt(const std::string& key, int fallback) const;
-    double getDouble(const std::string& key, double fallback) const;
-    std::string getString(const std::string& key, const std::string& fallback) const;
+    /** The pairs as given, values as text: validateOptions (MethodOptions.h) checks them against
+     *  a method's option table and gives typed values. */
     const std::map<std::string, std::string>& values() const { return _values; }
 
 private:
