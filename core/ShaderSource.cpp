@@ -24,6 +24,12 @@ std::string overridePath(const std::string& name) {
                                  osgDB::Registry::instance()->getDataFilePathList());
 }
 
+/** Sources added at run time (addShaderSource), e.g. by a method defined outside the library. */
+std::map<std::string, std::string>& addedShaders() {
+    static std::map<std::string, std::string> shaders;
+    return shaders;
+}
+
 std::string rawSource(const std::string& name) {
     const std::string path = overridePath(name);
     if (!path.empty()) {
@@ -33,11 +39,10 @@ std::string rawSource(const std::string& name) {
         return text.str();
     }
     const auto& embedded = detail::embeddedShaders();
-    const auto it = embedded.find(name);
-    if (it == embedded.end())
-        throw Error("shader '" + name + "': not found (neither on OSG_FILE_PATH as shaders/" +
-                    name + " nor embedded)");
-    return it->second;
+    if (const auto it = embedded.find(name); it != embedded.end()) return it->second;
+    if (const auto it = addedShaders().find(name); it != addedShaders().end()) return it->second;
+    throw Error("shader '" + name + "': not found (neither on OSG_FILE_PATH as shaders/" + name +
+                " nor embedded)");
 }
 
 std::string resolveIncludes(const std::string& name, int depth) {
@@ -69,6 +74,10 @@ std::string shaderSource(const std::string& name) {
 std::string shaderOrigin(const std::string& name) {
     const std::string path = overridePath(name);
     return path.empty() ? "embedded:" + name : path;
+}
+
+void addShaderSource(const std::string& name, const std::string& text) {
+    addedShaders()[name] = text;
 }
 
 std::vector<std::string> embeddedShaderNames() {

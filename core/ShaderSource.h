@@ -18,7 +18,12 @@ std::string shaderSource(const std::string& name);
 /** Where the shader comes from: the override file's path, or "embedded:NAME". */
 std::string shaderOrigin(const std::string& name);
 
-/** Names of all embedded shaders. */
+/** Makes `text` the built-in source of shader NAME when the library embeds none of that name
+ *  (for methods registered from outside the library: MethodInfo::fragmentShader). An override
+ *  file on OSG_FILE_PATH still wins. Call before the first use (not thread-safe). */
+void addShaderSource(const std::string& name, const std::string& text);
+
+/** Names of all embedded shaders (those built into the library). */
 std::vector<std::string> embeddedShaderNames();
 
 }  // namespace osgBTF

@@ -22,7 +22,10 @@ namespace osgBTF {
 namespace fs = std::filesystem;
 
 std::vector<std::string> allCompareMethods() {
-    return {"laf", "slaf", "rf", "pca", "lpca", "lpca-revised"};
+    std::vector<std::string> methods;
+    for (const std::string& name : methodNamesInOrder())
+        if (findMethod(name).compareAll) methods.push_back(name);
+    return methods;
 }
 
 namespace {

@@ -20,7 +20,8 @@
 
 namespace osgBTF {
 
-/** The methods "all" stands for (lambert, the baseline, is always added). */
+/** The methods "all" stands for: every registered method with MethodInfo::compareAll, by
+ *  MethodInfo::order (lambert, the baseline, is always added). */
 std::vector<std::string> allCompareMethods();
 
 struct CompareOptions {

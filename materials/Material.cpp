@@ -8,6 +8,8 @@
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
+#include "materials/MaterialSerializer.h"
+#include "materials/ShaderInterface.h"
 
 namespace osgBTF {
 
@@ -26,35 +28,6 @@ FitOptions FitOptions::parse(const std::string& text) {
         options.set(item.substr(0, eq), item.substr(eq + 1));
     }
     return options;
-}
-
-int FitOptions::getInt(const std::string& key, int fallback) const {
-    const auto it = _values.find(key);
-    if (it == _values.end()) return fallback;
-    std::size_t used = 0;
-    try {
-        const int value = std::stoi(it->second, &used);
-        if (used == it->second.size()) return value;
-    } catch (const std::exception&) {
-    }
-    throw Error("option " + key + ": '" + it->second + "' is not an integer");
-}
-
-double FitOptions::getDouble(const std::string& key, double fallback) const {
-    const auto it = _values.find(key);
-    if (it == _values.end()) return fallback;
-    std::size_t used = 0;
-    try {
-        const double value = std::stod(it->second, &used);
-        if (used == it->second.size()) return value;
-    } catch (const std::exception&) {
-    }
-    throw Error("option " + key + ": '" + it->second + "' is not a number");
-}
-
-std::string FitOptions::getString(const std::string& key, const std::string& fallback) const {
-    const auto it = _values.find(key);
-    return it == _values.end() ? fallback : it->second;
 }
 
 // ---- Material --------------------------------------------------------------------------------
@@ -139,13 +112,23 @@ std::map<std::string, MethodInfo>& registry() {
 
 bool registerMethod(MethodInfo info) {
     const std::string name = info.name;
-    registry()[name] = std::move(info);
+    if (!info.fragmentShader.empty()) addShaderSource(name + ".frag", info.fragmentShader);
+    const MethodInfo& stored = registry()[name] = std::move(info);
+    addMaterialWrapper(stored);
     return true;
 }
 
 std::vector<std::string> methodNames() {
     std::vector<std::string> names;
     for (const auto& entry : registry()) names.push_back(entry.first);
+    return names;
+}
+
+std::vector<std::string> methodNamesInOrder() {
+    std::vector<std::string> names = methodNames();
+    std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+        return registry().at(a).order < registry().at(b).order;
+    });
     return names;
 }
 
@@ -196,7 +179,7 @@ osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
         fs->setName(shaderOrigin(frag));
         created->addShader(vs);
         created->addShader(fs);
-        created->addBindAttribLocation("osgBTF_tangent", 6);
+        created->addBindAttribLocation(shader::kTangentAttributeName, shader::kTangentAttribute);
         program = created;
     }
     return program;

@@ -19,6 +19,8 @@
 
 #include "core/FittedMaterialFile.h"
 #include "core/MeasuredBtf.h"
+#include "materials/MethodOptions.h"
+#include "materials/ShaderCost.h"
 
 namespace osgBTF {
 
@@ -40,10 +42,8 @@ public:
 
     void set(const std::string& key, const std::string& value) { _values[key] = value; }
     bool has(const std::string& key) const { return _values.count(key) != 0; }
-    /** Typed access; throws Error "option KEY: 'VALUE' is not an integer" etc. */
-    int getInt(const std::string& key, int fallback) const;
-    double getDouble(const std::string& key, double fallback) const;
-    std::string getString(const std::string& key, const std::string& fallback) const;
+    /** The pairs as given, values as text: validateOptions (MethodOptions.h) checks them against
+     *  a method's option table and gives typed values. */
     const std::map<std::string, std::string>& values() const { return _values; }
 
 private:
@@ -129,21 +129,44 @@ private:
     mutable osg::ref_ptr<osg::StateSet> _sharedStateSet;
 };
 
-/** A compression method: how to fit it and how to read its files. */
+/** A compression method: everything the tools, the harness, the serializers and the tests need
+ *  to know about it, so that a new method is one folder that registers one of these. */
 struct MethodInfo {
     std::string name;         ///< "laf"
     std::string description;  ///< one line for --help
-    /** Option name -> "meaning (default X)". */
-    std::vector<std::pair<std::string, std::string>> options;
+    /** The fit options, in the order help texts list them (see MethodOptions.h). */
+    std::vector<OptionSpec> options;
+    /** Fits the method. Implementations start with validateOptions(), so every caller gets the
+     *  one error format; they read typed values from its result. */
     std::function<osg::ref_ptr<Material>(const MeasuredBtf&, const FitOptions&)> fit;
     std::function<osg::ref_ptr<Material>(const FittedMaterial&)> load;
+    /** A new empty material of the method's class (e.g. `[]() -> osg::Object* { return new
+     *  LafMaterial; }`): registerMethod adds an osgDB object wrapper for that class, named by its
+     *  libraryName()::className(), so .osgt/.osgb read and write the material (property
+     *  FittedData: the whole FittedMaterial). */
+    osg::Object* (*createInstance)() = nullptr;
+    /** Static ALU/TEX count of one fragment of a fitted material's shader (harness Table 3). */
+    std::function<ShaderCost(const Material&)> shaderCost;
+    /** The fragment shader's source when it is not built into the library as
+     *  shaders/<name>.frag (a method defined outside the library's sources). An override file
+     *  shaders/<name>.frag on OSG_FILE_PATH still wins, as for the built-in shaders. */
+    std::string fragmentShader;
+    /** Part of `btf compare --methods all` (false for the baseline, which is always added). */
+    bool compareAll = true;
+    /** Position in `--methods all` and other lists that follow the paper's order. */
+    int order = 100;
+    /** Options for a fit that is quick on a few texels (tests fit every method with these). */
+    std::string quickFitOptions;
 };
 
 /** Adds a method; each method's .cpp calls it from a static initialiser. Returns true. */
 bool registerMethod(MethodInfo info);
 /** Throws Error "unknown method 'X' (known: laf, slaf, ...)". */
 const MethodInfo& findMethod(const std::string& name);
+/** Registered method names, alphabetically. */
 std::vector<std::string> methodNames();
+/** Registered method names by MethodInfo::order (then name). */
+std::vector<std::string> methodNamesInOrder();
 
 /** Saves through the fitted-material container (atomic). */
 void saveMaterial(const Material& material, const std::string& path);
@@ -151,8 +174,9 @@ void saveMaterial(const Material& material, const std::string& path);
 osg::ref_ptr<Material> loadMaterial(const std::string& path);
 osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file);
 
-/** The method's shared program: shaders/common/btf.vert + shaders/<method>.frag. Compiled by
- *  OSG at first use; built once per process and method. Throws Error if a source is missing. */
+/** The method's shared program: shaders/common/btf.vert + shaders/<method>.frag (or the
+ *  method's MethodInfo::fragmentShader), the tangent bound to shader::kTangentAttribute. Compiled
+ * by OSG at first use; built once per process and method. Throws Error if a source is missing. */
 osg::ref_ptr<osg::Program> methodProgram(const std::string& method);
 
 }  // namespace osgBTF

@@ -8,6 +8,7 @@
 
 #include "core/Error.h"
 #include "materials/Material.h"
+#include "materials/ShaderInterface.h"
 
 namespace osgBTF {
 
@@ -139,8 +140,8 @@ void addDirectionTable(osg::StateSet& stateSet, const DirectionInterpolator::Bak
 
 void addCommonState(osg::StateSet& stateSet, const std::string& method, int width, int height) {
     stateSet.setAttributeAndModes(methodProgram(method).get(), osg::StateAttribute::ON);
-    stateSet.addUniform(new osg::Uniform("osgBTF_size", width, height));
-    stateSet.addUniform(new osg::Uniform("osgBTF_textureScale", 1.0f));
+    stateSet.addUniform(new osg::Uniform(shader::kSize, width, height));
+    stateSet.addUniform(new osg::Uniform(shader::kTextureScale, 1.0f));
 }
 
 }  // namespace osgBTF

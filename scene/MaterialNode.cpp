@@ -49,7 +49,7 @@ osg::ref_ptr<Material> loadSharedMaterial(const std::string& path) {
 
 namespace {
 
-constexpr unsigned kTangentAttribute = 6;  // shaders/common/btf.vert: osgBTF_tangent
+constexpr unsigned kTangentAttribute = shader::kTangentAttribute;
 
 // ---- tangents ------------------------------------------------------------------------------
 

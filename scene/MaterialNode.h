@@ -34,6 +34,7 @@
 #include <osgDB/Options>
 
 #include "materials/Material.h"
+#include "materials/ShaderInterface.h"
 
 namespace osgUtil {
 class CullVisitor;
@@ -48,8 +49,8 @@ struct EyeLight {
     osg::Vec3 color;
 };
 
-/** The shader's light limit (shaders/common/btf_main.glsl). */
-constexpr int kMaxLights = 8;
+/** The shader's light limit (materials/ShaderInterface.h). */
+constexpr int kMaxLights = shader::kMaxLights;
 
 class MaterialNode : public osg::Group {
 public:

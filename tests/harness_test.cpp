@@ -114,8 +114,7 @@ TEST(Harness, TinySampleWritesEveryFileAndTablesMatchTheMethodApis) {
 
     std::ifstream in(out / "results.json");
     const nlohmann::json results = nlohmann::json::parse(in);
-    const std::string failure =
-        "failed: lpca: clusters must be between 1 and 256 (8-bit index), got 0";
+    const std::string failure = "failed: lpca: option clusters must be an integer in 1..256, got 0";
     const nlohmann::json& lpca = methodEntry(results, "lpca");
     EXPECT_EQ(lpca["status"], "failed");
     EXPECT_EQ(lpca["message"], failure);

@@ -11,18 +11,16 @@
 
 using namespace osgBTF;
 
-TEST(FitOptions, ParsesAndReportsBadValues) {
+TEST(FitOptions, ParsesKeyValuePairs) {
+    // Values stay text: only validateOptions (MethodOptions.h) interprets them.
     const FitOptions o = FitOptions::parse("lobes=3, clusters=32 name=x");
-    EXPECT_EQ(o.getInt("lobes", 2), 3);
-    EXPECT_EQ(o.getInt("missing", 7), 7);
-    EXPECT_EQ(o.getString("name", ""), "x");
-    EXPECT_THROW(FitOptions::parse("lobes"), Error);
-    try {
-        FitOptions::parse("lobes=two").getInt("lobes", 2);
-        FAIL();
-    } catch (const Error& e) {
-        EXPECT_STREQ(e.what(), "option lobes: 'two' is not an integer");
-    }
+    const std::map<std::string, std::string> expected = {
+        {"lobes", "3"}, {"clusters", "32"}, {"name", "x"}};
+    EXPECT_EQ(o.values(), expected);
+    EXPECT_TRUE(o.has("name"));
+    EXPECT_FALSE(o.has("missing"));
+    EXPECT_EQ(test::errorOf([] { FitOptions::parse("lobes"); }),
+              "option 'lobes': expected KEY=VALUE");
 }
 
 TEST(MethodRegistry, UnknownMethodListsTheKnownOnes) {

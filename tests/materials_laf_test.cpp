@@ -58,14 +58,14 @@ ErrorSummary errorOf(const MeasuredBtf& btf, const Material& m) {
 
 TEST(Laf, InvalidOptionsAndInputAreRefused) {
     const MeasuredBtf btf = smallSample(2, 2);
-    EXPECT_EQ(fitError(btf, "lobes=0"), "laf: option lobes must be between 1 and 8, got 0");
-    EXPECT_EQ(fitError(btf, "lobes=9"), "laf: option lobes must be between 1 and 8, got 9");
-    EXPECT_EQ(fitError(btf, "lobes=two"), "option lobes: 'two' is not an integer");
+    EXPECT_EQ(fitError(btf, "lobes=0"), "laf: option lobes must be an integer in 1..8, got 0");
+    EXPECT_EQ(fitError(btf, "lobes=9"), "laf: option lobes must be an integer in 1..8, got 9");
+    EXPECT_EQ(fitError(btf, "lobes=two"), "laf: option lobes must be an integer in 1..8, got two");
     EXPECT_EQ(fitError(btf, "iterations=0"),
-              "laf: option iterations must be between 1 and 500, got 0");
+              "laf: option iterations must be an integer in 1..500, got 0");
     EXPECT_EQ(fitError(btf, "clusters=4"),
-              "laf: unknown option 'clusters' (known: cosine, iterations, lobes)");
-    EXPECT_EQ(fitError(btf, "cosine=2"), "laf: option cosine must be between 0 and 1, got 2");
+              "laf: option clusters is unknown (known: lobes, iterations, cosine)");
+    EXPECT_EQ(fitError(btf, "cosine=2"), "laf: option cosine must be 0 or 1, got 2");
     EXPECT_EQ(fitError(MeasuredBtf(), ""), "laf: cannot fit an empty BTF");
 }
 
@@ -200,5 +200,5 @@ TEST(Laf, IsRegistered) {
     const MethodInfo& info = findMethod("laf");
     EXPECT_FALSE(info.description.empty());
     ASSERT_EQ(info.options.size(), 3u);
-    EXPECT_EQ(info.options[0].first, "lobes");
+    EXPECT_EQ(info.options[0].name, "lobes");
 }

@@ -70,18 +70,19 @@ TEST(ConcentricMap, InverseIsExactBothWays) {
 }
 
 TEST(LpcaRevised, InvalidOptionsAreRefusedWithClearMessages) {
-    EXPECT_EQ(fitError("resolution=1"), "lpca-revised: resolution must be between 2 and 45, got 1");
+    EXPECT_EQ(fitError("resolution=1"),
+              "lpca-revised: option resolution must be an integer in 2..45, got 1");
     EXPECT_EQ(fitError("resolution=46"),
-              "lpca-revised: resolution must be between 2 and 45, got 46");
+              "lpca-revised: option resolution must be an integer in 2..45, got 46");
     EXPECT_EQ(fitError("storage=float"),
-              "lpca-revised: storage must be 'half' or 'unorm8', got 'float'");
+              "lpca-revised: option storage must be one of half, unorm8, got float");
     EXPECT_EQ(fitError("clusters=0"),
-              "lpca: clusters must be between 1 and 256 (8-bit index), got 0");
+              "lpca-revised: option clusters must be an integer in 1..256, got 0");
     EXPECT_EQ(fitError("clusters=200 resolution=16"),
-              "lpca-revised: clusters x resolution and components x resolution must be at most "
-              "2048 (3D texture size), got 3200 and 128");
+              "lpca-revised: option resolution must be at most 10 with clusters=200 "
+              "components=8 (k x n and c x n <= 2048, the 3D texture size), got 16");
     EXPECT_EQ(fitError("lobes=2"),
-              "lpca-revised: unknown option 'lobes' (known: clusters, components, iterations, "
+              "lpca-revised: option lobes is unknown (known: clusters, components, iterations, "
               "training, seed, resolution, storage)");
 }
 

@@ -49,19 +49,20 @@ double sumSquaredResidual(const MeasuredBtf& btf, const Material& m) {
 }  // namespace
 
 TEST(Lpca, InvalidOptionsAreRefusedWithClearMessages) {
-    EXPECT_EQ(fitError("clusters=0"),
-              "lpca: clusters must be between 1 and 256 (8-bit index), got 0");
+    EXPECT_EQ(fitError("clusters=0"), "lpca: option clusters must be an integer in 1..256, got 0");
     EXPECT_EQ(fitError("clusters=257"),
-              "lpca: clusters must be between 1 and 256 (8-bit index), got 257");
-    EXPECT_EQ(fitError("components=0"), "lpca: components must be at least 1, got 0");
-    EXPECT_EQ(fitError("iterations=0"), "lpca: iterations must be at least 1, got 0");
-    EXPECT_EQ(fitError("training=-1"),
-              "lpca: training must be 0 (all texels) or a texel count, got -1");
-    EXPECT_EQ(fitError("clusters=17"), "lpca: clusters (17) exceed the texel count (16)");
+              "lpca: option clusters must be an integer in 1..256, got 257");
+    EXPECT_EQ(fitError("components=0"), "lpca: option components must be an integer >= 1, got 0");
+    EXPECT_EQ(fitError("iterations=0"), "lpca: option iterations must be an integer >= 1, got 0");
+    EXPECT_EQ(fitError("training=-1"), "lpca: option training must be an integer >= 0, got -1");
+    EXPECT_EQ(fitError("seed=-1"), "lpca: option seed must be an integer >= 0, got -1");
+    EXPECT_EQ(fitError("clusters=17"),
+              "lpca: option clusters must be at most 16 (the texels of this BTF), got 17");
     EXPECT_EQ(fitError("lobes=2"),
-              "lpca: unknown option 'lobes' (known: clusters, components, iterations, training, "
+              "lpca: option lobes is unknown (known: clusters, components, iterations, training, "
               "seed)");
-    EXPECT_EQ(fitError("clusters=two"), "option clusters: 'two' is not an integer");
+    EXPECT_EQ(fitError("clusters=two"),
+              "lpca: option clusters must be an integer in 1..256, got two");
 }
 
 TEST(Lpca, RecoversClustersAndSubspacesOfAModelGeneratedBtf) {

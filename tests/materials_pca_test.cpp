@@ -96,18 +96,21 @@ double optimalResidual(const MeasuredBtf& btf, std::size_t v, int c) {
 TEST(Pca, InvalidOptionsAreRefusedWithClearMessages) {
     const MeasuredBtf btf = smallSample(4, 3);
     EXPECT_EQ(fitError(btf, "components=0"),
-              "pca: option components must be between 1 and 36, got 0");
+              "pca: option components must be an integer >= 1, got 0");
     EXPECT_EQ(fitError(btf, "components=37"),
-              "pca: option components must be between 1 and 36, got 37");
-    EXPECT_EQ(fitError(btf, "components=many"), "option components: 'many' is not an integer");
+              "pca: option components must be at most 36 for this BTF (its lights, or 3 x texels "
+              "if fewer), got 37");
+    EXPECT_EQ(fitError(btf, "components=many"),
+              "pca: option components must be an integer >= 1, got many");
     EXPECT_EQ(fitError(btf, "storage=int4"),
-              "pca: option storage must be unorm8, half or float, got 'int4'");
+              "pca: option storage must be one of unorm8, half, float, got int4");
     EXPECT_EQ(fitError(btf, "lobes=2"),
-              "pca: unknown option 'lobes' (options: components, storage)");
+              "pca: option lobes is unknown (known: components, storage)");
     EXPECT_EQ(fitError(MeasuredBtf(), ""), "pca: the BTF is empty");
     // With more texel values than lights, the light count bounds the rank.
     EXPECT_EQ(fitError(smallSample(6, 5), "components=82"),
-              "pca: option components must be between 1 and 81, got 82");
+              "pca: option components must be at most 81 for this BTF (its lights, or 3 x texels "
+              "if fewer), got 82");
 }
 
 TEST(Pca, ShapeBeyondGpuTextureLimitsIsRefused) {

@@ -83,20 +83,20 @@ TEST(RfOptions, InvalidOptionsAreRefusedWithExactMessages) {
     const auto fitWith = [&](const std::string& options) {
         return errorOf([&] { RfMaterial::fit(btf, FitOptions::parse(options)); });
     };
-    EXPECT_EQ(fitWith("lobes=0"), "option lobes: must be between 1 and 8, got 0");
-    EXPECT_EQ(fitWith("lobes=9"), "option lobes: must be between 1 and 8, got 9");
-    EXPECT_EQ(fitWith("lobes=two"), "option lobes: 'two' is not an integer");
-    EXPECT_EQ(fitWith("iterations=0"), "option iterations: must be at least 1, got 0");
-    EXPECT_EQ(fitWith("starts=4"), "option starts: must be between 1 and 3, got 4");
+    EXPECT_EQ(fitWith("lobes=0"), "rf: option lobes must be an integer in 1..8, got 0");
+    EXPECT_EQ(fitWith("lobes=9"), "rf: option lobes must be an integer in 1..8, got 9");
+    EXPECT_EQ(fitWith("lobes=two"), "rf: option lobes must be an integer in 1..8, got two");
+    EXPECT_EQ(fitWith("iterations=0"), "rf: option iterations must be an integer >= 1, got 0");
+    EXPECT_EQ(fitWith("starts=4"), "rf: option starts must be an integer in 1..3, got 4");
     EXPECT_EQ(fitWith("max-exponent=0.5"),
-              "option max-exponent: must be between 1 and 256, got 0.5");
+              "rf: option max-exponent must be a number in 1..256, got 0.5");
     EXPECT_EQ(fitWith("max-exponent=nan"),
-              "option max-exponent: must be between 1 and 256, got nan");
+              "rf: option max-exponent must be a number in 1..256, got nan");
     EXPECT_EQ(fitWith("lobe=2"),
-              "rf: unknown option 'lobe' (known: lobes, iterations, starts, max-exponent)");
+              "rf: option lobe is unknown (known: lobes, iterations, starts, max-exponent)");
     // The registry's entry point validates the same way.
     EXPECT_EQ(errorOf([&] { findMethod("rf").fit(btf, FitOptions::parse("lobes=0")); }),
-              "option lobes: must be between 1 and 8, got 0");
+              "rf: option lobes must be an integer in 1..8, got 0");
 }
 
 TEST(RfOptions, DataTheModelCannotHoldIsRefused) {
@@ -114,8 +114,8 @@ TEST(RfRegistry, RegisteredWithOptionDocs) {
     const MethodInfo& info = findMethod("rf");
     EXPECT_NE(info.description.find("reflectance fields"), std::string::npos);
     ASSERT_FALSE(info.options.empty());
-    EXPECT_EQ(info.options[0].first, "lobes");
-    EXPECT_NE(info.options[0].second.find("default 2"), std::string::npos);
+    EXPECT_EQ(info.options[0].name, "lobes");
+    EXPECT_EQ(info.options[0].defaultValue, "2");
 }
 
 // Seed 001 Table 2 at its standard configuration: Bonn 81 directions, 2 lobes, 256 x 256 texels.

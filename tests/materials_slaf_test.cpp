@@ -57,12 +57,13 @@ ErrorSummary errorOf(const MeasuredBtf& btf, const Material& m) {
 
 TEST(Slaf, InvalidOptionsAndInputAreRefused) {
     const MeasuredBtf btf = smallSample(2, 2);
-    EXPECT_EQ(fitError(btf, "lobes=0"), "slaf: option lobes must be between 1 and 8, got 0");
-    EXPECT_EQ(fitError(btf, "rounds=-1"), "slaf: option rounds must be between 0 and 10, got -1");
+    EXPECT_EQ(fitError(btf, "lobes=0"), "slaf: option lobes must be an integer in 1..8, got 0");
+    EXPECT_EQ(fitError(btf, "rounds=-1"),
+              "slaf: option rounds must be an integer in 0..10, got -1");
     EXPECT_EQ(fitError(btf, "iterations=501"),
-              "slaf: option iterations must be between 1 and 500, got 501");
+              "slaf: option iterations must be an integer in 1..500, got 501");
     EXPECT_EQ(fitError(btf, "views=3"),
-              "slaf: unknown option 'views' (known: cosine, iterations, lobes, rounds)");
+              "slaf: option views is unknown (known: lobes, iterations, rounds, cosine)");
     EXPECT_EQ(fitError(MeasuredBtf(), ""), "slaf: cannot fit an empty BTF");
 }
 

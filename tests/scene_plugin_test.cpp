@@ -143,6 +143,36 @@ TEST(ScenePlugins, UnknownFitMethod) {
     EXPECT_FALSE(fs::exists(dir.file("cache")));
 }
 
+TEST(ScenePlugins, FitOptionsAreValidatedAgainstTheMethodsTable) {
+    TempDir dir;
+    const std::string zip = writeSampleZip(dir);
+    ReadResult result = readNode(zip, "method=lambert lobes=2 cache=off");
+    EXPECT_EQ(result.status(), ReadResult::ERROR_IN_READING_FILE);
+    EXPECT_EQ(result.message(), "lambert: option lobes is unknown (known: none)");
+    result = readNode(zip, "method=pca storage=int cache=off");
+    EXPECT_EQ(result.message(), "pca: option storage must be one of unorm8, half, float, got int");
+    // Words no method knows belong to other plugins and are left alone.
+    result = readNode(zip, "method=lambert noRotation otherPlugin=3 cache=off");
+    EXPECT_TRUE(result.success()) << result.message();
+}
+
+TEST(ScenePlugins, OptionDocumentationComesFromTheMethodTables) {
+    usePluginsFromBuild();
+    osgDB::ReaderWriter* reader = osgDB::Registry::instance()->getReaderWriterForExtension("btf");
+    ASSERT_NE(reader, nullptr);
+    const auto options = reader->supportedOptions();
+    for (const std::string& name : methodNames())
+        for (const OptionSpec& option : findMethod(name).options) {
+            const auto it = options.find(option.name + "=<" + option.typeName() + ">");
+            ASSERT_NE(it, options.end()) << name << " " << option.name;
+            EXPECT_NE(it->second.find(name + ": " + optionHelp(option)), std::string::npos)
+                << it->second;
+        }
+    EXPECT_EQ(options.at("lobes=<integer>")
+                  .rfind("laf: number of Lafortune lobes (integer in 1..8, default 2); slaf: ", 0),
+              0u);
+}
+
 TEST(ScenePlugins, BrokenMeasuredFileIsAnErrorNamingIt) {
     TempDir dir;
     osgBTF::test::writeTextFile(dir.file("broken.zip"), "PK but not really");

@@ -52,10 +52,9 @@ osg::ref_ptr<LafMaterial> LafMaterial::create(int width, int height, int lobeCou
 // ---- fitter ----------------------------------------------------------------------------------
 
 osg::ref_ptr<LafMaterial> LafMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
-    lobes::checkOptionNames(options, "laf", {"cosine", "iterations", "lobes"});
-    const int k = lobes::boundedOption(options, "laf", "lobes", 2, 1, lobes::kMaxLobes);
-    const int iterations = lobes::boundedOption(options, "laf", "iterations", 50, 1, 500);
-    const bool cosine = lobes::boundedOption(options, "laf", "cosine", 1, 0, 1) == 1;
+    const OptionValues o = validateOptions("laf", options);
+    const int k = o.integer("lobes"), iterations = o.integer("iterations");
+    const bool cosine = o.flag("cosine");
     if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
         throw Error("laf: cannot fit an empty BTF");
 
@@ -271,19 +270,34 @@ osg::ref_ptr<osg::StateSet> LafMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod(
-    {"laf",
-     "Lafortune lobes per texel (McAllister): rho_d + rho_s * sum_k (C . v*l)^n; RGB albedos, "
-     "luminance lobes; 14 values / 22 bytes per texel at 2 lobes",
-     {{"lobes", "number of Lafortune lobes, 1..8 (default 2)"},
-      {"iterations", "Levenberg-Marquardt iterations per texel, 1..500 (default 50)"},
-      {"cosine",
-       "1: the bracket times l_z, the BRDF model times the foreshortening the data "
-       "contain (default); 0: seed 001 eq. 2 literally, no l_z"}},
-     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-         return LafMaterial::fit(btf, o);
-     },
-     [](const FittedMaterial& f) -> osg::ref_ptr<Material> { return LafMaterial::fromFile(f); }});
+const bool registered = registerMethod([] {
+    MethodInfo m;
+    m.name = "laf";
+    m.description =
+        "Lafortune lobes per texel (McAllister): rho_d + rho_s * sum_k (C . v*l)^n; RGB albedos, "
+        "luminance lobes; 14 values / 22 bytes per texel at 2 lobes";
+    m.options = {
+        OptionSpec::integer("lobes", 2, 1, lobes::kMaxLobes, "number of Lafortune lobes"),
+        OptionSpec::integer("iterations", 50, 1, 500, "Levenberg-Marquardt iterations per texel"),
+        OptionSpec::flag("cosine", true,
+                         "1: the bracket times l_z, the BRDF model times the foreshortening the "
+                         "data contain; 0: seed 001 eq. 2 literally, no l_z")};
+    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return LafMaterial::fit(btf, o);
+    };
+    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+        return LafMaterial::fromFile(f);
+    };
+    m.createInstance = []() -> osg::Object* { return new LafMaterial; };
+    m.shaderCost = [](const Material& material) {
+        // v*l 1; per lobe: row index 2, dot, test, pow, add; bracket 5. Fetches: lobes + rhoD,
+        // rhoS.
+        const int k = static_cast<const LafMaterial&>(material).lobeCount();
+        return ShaderCost::ofEvaluate(6 + 6 * k, k + 2, "ALU 6k+16, TEX k+2 (k lobes)");
+    };
+    m.order = 10;
+    return m;
+}());
 }  // namespace
 
 }  // namespace osgBTF

@@ -286,25 +286,6 @@ void nonNegativeLeastSquares2(const double* f, const double* g, const double* y,
     beta = bestB;
 }
 
-void checkOptionNames(const FitOptions& options, const std::string& method,
-                      const std::vector<std::string>& known) {
-    for (const auto& entry : options.values())
-        if (std::find(known.begin(), known.end(), entry.first) == known.end()) {
-            std::string list;
-            for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-            throw Error(method + ": unknown option '" + entry.first + "' (known: " + list + ")");
-        }
-}
-
-int boundedOption(const FitOptions& options, const std::string& method, const std::string& key,
-                  int fallback, int lo, int hi) {
-    const int value = options.getInt(key, fallback);
-    if (value < lo || value > hi)
-        throw Error(method + ": option " + key + " must be between " + std::to_string(lo) +
-                    " and " + std::to_string(hi) + ", got " + std::to_string(value));
-    return value;
-}
-
 float roundHalf(double x) {
     return float(Imath::half(float(std::clamp(x, -65504.0, 65504.0))));
 }

@@ -107,13 +107,6 @@ void scaleLobes(double* lobeParams, int lobes, double factor);
 
 // ---- small helpers both methods' fitters and models use ---------------------------------------
 
-/** Throws Error "METHOD: unknown option 'KEY' (known: a, b)" for keys not in `known`. */
-void checkOptionNames(const FitOptions& options, const std::string& method,
-                      const std::vector<std::string>& known);
-/** An integer option in [lo, hi]; throws Error "METHOD: option KEY must be between LO and HI,
- *  got V". */
-int boundedOption(const FitOptions& options, const std::string& method, const std::string& key,
-                  int fallback, int lo, int hi);
 /** Rounds to the nearest half float (clamped to its finite range). */
 float roundHalf(double x);
 /** Seed 001's per-texel error: mean over pairs of |measured - model| (RGB length). */

@@ -15,7 +15,9 @@ void LambertMaterial::assignFrom(const Material& other) {
     albedo = o.albedo;
 }
 
-osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const MeasuredBtf& btf, const FitOptions&) {
+osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const MeasuredBtf& btf,
+                                                   const FitOptions& options) {
+    validateOptions("lambert", options);  // it has none: anything given is an error
     osg::ref_ptr<LambertMaterial> m = new LambertMaterial;
     m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());
     m->albedo.assign(btf.texelCount() * 3, 0.0f);
@@ -76,16 +78,23 @@ osg::ref_ptr<osg::StateSet> LambertMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered =
-    registerMethod({"lambert",
-                    "plain lit texture: rho(x) * cos(theta_l), the baseline",
-                    {},
-                    [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-                        return LambertMaterial::fit(btf, o);
-                    },
-                    [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-                        return LambertMaterial::fromFile(f);
-                    }});
+const bool registered = registerMethod([] {
+    MethodInfo m;
+    m.name = "lambert";
+    m.description = "plain lit texture: rho(x) * cos(theta_l), the baseline";
+    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return LambertMaterial::fit(btf, o);
+    };
+    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+        return LambertMaterial::fromFile(f);
+    };
+    m.createInstance = []() -> osg::Object* { return new LambertMaterial; };
+    // One albedo fetch, times l_z.
+    m.shaderCost = [](const Material&) { return ShaderCost::ofEvaluate(1, 1, "ALU 11, TEX 1"); };
+    m.compareAll = false;  // the comparison always adds it as its baseline
+    m.order = 0;
+    return m;
+}());
 }  // namespace
 
 }  // namespace osgBTF

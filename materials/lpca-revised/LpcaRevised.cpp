@@ -52,35 +52,20 @@ void LpcaRevisedMaterial::assignFrom(const Material& other) {
 
 osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fit(const MeasuredBtf& btf,
                                                            const FitOptions& options) {
-    static const std::set<std::string> lpcaKeys = {"clusters", "components", "iterations",
-                                                   "training", "seed"};
-    FitOptions lpcaOptions;
-    for (const auto& [key, value] : options.values()) {
-        if (lpcaKeys.count(key))
-            lpcaOptions.set(key, value);
-        else if (key != "resolution" && key != "storage")
-            throw Error("lpca-revised: unknown option '" + key +
-                        "' (known: clusters, components, iterations, training, seed, "
-                        "resolution, storage)");
-    }
-    const int resolution = options.getInt("resolution", 16);
-    const std::string storage = options.getString("storage", "half");
-    if (resolution < 2 || resolution * resolution > kMax3DTextureSize)
-        throw Error("lpca-revised: resolution must be between 2 and 45, got " +
-                    std::to_string(resolution));
-    if (storage != "half" && storage != "unorm8")
-        throw Error("lpca-revised: storage must be 'half' or 'unorm8', got '" + storage + "'");
-    const LpcaSettings settings = LpcaSettings::fromOptions(lpcaOptions);
-    if (settings.clusters * resolution > kMax3DTextureSize ||
-        settings.components * resolution > kMax3DTextureSize)
-        throw Error(
-            "lpca-revised: clusters x resolution and components x resolution must be at "
-            "most " +
-            std::to_string(kMax3DTextureSize) + " (3D texture size), got " +
-            std::to_string(settings.clusters * resolution) + " and " +
-            std::to_string(settings.components * resolution));
-    osg::ref_ptr<LpcaMaterial> lpca = LpcaMaterial::fit(btf, lpcaOptions);
-    return fromLpca(*lpca, resolution, storage == "unorm8");
+    const OptionValues o = validateOptions("lpca-revised", options);
+    const int resolution = o.integer("resolution");
+    const LpcaSettings settings = LpcaSettings::fromValues(o);
+    // The 3D texture holds k x n by c x n by n^2 texels: the bound on n depends on k and c.
+    const int largest = std::max(settings.clusters, settings.components);
+    if (largest * resolution > kMax3DTextureSize)
+        throw Error("lpca-revised: option resolution must be at most " +
+                    std::to_string(kMax3DTextureSize / largest) +
+                    " with clusters=" + std::to_string(settings.clusters) +
+                    " components=" + std::to_string(settings.components) +
+                    " (k x n and c x n <= " + std::to_string(kMax3DTextureSize) +
+                    ", the 3D texture size), got " + std::to_string(resolution));
+    osg::ref_ptr<LpcaMaterial> lpca = LpcaMaterial::fit(btf, settings);
+    return fromLpca(*lpca, resolution, o.choice("storage") == "unorm8");
 }
 
 osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromLpca(const LpcaMaterial& lpca,
@@ -340,23 +325,42 @@ osg::ref_ptr<osg::StateSet> LpcaRevisedMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod(
-    {"lpca-revised",
-     "revised local PCA (Schneider 2004): LPCA Eigen-BRDFs resampled over the elevated "
-     "concentric map into one filtered 3D texture, 2 fetches + 1 lerp per component",
-     {{"clusters", "number of clusters k, 1..256 (default 32)"},
-      {"components", "Eigen-BRDFs per cluster c (default 8)"},
-      {"iterations", "maximum Lloyd iterations of the clustering (default 20)"},
-      {"training", "texels sampled to train the clusters, 0 = all (default 4096)"},
-      {"seed", "random seed of the training sample (default 1)"},
-      {"resolution", "grid samples per direction parameter, 2..45 (default 16)"},
-      {"storage", "grid precision: half or unorm8 (scales folded into the weights; default half)"}},
-     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-         return LpcaRevisedMaterial::fit(btf, o);
-     },
-     [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-         return LpcaRevisedMaterial::fromFile(f);
-     }});
+const bool registered = registerMethod([] {
+    MethodInfo m;
+    m.name = "lpca-revised";
+    m.description =
+        "revised local PCA (Schneider 2004): LPCA Eigen-BRDFs resampled over the elevated "
+        "concentric map into one filtered 3D texture, 2 fetches + 1 lerp per component";
+    m.options = LpcaSettings::optionTable();
+    // n^2 <= 2048 (the 3D texture's depth): n <= 45.
+    m.options.push_back(
+        OptionSpec::integer("resolution", 16, 2, 45, "grid samples per direction parameter n"));
+    m.options.push_back(OptionSpec::choice("storage", "half", {"half", "unorm8"},
+                                           "grid precision (unorm8: the scales are folded into "
+                                           "the weights)"));
+    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return LpcaRevisedMaterial::fit(btf, o);
+    };
+    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+        return LpcaRevisedMaterial::fromFile(f);
+    };
+    m.createInstance = []() -> osg::Object* { return new LpcaRevisedMaterial; };
+    m.shaderCost = [](const Material& material) {
+        // Cluster 2; two concentric maps 17 each; grid coordinates 22; per component: row 2, two
+        // filtered 3D fetches with their scaling 2, weight address 2 and fetch, mix, multiply-add
+        // 2; offset test 1 (+3 and a fetch when the grid is 8-bit).
+        const auto& revised = static_cast<const LpcaRevisedMaterial&>(material);
+        const int c = revised.components();
+        const bool offset = revised.eightBit();
+        return ShaderCost::ofEvaluate(58 + 9 * c + 1 + (offset ? 3 : 0),
+                                      1 + 3 * c + (offset ? 1 : 0),
+                                      offset ? "ALU 9c+72, TEX 3c+2 (c components, 8-bit)"
+                                             : "ALU 9c+69, TEX 3c+1 (c components)");
+    };
+    m.order = 60;
+    m.quickFitOptions = "clusters=2 components=2 resolution=4";
+    return m;
+}());
 }  // namespace
 
 }  // namespace osgBTF

@@ -263,19 +263,32 @@ osg::ref_ptr<osg::StateSet> LpcaMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod(
-    {"lpca",
-     "local PCA (Mueller 2003): per texel a cluster index and c weights of its cluster's "
-     "Eigen-BRDFs, 3x3 view/light interpolation",
-     {{"clusters", "number of clusters k, 1..256 (default 32)"},
-      {"components", "Eigen-BRDFs per cluster c (default 8)"},
-      {"iterations", "maximum Lloyd iterations of the clustering (default 20)"},
-      {"training", "texels sampled to train the clusters, 0 = all (default 4096)"},
-      {"seed", "random seed of the training sample (default 1)"}},
-     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-         return LpcaMaterial::fit(btf, o);
-     },
-     [](const FittedMaterial& f) -> osg::ref_ptr<Material> { return LpcaMaterial::fromFile(f); }});
+const bool registered = registerMethod([] {
+    MethodInfo m;
+    m.name = "lpca";
+    m.description =
+        "local PCA (Mueller 2003): per texel a cluster index and c weights of its cluster's "
+        "Eigen-BRDFs, 3x3 view/light interpolation";
+    m.options = LpcaSettings::optionTable();
+    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return LpcaMaterial::fit(btf, o);
+    };
+    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+        return LpcaMaterial::fromFile(f);
+    };
+    m.createInstance = []() -> osg::Object* { return new LpcaMaterial; };
+    m.shaderCost = [](const Material& material) {
+        // Cluster fetch and decode 2; two lookups; per component: alpha address 2 and fetch,
+        // 9 x (weight product, row index 2, multiply-add 2, one fetch), weighted add 2.
+        const int c = static_cast<const LpcaMaterial&>(material).components();
+        return ShaderCost::ofEvaluate(2 + 2 * ShaderCost::kLookupAlu + 49 * c,
+                                      1 + 2 * ShaderCost::kLookupTex + 10 * c,
+                                      "ALU 49c+34, TEX 10c+5 (c components)");
+    };
+    m.order = 50;
+    m.quickFitOptions = "clusters=2 components=2";
+    return m;
+}());
 }  // namespace
 
 }  // namespace osgBTF

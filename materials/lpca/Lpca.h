@@ -33,7 +33,11 @@ struct LpcaSettings {
     int trainingTexels = 4096;  ///< [training] texels the clusters are trained on (0 = all)
     unsigned seed = 1;          ///< [seed] random seed of the training sample and refit subsampling
 
-    /** Reads and validates the options; throws Error "lpca: ..." for bad values. */
+    /** The options above as an option table (lpca-revised extends it). */
+    static std::vector<OptionSpec> optionTable();
+    /** The settings from values validated against a table that includes optionTable(). */
+    static LpcaSettings fromValues(const OptionValues& values);
+    /** validateOptions("lpca", options), then fromValues. */
     static LpcaSettings fromOptions(const FitOptions& options);
 };
 
@@ -48,6 +52,8 @@ public:
         /** Fits the model (LpcaFit.cpp). Options: see LpcaSettings. Fills fitInfo with "seconds",
          *  "iterations", "training_texels", "training_rms". Throws Error for invalid options. */
         static osg::ref_ptr<LpcaMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+    /** The same with settings already read (lpca-revised's fit). */
+    static osg::ref_ptr<LpcaMaterial> fit(const MeasuredBtf& btf, const LpcaSettings& settings);
     static osg::ref_ptr<LpcaMaterial> fromFile(const FittedMaterial& file);
 
     /** A model of the given shape with zero weights and Eigen-BRDFs, e.g. for memory accounting

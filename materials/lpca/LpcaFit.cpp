@@ -146,32 +146,32 @@ void fitSubspace(const RowMatrix& rows, const std::vector<std::size_t>& members,
 
 }  // namespace
 
-LpcaSettings LpcaSettings::fromOptions(const FitOptions& options) {
-    static const std::set<std::string> known = {"clusters", "components", "iterations", "training",
-                                                "seed"};
-    for (const auto& [key, value] : options.values())
-        if (!known.count(key))
-            throw Error("lpca: unknown option '" + key +
-                        "' (known: clusters, components, iterations, training, seed)");
+std::vector<OptionSpec> LpcaSettings::optionTable() {
+    const LpcaSettings d;
+    return {OptionSpec::integer("clusters", d.clusters, 1, 256,
+                                "number of clusters k (the index is stored in 8 bits)"),
+            OptionSpec::integer("components", d.components, 1, OptionSpec::kNoLimit,
+                                "Eigen-BRDFs per cluster c"),
+            OptionSpec::integer("iterations", d.iterations, 1, OptionSpec::kNoLimit,
+                                "maximum Lloyd iterations of the clustering"),
+            OptionSpec::integer("training", d.trainingTexels, 0, OptionSpec::kNoLimit,
+                                "texels sampled to train the clusters, 0 = all"),
+            OptionSpec::integer("seed", int(d.seed), 0, OptionSpec::kNoLimit,
+                                "random seed of the training sample")};
+}
+
+LpcaSettings LpcaSettings::fromValues(const OptionValues& values) {
     LpcaSettings s;
-    s.clusters = options.getInt("clusters", s.clusters);
-    s.components = options.getInt("components", s.components);
-    s.iterations = options.getInt("iterations", s.iterations);
-    s.trainingTexels = options.getInt("training", s.trainingTexels);
-    const int seed = options.getInt("seed", int(s.seed));
-    if (s.clusters < 1 || s.clusters > 256)
-        throw Error("lpca: clusters must be between 1 and 256 (8-bit index), got " +
-                    std::to_string(s.clusters));
-    if (s.components < 1)
-        throw Error("lpca: components must be at least 1, got " + std::to_string(s.components));
-    if (s.iterations < 1)
-        throw Error("lpca: iterations must be at least 1, got " + std::to_string(s.iterations));
-    if (s.trainingTexels < 0)
-        throw Error("lpca: training must be 0 (all texels) or a texel count, got " +
-                    std::to_string(s.trainingTexels));
-    if (seed < 0) throw Error("lpca: seed must be >= 0, got " + std::to_string(seed));
-    s.seed = unsigned(seed);
+    s.clusters = values.integer("clusters");
+    s.components = values.integer("components");
+    s.iterations = values.integer("iterations");
+    s.trainingTexels = values.integer("training");
+    s.seed = unsigned(values.integer("seed"));
     return s;
+}
+
+LpcaSettings LpcaSettings::fromOptions(const FitOptions& options) {
+    return fromValues(validateOptions("lpca", options));
 }
 
 struct LpcaFitter {
@@ -182,6 +182,10 @@ osg::ref_ptr<LpcaMaterial> LpcaMaterial::fit(const MeasuredBtf& btf, const FitOp
     return LpcaFitter::run(btf, LpcaSettings::fromOptions(options));
 }
 
+osg::ref_ptr<LpcaMaterial> LpcaMaterial::fit(const MeasuredBtf& btf, const LpcaSettings& settings) {
+    return LpcaFitter::run(btf, settings);
+}
+
 osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const MeasuredBtf& btf, const LpcaSettings& s) {
     const auto start = std::chrono::steady_clock::now();
     if (btf.empty()) throw Error("lpca: the BTF is empty");
@@ -189,11 +193,11 @@ osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const MeasuredBtf& btf, const LpcaSet
     const std::size_t dims = btf.viewCount() * btf.lightCount() * 3;
     const int K = s.clusters, c = s.components;
     if (std::size_t(c) > dims)
-        throw Error("lpca: components (" + std::to_string(c) + ") exceed the ABRDF size (" +
-                    std::to_string(dims) + ")");
+        throw Error("lpca: option components must be at most " + std::to_string(dims) +
+                    " (the values per texel of this BTF), got " + std::to_string(c));
     if (std::size_t(K) > texels)
-        throw Error("lpca: clusters (" + std::to_string(K) + ") exceed the texel count (" +
-                    std::to_string(texels) + ")");
+        throw Error("lpca: option clusters must be at most " + std::to_string(texels) +
+                    " (the texels of this BTF), got " + std::to_string(K));
     std::mt19937_64 random(s.seed);  // training sample and refit subsampling
 
     // ---- training set ----

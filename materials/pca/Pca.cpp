@@ -46,11 +46,10 @@ double bytesPerValue(MaterialTexture::PixelKind kind) {
     return 4;
 }
 
-MaterialTexture::PixelKind parseStorage(const std::string& text) {
+/** The storage option's value (validated: one of the option table's choices). */
+MaterialTexture::PixelKind storageKind(const std::string& text) {
     if (text == "unorm8") return MaterialTexture::UNorm8;
-    if (text == "half") return MaterialTexture::Half;
-    if (text == "float") return MaterialTexture::Float;
-    throw Error("pca: option storage must be unorm8, half or float, got '" + text + "'");
+    return text == "half" ? MaterialTexture::Half : MaterialTexture::Float;
 }
 
 /** Stores one Eigen-Texture column (3 * texels values, max |value| = 1) at the storage's precision.
@@ -146,17 +145,17 @@ void PcaMaterial::bakeDirectionTables() {
 
 osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
-    for (const auto& entry : options.values())
-        if (entry.first != "components" && entry.first != "storage")
-            throw Error("pca: unknown option '" + entry.first + "' (options: components, storage)");
+    const OptionValues o = validateOptions("pca", options);
     if (btf.empty()) throw Error("pca: the BTF is empty");
-    const int components = options.getInt("components", 16);
-    const MaterialTexture::PixelKind storage = parseStorage(options.getString("storage", "unorm8"));
+    const int components = o.integer("components");
+    const MaterialTexture::PixelKind storage = storageKind(o.choice("storage"));
     const std::size_t texels = btf.texelCount(), rows = texels * 3, lights = btf.lightCount();
     const std::size_t maxComponents = std::min(lights, rows);
-    if (components < 1 || std::size_t(components) > maxComponents)
-        throw Error("pca: option components must be between 1 and " +
-                    std::to_string(maxComponents) + ", got " + std::to_string(components));
+    // The rank of a view's matrix bounds it; that depends on the data, not on the table.
+    if (std::size_t(components) > maxComponents)
+        throw Error("pca: option components must be at most " + std::to_string(maxComponents) +
+                    " for this BTF (its lights, or 3 x texels if fewer), got " +
+                    std::to_string(components));
 
     osg::ref_ptr<PcaMaterial> m = new PcaMaterial;
     m->setShape(btf.width(), btf.height(), btf.views(), btf.lights(), components, storage);
@@ -348,19 +347,39 @@ osg::ref_ptr<osg::StateSet> PcaMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod(
-    {"pca",
-     "per-view Eigen-Textures (Sattler 2003): rank-c PCA of each view's light images, "
-     "3x3 view/light interpolation; 3888 values / 3888 bytes per texel at 81 views, 16 "
-     "components, unorm8",
-     {{"components", "Eigen-Textures per view, 1..lights (default 16)"},
-      {"storage",
-       "Eigen-Texture precision: unorm8 (1 byte, seed 001), half or float "
-       "(default unorm8)"}},
-     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-         return PcaMaterial::fit(btf, o);
-     },
-     [](const FittedMaterial& f) -> osg::ref_ptr<Material> { return PcaMaterial::fromFile(f); }});
+const bool registered = registerMethod([] {
+    MethodInfo m;
+    m.name = "pca";
+    m.description =
+        "per-view Eigen-Textures (Sattler 2003): rank-c PCA of each view's light images, "
+        "3x3 view/light interpolation; 3888 values / 3888 bytes per texel at 81 views, 16 "
+        "components, unorm8";
+    m.options = {
+        OptionSpec::integer("components", 16, 1, OptionSpec::kNoLimit,
+                            "Eigen-Textures per view (at most the lights, or 3 x texels if fewer)"),
+        OptionSpec::choice("storage", "unorm8", {"unorm8", "half", "float"},
+                           "Eigen-Texture precision: unorm8 is 1 byte per value, as seed 001 "
+                           "Table 2 counts")};
+    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return PcaMaterial::fit(btf, o);
+    };
+    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+        return PcaMaterial::fromFile(f);
+    };
+    m.createInstance = []() -> osg::Object* { return new PcaMaterial; };
+    m.shaderCost = [](const Material& material) {
+        // View + light lookups; 3 view-weight tests; per (view, light) pair (9): weight product
+        // and test, bias fetch, per component: tile address 4, multiply-add 2 and 2 fetches;
+        // weighted add 2.
+        const int c = static_cast<const PcaMaterial&>(material).components();
+        return ShaderCost::ofEvaluate(2 * ShaderCost::kLookupAlu + 3 + 9 * (4 + 6 * c),
+                                      2 * ShaderCost::kLookupTex + 9 * (1 + 2 * c),
+                                      "ALU 54c+71, TEX 18c+13 (c components)");
+    };
+    m.order = 40;
+    m.quickFitOptions = "components=2";
+    return m;
+}());
 }  // namespace
 
 }  // namespace osgBTF

@@ -138,28 +138,12 @@ void RfMaterial::roundToStorage() {
 // ---- options ---------------------------------------------------------------------------------
 
 RfMaterial::Settings RfMaterial::settingsFrom(const FitOptions& options) {
-    static const char* const known[] = {"lobes", "iterations", "starts", "max-exponent"};
-    for (const auto& entry : options.values())
-        if (std::find_if(std::begin(known), std::end(known),
-                         [&](const char* k) { return entry.first == k; }) == std::end(known))
-            throw Error("rf: unknown option '" + entry.first +
-                        "' (known: lobes, iterations, starts, max-exponent)");
+    const OptionValues o = validateOptions("rf", options);
     Settings s;
-    const auto outOfRange = [&](const std::string& key, const std::string& range) {
-        return Error("option " + key + ": must be " + range + ", got " +
-                     options.getString(key, ""));
-    };
-    s.lobes = options.getInt("lobes", s.lobes);
-    if (s.lobes < 1 || s.lobes > kMaxLobes)
-        throw outOfRange("lobes", "between 1 and " + std::to_string(kMaxLobes));
-    s.iterations = options.getInt("iterations", s.iterations);
-    if (s.iterations < 1) throw outOfRange("iterations", "at least 1");
-    s.starts = options.getInt("starts", s.starts);
-    if (s.starts < 1 || s.starts > 3) throw outOfRange("starts", "between 1 and 3");
-    s.maxExponent = options.getDouble("max-exponent", s.maxExponent);
-    // Above 256 a base a little over 1 overflows half precision; below 1 no cosine fits.
-    if (!(s.maxExponent >= 1.0 && s.maxExponent <= 256.0))
-        throw outOfRange("max-exponent", "between 1 and 256");
+    s.lobes = o.integer("lobes");
+    s.iterations = o.integer("iterations");
+    s.starts = o.integer("starts");
+    s.maxExponent = o.number("max-exponent");
     return s;
 }
 
@@ -687,20 +671,44 @@ osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
 // ---- registration ----------------------------------------------------------------------------
 
 namespace {
-const bool registered = registerMethod(
-    {"rf",
-     "reflectance fields (Meseth 2003): per measured view, rho_d + rho_v(v) RGB x k light lobes "
-     "(a l_x + b l_y + c l_z)^n, views blended with interpolation weights",
-     {{"lobes", "lobes per view, 1-8 (default 2)"},
-      {"iterations", "Levenberg-Marquardt iterations per start (default 20)"},
-      {"starts",
-       "initialisations tried per texel and view when the first fits poorly, 1-3 "
-       "(default 2: greedy, then the left neighbour's lobes)"},
-      {"max-exponent", "largest lobe exponent n, 1-256 (default 64)"}},
-     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-         return RfMaterial::fit(btf, o);
-     },
-     [](const FittedMaterial& f) -> osg::ref_ptr<Material> { return RfMaterial::fromFile(f); }});
+const bool registered = registerMethod([] {
+    const RfMaterial::Settings defaults;
+    MethodInfo m;
+    m.name = "rf";
+    m.description =
+        "reflectance fields (Meseth 2003): per measured view, rho_d + rho_v(v) RGB x k light "
+        "lobes (a l_x + b l_y + c l_z)^n, views blended with interpolation weights";
+    m.options = {
+        OptionSpec::integer("lobes", defaults.lobes, 1, RfMaterial::kMaxLobes,
+                            "lobes per view (8 x 151 UBO2014 views = 1208 array layers < 2048)"),
+        OptionSpec::integer("iterations", defaults.iterations, 1, OptionSpec::kNoLimit,
+                            "Levenberg-Marquardt iterations per start"),
+        OptionSpec::integer("starts", defaults.starts, 1, 3,
+                            "initialisations tried per texel and view while the fit is poor: "
+                            "greedy, the left neighbour's lobes, greedy with the lobe at the "
+                            "mirror direction"),
+        // Above 256 a base a little over 1 overflows half precision; below 1 no cosine fits.
+        OptionSpec::number("max-exponent", defaults.maxExponent, 1, 256,
+                           "largest lobe exponent n (the Bonn lights are 15 degrees apart: "
+                           "sharper lobes are unconstrained between them)")};
+    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return RfMaterial::fit(btf, o);
+    };
+    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+        return RfMaterial::fromFile(f);
+    };
+    m.createInstance = []() -> osg::Object* { return new RfMaterial; };
+    m.shaderCost = [](const Material& material) {
+        // View lookup, rhoD; per blended view (3): weight test, rhoV fetch, per lobe: layer index
+        // 2, 3-term dot 5, test, select, pow, add; then 3 for the weighted add.
+        const int k = static_cast<const RfMaterial&>(material).lobeCount();
+        return ShaderCost::ofEvaluate(ShaderCost::kLookupAlu + 3 * (4 + 11 * k),
+                                      ShaderCost::kLookupTex + 1 + 3 * (1 + k),
+                                      "ALU 33k+33, TEX 3k+6 (k lobes per view)");
+    };
+    m.order = 30;
+    return m;
+}());
 }  // namespace
 
 }  // namespace osgBTF

@@ -68,11 +68,10 @@ void SlafMaterial::prepare() {
 // rounded to half, so the last step is optimal for exactly what the file and the GPU hold.
 
 osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
-    lobes::checkOptionNames(options, "slaf", {"cosine", "iterations", "lobes", "rounds"});
-    const int k = lobes::boundedOption(options, "slaf", "lobes", 2, 1, lobes::kMaxLobes);
-    const int iterations = lobes::boundedOption(options, "slaf", "iterations", 50, 1, 500);
-    const int rounds = lobes::boundedOption(options, "slaf", "rounds", 2, 0, 10);
-    const bool cosine = lobes::boundedOption(options, "slaf", "cosine", 1, 0, 1) == 1;
+    const OptionValues o = validateOptions("slaf", options);
+    const int k = o.integer("lobes"), iterations = o.integer("iterations"),
+              rounds = o.integer("rounds");
+    const bool cosine = o.flag("cosine");
     if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
         throw Error("slaf: cannot fit an empty BTF");
     if (btf.viewCount() < 3) throw Error("slaf: needs at least 3 view directions to interpolate T");
@@ -404,18 +403,37 @@ osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod(
-    {"slaf",
-     "scaled Lafortune lobes (Daubert): T(v) * (rho_d + rho_s * sum_k (C . v*l)^n), T an RGB "
-     "table over the measured views; 257 values / 508 bytes per texel at 81 views, 2 lobes",
-     {{"lobes", "number of Lafortune lobes, 1..8 (default 2)"},
-      {"iterations", "Levenberg-Marquardt iterations per texel and round, 1..500 (default 50)"},
-      {"rounds", "alternations between the view table T and the lobes, 0..10 (default 2)"},
-      {"cosine", "1: the bracket times l_z (default); 0: seed 001 eq. 4 literally (see laf)"}},
-     [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-         return SlafMaterial::fit(btf, o);
-     },
-     [](const FittedMaterial& f) -> osg::ref_ptr<Material> { return SlafMaterial::fromFile(f); }});
+const bool registered = registerMethod([] {
+    MethodInfo m;
+    m.name = "slaf";
+    m.description =
+        "scaled Lafortune lobes (Daubert): T(v) * (rho_d + rho_s * sum_k (C . v*l)^n), T an RGB "
+        "table over the measured views; 257 values / 508 bytes per texel at 81 views, 2 lobes";
+    m.options = {
+        OptionSpec::integer("lobes", 2, 1, lobes::kMaxLobes, "number of Lafortune lobes"),
+        OptionSpec::integer("iterations", 50, 1, 500,
+                            "Levenberg-Marquardt iterations per texel and round"),
+        OptionSpec::integer("rounds", 2, 0, 10,
+                            "alternations between the view table T and the lobes"),
+        OptionSpec::flag("cosine", true,
+                         "1: the bracket times l_z; 0: seed 001 eq. 4 literally (see laf)")};
+    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return SlafMaterial::fit(btf, o);
+    };
+    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+        return SlafMaterial::fromFile(f);
+    };
+    m.createInstance = []() -> osg::Object* { return new SlafMaterial; };
+    m.shaderCost = [](const Material& material) {
+        // View lookup; T: 3 multiply-adds and 3 fetches; v*l 1; lobes as LAF; bracket 5; T* 1.
+        const int k = static_cast<const SlafMaterial&>(material).lobeCount();
+        return ShaderCost::ofEvaluate(ShaderCost::kLookupAlu + 6 + 1 + 6 * k + 5 + 1,
+                                      ShaderCost::kLookupTex + 3 + k + 2,
+                                      "ALU 6k+34, TEX k+7 (k lobes)");
+    };
+    m.order = 20;
+    return m;
+}());
 }  // namespace
 
 }  // namespace osgBTF

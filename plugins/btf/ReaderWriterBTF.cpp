@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <sstream>
 #include <system_error>
 
@@ -74,12 +75,15 @@ Settings parseSettings(const osgDB::Options* options, const std::string& extra =
     return settings;
 }
 
-/** The method's own options among the words; the rest belongs to other plugins. */
+/** The fit options among the words, validated against the method's option table: every word
+ *  whose key is an option of some registered method (so "method=laf components=4" is an error,
+ *  not silently ignored); keys no method has belong to other plugins. */
 FitOptions fitOptionsFor(const MethodInfo& method, const Settings& settings) {
     FitOptions options;
     for (const auto& [key, value] : settings.values)
-        for (const auto& known : method.options)
-            if (known.first == key) options.set(key, value);
+        for (const std::string& name : methodNames())
+            if (findOption(findMethod(name), key)) options.set(key, value);
+    validateOptions(method, options);
     return options;
 }
 
@@ -231,7 +235,14 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
             std::string("pseudo-loader: a model under an osgBTF material, ") + kPseudoSyntax);
     if (extension != "btfmat") {
         supportsOption("method=<name>", "fit method for measured BTFs (default lpca)");
-        supportsOption("<key>=<value>", "an option of the fit method, e.g. clusters=32");
+        // Each fit option once, with what every method that has it makes of it.
+        std::map<std::string, std::string> fitOptions;
+        for (const std::string& name : methodNamesInOrder())
+            for (const OptionSpec& option : findMethod(name).options) {
+                std::string& text = fitOptions[option.name + "=<" + option.typeName() + ">"];
+                text += (text.empty() ? "" : "; ") + name + ": " + optionHelp(option);
+            }
+        for (const auto& [key, text] : fitOptions) supportsOption(key, text);
         supportsOption("cache=<dir>|off", "fit cache folder (default ~/.cache/osgbtf)");
     }
     supportsOption("scale=<s>", "texture scale (tiling) of the MaterialNode (default 1)");

@@ -26,6 +26,9 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common);
 Runner addEvalCommand(CLI::App& app, CommonOptions& common);
 Runner addCompareCommand(CLI::App& app, CommonOptions& common);
 
+/** "laf, slaf, rf": the registered methods that have fit option `key` (for help texts). */
+std::string methodsWithOption(const std::string& key);
+
 /** Adds --storage, --decode to a subcommand that loads measured data. */
 void addLoadOptions(CLI::App& command, CommonOptions& common);
 

@@ -43,12 +43,6 @@ void parseResolution(const std::string& text, PassSettings& pass) {
     throw Error("--resolution: '" + text + "' is not N or WxH (positive integers)");
 }
 
-bool hasOption(const std::string& method, const std::string& key) {
-    for (const auto& option : findMethod(method).options)
-        if (option.first == key) return true;
-    return false;
-}
-
 }  // namespace
 
 Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
@@ -83,17 +77,20 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
                      "Comma-separated methods, or 'all' (" + methodList +
                          "); the plain lit texture baseline 'lambert' is always added")
         ->capture_default_str();
-    command->add_option("--lobes", options->lobes,
-                        "lobes=N for every compared method that has it (laf, slaf, rf)");
+    command->add_option(
+        "--lobes", options->lobes,
+        "lobes=N for every compared method that has it (" + methodsWithOption("lobes") + ")");
     command->add_option("--components", options->components,
-                        "components=C for every compared method that has it (pca, lpca, "
-                        "lpca-revised)");
-    command->add_option("--clusters", options->clusters,
-                        "clusters=K for every compared method that has it (lpca, lpca-revised)");
+                        "components=C for every compared method that has it (" +
+                            methodsWithOption("components") + ")");
+    command->add_option(
+        "--clusters", options->clusters,
+        "clusters=K for every compared method that has it (" + methodsWithOption("clusters") + ")");
     command->add_option("--set", options->settings,
                         "METHOD:KEY=VALUE, one method's option (repeatable; `btf fit --help` "
                         "lists them), e.g. --set pca:components=8. Invalid values make that "
-                        "method fail, reported in the tables, while the others complete");
+                        "method fail, reported in the tables, while the others complete.\n" +
+                            methodsHelp());
     command
         ->add_option("--resolution", options->resolution,
                      "Viewport of the timed passes: N (square) or WxH")
@@ -150,7 +147,7 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
                                                              {"components", options->components},
                                                              {"clusters", options->clusters}};
             for (const auto& [key, value] : shortcuts)
-                if (value && hasOption(m, key))
+                if (value && findOption(findMethod(m), key))
                     compare.methodOptions[m][key] = std::to_string(value);
         }
         for (const std::string& setting : options->settings) {

@@ -13,19 +13,12 @@
 
 namespace osgBTF::tool {
 
-namespace {
-
-std::string methodHelp() {
-    std::string text = "Compression method:";
-    for (const std::string& name : methodNames()) {
-        const MethodInfo& info = findMethod(name);
-        text += "\n  " + name + ": " + info.description;
-        for (const auto& [option, doc] : info.options) text += "\n      " + option + "=  " + doc;
-    }
-    return text;
+std::string methodsWithOption(const std::string& key) {
+    std::string list;
+    for (const std::string& name : methodNamesInOrder())
+        if (findOption(findMethod(name), key)) list += (list.empty() ? "" : ", ") + name;
+    return list;
 }
-
-}  // namespace
 
 void printErrorSummary(const ErrorSummary& e) {
     std::cout << std::setprecision(5) << "per-texel error (seed 001 sec. 4.1): avg " << e.average
@@ -47,12 +40,14 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
     auto options = std::make_shared<Options>();
     command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
     command->add_option("-o,--output", options->output, "Fitted material file (.exr)")->required();
-    command->add_option("-m,--method", options->method, methodHelp())->required();
-    command->add_option("--lobes", options->lobes, "Shortcut for --set lobes=N (laf, slaf, rf)");
-    command->add_option("--components", options->components,
-                        "Shortcut for --set components=C (pca, lpca, lpca-revised)");
+    command->add_option("-m,--method", options->method, methodsHelp())->required();
+    command->add_option("--lobes", options->lobes,
+                        "Shortcut for --set lobes=N (" + methodsWithOption("lobes") + ")");
+    command->add_option(
+        "--components", options->components,
+        "Shortcut for --set components=C (" + methodsWithOption("components") + ")");
     command->add_option("--clusters", options->clusters,
-                        "Shortcut for --set clusters=K (lpca, lpca-revised)");
+                        "Shortcut for --set clusters=K (" + methodsWithOption("clusters") + ")");
     command->add_option("--set", options->settings,
                         "Method option KEY=VALUE (repeatable; see --method above)");
     addLoadOptions(*command, common);
@@ -66,13 +61,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         if (options->lobes) fit.set("lobes", std::to_string(options->lobes));
         if (options->components) fit.set("components", std::to_string(options->components));
         if (options->clusters) fit.set("clusters", std::to_string(options->clusters));
-        for (const auto& [key, value] : fit.values()) {
-            bool known = false;
-            for (const auto& option : method.options) known |= option.first == key;
-            if (!known)
-                throw Error("method " + method.name + " has no option '" + key +
-                            "' (see btf fit --help)");
-        }
+        validateOptions(method, fit);  // before the (long) load; the fit validates them again
 
         const auto start = std::chrono::steady_clock::now();
         const MeasuredBtf btf = loadMeasuredBtf(options->input, common.loadOptions());

@@ -1,0 +1,150 @@
+#include "materials/MaterialSerializer.h"
+
+#include <cstdint>
+#include <cstring>
+
+#include <osgDB/ObjectWrapper>
+#include <osgDB/Registry>
+#include <osgDB/Serializer>
+
+#include "core/Error.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+namespace {
+
+std::string toHex(const std::vector<float>& values) {
+    static const char digits[] = "0123456789abcdef";
+    std::string text;
+    text.reserve(values.size() * 8);
+    for (float value : values) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &value, 4);
+        for (int shift = 28; shift >= 0; shift -= 4) text += digits[(bits >> shift) & 0xf];
+    }
+    return text;
+}
+
+bool fromHex(const std::string& text, std::vector<float>& values) {
+    if (text.size() % 8 != 0) return false;
+    values.resize(text.size() / 8);
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        std::uint32_t bits = 0;
+        for (std::size_t k = 0; k < 8; ++k) {
+            const char c = text[i * 8 + k];
+            const int digit = c >= '0' && c <= '9'   ? c - '0'
+                              : c >= 'a' && c <= 'f' ? c - 'a' + 10
+                                                     : -1;
+            if (digit < 0) return false;
+            bits = (bits << 4) | std::uint32_t(digit);
+        }
+        std::memcpy(&values[i], &bits, 4);
+    }
+    return true;
+}
+
+// Every material class: one property, FittedData, the material's whole FittedMaterial. Reading
+// rebuilds it through the method registry and copies it into the object OSG created.
+bool checkFittedData(const Material& material) {
+    return material.texelCount() > 0;
+}
+
+bool readFittedData(osgDB::InputStream& is, Material& material) {
+    try {
+        FittedMaterial fitted;
+        if (!readFittedMaterial(is, fitted)) return false;
+        material.assignFrom(*materialFromFile(fitted));
+    } catch (const std::exception& e) {
+        OSG_WARN << "osgBTF::" << material.className() << ": " << e.what() << std::endl;
+    }
+    return true;
+}
+
+bool writeFittedData(osgDB::OutputStream& os, const Material& material) {
+    return writeFittedMaterial(os, material.toFittedMaterial());
+}
+
+}  // namespace
+
+/** Reads what writeFitted wrote. Returns false on a stream error; throws Error for data that
+ *  read but make no material. */
+bool readFittedMaterial(osgDB::InputStream& is, FittedMaterial& fitted) {
+    fitted.source = "material embedded in the scene";
+    is.readWrappedString(fitted.method);
+    unsigned count = 0;
+    is >> count >> is.BEGIN_BRACKET;
+    for (unsigned i = 0; i < count; ++i) {
+        std::string key, value;
+        is.readWrappedString(key);
+        is.readWrappedString(value);
+        fitted.parameters[key] = value;
+    }
+    is >> is.END_BRACKET;
+    std::string views, lights;
+    is.readWrappedString(views);
+    is.readWrappedString(lights);
+    is >> count >> is.BEGIN_BRACKET;
+    bool ok = true;
+    for (unsigned i = 0; i < count; ++i) {
+        MaterialTexture texture;
+        int kind = 0;
+        std::string data;
+        is.readWrappedString(texture.name);
+        is >> texture.width >> texture.height >> texture.depth >> texture.channels >> kind;
+        is.readWrappedString(data);
+        texture.kind = MaterialTexture::PixelKind(kind);
+        ok = ok && fromHex(data, texture.data) && texture.data.size() == texture.valueCount();
+        fitted.textures.push_back(std::move(texture));
+    }
+    is >> is.END_BRACKET;
+    if (is.getException()) return false;
+    if (!ok) fail(fitted.source, "texture data is damaged");
+    fitted.views = DirectionSet::deserialize(views);
+    fitted.lights = DirectionSet::deserialize(lights);
+    return true;
+}
+
+bool writeFittedMaterial(osgDB::OutputStream& os, const FittedMaterial& fitted) {
+    os.writeWrappedString(fitted.method);
+    os << std::endl;
+    os << unsigned(fitted.parameters.size()) << os.BEGIN_BRACKET << std::endl;
+    for (const auto& [key, value] : fitted.parameters) {
+        os.writeWrappedString(key);
+        os.writeWrappedString(value);
+        os << std::endl;
+    }
+    os << os.END_BRACKET << std::endl;
+    os.writeWrappedString(fitted.views.serialize());
+    os << std::endl;
+    os.writeWrappedString(fitted.lights.serialize());
+    os << std::endl;
+    os << unsigned(fitted.textures.size()) << os.BEGIN_BRACKET << std::endl;
+    for (const MaterialTexture& texture : fitted.textures) {
+        os.writeWrappedString(texture.name);
+        os << texture.width << texture.height << texture.depth << texture.channels
+           << int(texture.kind);
+        os.writeWrappedString(toHex(texture.data));
+        os << std::endl;
+    }
+    os << os.END_BRACKET << std::endl;
+    return true;
+}
+
+void addMaterialWrapper(const MethodInfo& method) {
+    if (!method.createInstance) return;
+    const osg::ref_ptr<osg::Object> prototype = method.createInstance();
+    const std::string name = std::string(prototype->libraryName()) + "::" + prototype->className();
+    osg::ref_ptr<osgDB::ObjectWrapper> wrapper =
+        new osgDB::ObjectWrapper(method.createInstance, name, "osg::Object " + name);
+    wrapper->addSerializer(new osgDB::UserSerializer<Material>("FittedData", &checkFittedData,
+                                                               &readFittedData, &writeFittedData),
+                           osgDB::BaseSerializer::RW_USER);
+    osgDB::ObjectWrapperManager* manager = osgDB::Registry::instance()->getObjectWrapperManager();
+    // Not findWrapper: on a miss it searches for a serializer plugin, and this runs while the
+    // library itself is being loaded. A method registered again replaces its wrapper quietly.
+    manager->getWrapperMap().erase(name);
+    manager->addWrapper(wrapper.get());
+}
+
+}  // namespace osgBTF

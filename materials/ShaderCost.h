@@ -1,0 +1,55 @@
+// osgBTF: what one fragment of a method's shader costs, counted statically from the GLSL.
+//
+// Each method supplies its count through MethodInfo::shaderCost (its shader is in its folder's
+// care); harness/ShaderCost.h applies it to a fitted material for the comparison's Table 3.
+#pragma once
+
+#include <string>
+
+namespace osgBTF {
+
+/** Operations of one fragment, split like seed 001 Table 3 into a fixed part and a part per light.
+ *
+ *  Counting rule (harness/README.md): the shader source as written, loops unrolled to the
+ *  material's parameters (lobes, components) and every data-dependent branch taken (all three
+ *  interpolation weights non-zero: the worst case). TEX = texture reads (texelFetch or a filtered
+ *  texture(); textureSize queries are free). ALU = arithmetic operations: each binary operator,
+ *  comparison or select, and each built-in call (dot, pow, normalize, clamp, floor, mix, atan,
+ *  ...) counts 1 whatever the vector width; conversions and swizzles are free. The shared frame
+ *  set-up of shaders/common/btf_main.glsl is the fixed part; btfEvaluate and the light loop body
+ *  are the per-light part. */
+struct ShaderCost {
+    int fixedAlu = 0, fixedTex = 0;
+    int perLightAlu = 0, perLightTex = 0;
+    bool counted = false;  ///< false: unknown method, no count
+    std::string formula;   ///< the per-light count in terms of the parameters, e.g. "TEX k+2"
+
+    int alu(int lights) const { return fixedAlu + lights * perLightAlu; }
+    int tex(int lights) const { return fixedTex + lights * perLightTex; }
+
+    // shaders/common/btf_main.glsl, once per fragment: normal 1, Gram-Schmidt tangent 3,
+    // degenerate test 2, normalize 1, bitangent 4, eye direction 4, local view 3 dots, fixed-view
+    // test 1, btfTexel 5, view.z test 1.
+    static constexpr int kFrameAlu = 25;
+    // The light loop body around btfEvaluate: direction select + normalize 4, 3 dots, horizon
+    // test 1, colour multiply-add 2.
+    static constexpr int kLightLoopAlu = 10;
+    // shaders/common/directions.glsl btfLookupDirections: disc map 4, cell 6, index rounding 1;
+    // the index and weight tables are 2 fetches.
+    static constexpr int kLookupAlu = 11, kLookupTex = 2;
+
+    /** The count of a method whose btfEvaluate costs `evaluateAlu` / `evaluateTex`: the shared
+     *  frame set-up as the fixed part, the light loop body plus btfEvaluate per light. */
+    static ShaderCost ofEvaluate(int evaluateAlu, int evaluateTex, std::string formula) {
+        ShaderCost c;
+        c.fixedAlu = kFrameAlu;
+        c.fixedTex = 0;
+        c.perLightAlu = kLightLoopAlu + evaluateAlu;
+        c.perLightTex = evaluateTex;
+        c.counted = true;
+        c.formula = std::move(formula);
+        return c;
+    }
+};
+
+}  // namespace osgBTF

@@ -1,0 +1,50 @@
+// materials/ShaderInterface.h states the C++ side of the shared shader stages; the GLSL in
+// shaders/common/ must declare the same names and the same light limit.
+#include <filesystem>
+#include <regex>
+
+#include <gtest/gtest.h>
+
+#include "materials/ShaderInterface.h"
+#include "scene/MaterialNode.h"
+#include "tests/TestUtil.h"
+
+using namespace osgBTF;
+
+namespace {
+
+std::string commonShader(const std::string& name) {
+    return test::readTextFile(
+        (std::filesystem::path(OSGBTF_SOURCE_DIR) / "shaders" / "common" / name).string());
+}
+
+bool declares(const std::string& source, const std::string& pattern) {
+    return std::regex_search(source, std::regex(pattern));
+}
+
+}  // namespace
+
+TEST(ShaderInterface, GlslDeclaresTheSameNamesAndLimits) {
+    const std::string vert = commonShader("btf.vert"), frag = commonShader("btf_main.glsl");
+    EXPECT_TRUE(declares(frag, std::string("const int ") + shader::kMaxLightsName + " = " +
+                                   std::to_string(shader::kMaxLights) + ";"));
+    EXPECT_TRUE(declares(vert, std::string("\\bin vec4 ") + shader::kTangentAttributeName + ";"));
+    EXPECT_TRUE(declares(frag, std::string("uniform int ") + shader::kLightCount + "\\b"));
+    EXPECT_TRUE(declares(frag, std::string("uniform vec4 ") + shader::kLightPosition + "\\[" +
+                                   shader::kMaxLightsName + "\\];"));
+    EXPECT_TRUE(declares(frag, std::string("uniform vec3 ") + shader::kLightColor + "\\[" +
+                                   shader::kMaxLightsName + "\\];"));
+    EXPECT_TRUE(declares(frag, std::string("uniform ivec2 ") + shader::kSize + ";"));
+    EXPECT_TRUE(declares(frag, std::string("uniform vec4 ") + shader::kFixedView + "\\b"));
+    EXPECT_TRUE(declares(vert, std::string("uniform float ") + shader::kTextureScale + "\\b"));
+    // No other copy of the limit: MaterialNode uses the header's.
+    EXPECT_EQ(kMaxLights, shader::kMaxLights);
+}
+
+TEST(ShaderInterface, ProgramsBindTheTangentAttribute) {
+    osg::ref_ptr<osg::Program> program = methodProgram("lambert");
+    const auto& bindings = program->getAttribBindingList();
+    const auto it = bindings.find(shader::kTangentAttributeName);
+    ASSERT_NE(it, bindings.end());
+    EXPECT_EQ(it->second, shader::kTangentAttribute);
+}
