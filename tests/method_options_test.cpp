@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "core/Error.h"
-#include "core/SampleBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "tests/TestUtil.h"
 

@@ -11,9 +11,9 @@
 
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
-#include "core/SampleBtf.h"
 #include "harness/Compare.h"
 #include "harness/FitRunner.h"
+#include "harness/sample/SampleBtf.h"
 #include "loaders/LoadBtf.h"
 #include "materials/Material.h"
 #include "materials/MaterialState.h"
