@@ -9,6 +9,7 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialMath.h"
 #include "materials/laf/Laf.h"
 #include "materials/laf/Lobes.h"
 #include "materials/lambert/Lambert.h"
@@ -73,11 +74,11 @@ TEST(Laf, TwoVariableNonNegativeLeastSquares) {
     const double f[] = {1, 1, 1, 1}, g[] = {0, 1, 2, 3};
     double a, b;
     const double exact[] = {0.5, 1.5, 2.5, 3.5};  // 0.5 + 1 * g
-    lobes::nonNegativeLeastSquares2(f, g, exact, 4, 1, a, b);
+    nonNegativeLeastSquares2(f, g, exact, 4, 1, a, b);
     EXPECT_NEAR(a, 0.5, 1e-12);
     EXPECT_NEAR(b, 1.0, 1e-12);
     const double falling[] = {3, 2, 1, 0};  // unconstrained slope < 0: beta clamps to 0
-    lobes::nonNegativeLeastSquares2(f, g, falling, 4, 1, a, b);
+    nonNegativeLeastSquares2(f, g, falling, 4, 1, a, b);
     EXPECT_EQ(b, 0.0);
     EXPECT_NEAR(a, 1.5, 1e-12);
 }
@@ -89,15 +90,15 @@ TEST(Laf, RecoversAKnownModelFromNoisyData) {
     const std::size_t texels = truth->texelCount();
     for (std::size_t t = 0; t < texels; ++t) {
         for (int c = 0; c < 3; ++c) {
-            truth->rhoD[t * 3 + c] = lobes::quantizeUNorm8(0.05 + 0.02 * double(t) + 0.05 * c);
-            truth->rhoS[t * 3 + c] = lobes::quantizeUNorm8(1.0 - 0.2 * c);
+            truth->rhoD[t * 3 + c] = quantizeUNorm8(0.05 + 0.02 * double(t) + 0.05 * c);
+            truth->rhoS[t * 3 + c] = quantizeUNorm8(1.0 - 0.2 * c);
         }
         const float diffuse[4] = {0.1f * float(t % 3), 0.0f, 0.5f, 1.0f};
         const float sharp = 6.0f + 2.0f * float(t), k = std::pow(0.4f, 1.0f / sharp);
         const float mirror[4] = {-k, -k, k, sharp};
         for (int i = 0; i < 4; ++i) {
-            truth->lobes[t * 4 + i] = lobes::roundHalf(diffuse[i]);
-            truth->lobes[(texels + t) * 4 + i] = lobes::roundHalf(mirror[i]);
+            truth->lobes[t * 4 + i] = roundHalf(diffuse[i]);
+            truth->lobes[(texels + t) * 4 + i] = roundHalf(mirror[i]);
         }
     }
     const float noise = 0.01f;
@@ -151,11 +152,11 @@ TEST(Laf, LiteralSeedModelWithoutCosineIsAvailable) {
     ASSERT_FALSE(truth->cosine());
     for (std::size_t t = 0; t < 4; ++t) {
         for (int c = 0; c < 3; ++c) {
-            truth->rhoD[t * 3 + c] = lobes::quantizeUNorm8(0.2 + 0.1 * c);
-            truth->rhoS[t * 3 + c] = lobes::quantizeUNorm8(0.8);
+            truth->rhoD[t * 3 + c] = quantizeUNorm8(0.2 + 0.1 * c);
+            truth->rhoS[t * 3 + c] = quantizeUNorm8(0.8);
         }
         const float lobe[4] = {-0.9f, -0.9f, 0.9f, 4.0f + float(t)};
-        for (int i = 0; i < 4; ++i) truth->lobes[t * 4 + i] = lobes::roundHalf(lobe[i]);
+        for (int i = 0; i < 4; ++i) truth->lobes[t * 4 + i] = roundHalf(lobe[i]);
     }
     const MeasuredBtf data = dataFrom(*truth, 0.0f, 1);
     osg::ref_ptr<LafMaterial> fitted =

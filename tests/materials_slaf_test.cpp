@@ -2,6 +2,7 @@
 // measured views, file round trip, memory accounting against seed 001 Table 2.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <random>
@@ -9,6 +10,7 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialMath.h"
 #include "materials/laf/Laf.h"
 #include "materials/laf/Lobes.h"
 #include "materials/slaf/Slaf.h"
@@ -73,22 +75,22 @@ TEST(Slaf, RecoversAKnownModelFromNoisyData) {
     const std::size_t texels = truth->texelCount();
     for (std::size_t t = 0; t < texels; ++t) {
         for (int c = 0; c < 3; ++c) {
-            truth->rhoD[t * 3 + c] = lobes::quantizeUNorm8(0.1 + 0.03 * double(t) + 0.05 * c);
-            truth->rhoS[t * 3 + c] = lobes::quantizeUNorm8(1.0 - 0.25 * c);
+            truth->rhoD[t * 3 + c] = quantizeUNorm8(0.1 + 0.03 * double(t) + 0.05 * c);
+            truth->rhoS[t * 3 + c] = quantizeUNorm8(1.0 - 0.25 * c);
         }
         const float sharp = 5.0f + 3.0f * float(t), k = std::pow(0.3f, 1.0f / sharp);
         const float diffuse[4] = {0.0f, 0.1f * float(t % 2), 0.6f, 1.0f};
         const float mirror[4] = {-k, -k, k, sharp};
         for (int i = 0; i < 4; ++i) {
-            truth->lobes[t * 4 + i] = lobes::roundHalf(diffuse[i]);
-            truth->lobes[(texels + t) * 4 + i] = lobes::roundHalf(mirror[i]);
+            truth->lobes[t * 4 + i] = roundHalf(diffuse[i]);
+            truth->lobes[(texels + t) * 4 + i] = roundHalf(mirror[i]);
         }
         // View-dependent darkening toward grazing views, tinted differently per channel.
         for (std::size_t v = 0; v < 81; ++v) {
             const float z = truth->views().vector(v).z;
             for (int c = 0; c < 3; ++c)
                 truth->scale[(v * texels + t) * 3 + c] =
-                    lobes::roundHalf(0.6 + 0.4 * std::pow(z, 1.0 + c + 0.5 * double(t)));
+                    roundHalf(0.6 + 0.4 * std::pow(z, 1.0 + c + 0.5 * double(t)));
         }
     }
     const MeasuredBtf data = dataFrom(*truth, 0.01f, 11);
@@ -161,6 +163,26 @@ TEST(Slaf, InterpolationIsExactAtMeasuredViews) {
             const glm::vec3 e = m->evaluate(1, 1, m->views().vector(v), m->lights().vector(l));
             for (int c = 0; c < 3; ++c) EXPECT_EQ(e[c], abrdf[(v * 81 + l) * 3 + c]);
         }
+}
+
+// LAF is SLAF with T fixed at 1 (both are LobeMaterial): a SLAF holding a LAF fit's colours and
+// lobes with T = 1 gives exactly LAF's values.
+TEST(Slaf, WithTheViewTableAtOneIsLaf) {
+    osg::ref_ptr<LafMaterial> laf = LafMaterial::fit(smallSample(3, 2), FitOptions::parse(""));
+    osg::ref_ptr<SlafMaterial> slaf =
+        SlafMaterial::create(3, 2, laf->lobeCount(), laf->views(), laf->lights());
+    slaf->rhoD = laf->rhoD;
+    slaf->rhoS = laf->rhoS;
+    slaf->lobes = laf->lobes;
+    std::vector<float> a(81 * 81 * 3), b(81 * 81 * 3);
+    for (std::size_t t = 0; t < 6; ++t) {
+        laf->evaluateMeasured(t, a.data());
+        slaf->evaluateMeasured(t, b.data());
+        EXPECT_EQ(a, b) << "texel " << t;
+    }
+    float peak = 0;
+    for (float v : a) peak = std::max(peak, v);
+    EXPECT_GT(peak, 0.1f);  // a real fit, not zeros on both sides
 }
 
 TEST(Slaf, SaveLoadRoundTripIsExact) {

@@ -10,20 +10,21 @@
 // (McAllister renders it times cos theta_l); measured values contain that cosine, so by default
 // the model carries the l_z factor. Seed 001 eq. 2 literally (cosine=0) has no l_z, and no lobe
 // can produce l_z alone (a lobe in v_z l_z is also scaled by v_z): on data with Lambertian
-// shading it is several times worse than a lit texture (materials/laf/README.md). Fit: Lobes.h.
+// shading it is several times worse than a lit texture (materials/laf/README.md).
+//
+// The model, storage and fitter are LobeMaterial's (LobeMaterial.h, shared with SLAF): LAF is
+// SLAF with the view table fixed at 1.
 //
 // Storage (what seed 001 Table 2 counts: 14 values, 22 bytes per texel at k = 2): rho_d and rho_s
 // as 8-bit fixed point (2 x 3 values, 6 bytes), the lobes as half floats (4 k values, 8 k bytes).
 // The fitter rounds the model to exactly these precisions, so CPU, file and GPU agree.
 #pragma once
 
-#include <vector>
-
-#include "materials/Material.h"
+#include "materials/laf/LobeMaterial.h"
 
 namespace osgBTF {
 
-class LafMaterial : public Material {
+class LafMaterial : public LobeMaterial {
 public:
     LafMaterial() = default;
     LafMaterial(const LafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
@@ -47,21 +48,8 @@ public:
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
-    int lobeCount() const { return _lobes; }
-    /** True when the bracket is multiplied by l_z (option cosine=1, the default). */
-    bool cosine() const { return _cosine; }
-
-    /** RGB per texel, rows bottom-up, multiples of 1/255 in [0, 1] (8-bit storage). */
-    std::vector<float> rhoD, rhoS;
-    /** [lobe][y][x][Cx, Cy, Cz, n], half-representable values. */
-    std::vector<float> lobes;
-
 protected:
     ~LafMaterial() override = default;
-
-private:
-    int _lobes = 0;
-    bool _cosine = true;
 };
 
 }  // namespace osgBTF

@@ -15,6 +15,8 @@
 // (variable projection): the nonlinear solver never sees them. Several starts (a diffuse-like
 // lobe plus mirror / retro-reflective lobes, and the already fitted left neighbour) are tried on a
 // subsample of the pairs; the best is refined on a larger subsample (PairTable).
+// The material around this fit (colours, storage rounding, SLAF's view table) is LobeMaterial.h;
+// helpers that are not about lobes are in materials/MaterialMath.h.
 #pragma once
 
 #include <array>
@@ -22,8 +24,6 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
-
-#include "materials/Material.h"
 
 namespace osgBTF::lobes {
 
@@ -89,29 +89,8 @@ LuminanceFit fitLuminance(const PairTable& pairs, const double* target, const do
 int refineLuminance(const PairTable& pairs, const double* target, const double* scale, int lobes,
                     int maxIterations, std::vector<double>& params);
 
-/** Least squares y ~ alpha f + beta g with alpha, beta >= 0 (the two-variable NNLS, solved by
- *  checking the unconstrained optimum and both faces). Strided access: element j at [j * stride].
- */
-void nonNegativeLeastSquares2(const double* f, const double* g, const double* y, std::size_t n,
-                              std::size_t strideY, double& alpha, double& beta);
-
-/** Rounds to the 8-bit fixed point the file and the GPU hold: k / 255, k = 0..255. */
-inline float quantizeUNorm8(double x) {
-    const double c = x > 1.0 ? 1.0 : (x > 0.0 ? x : 0.0);
-    return float(std::round(c * 255.0)) / 255.0f;
-}
-
 /** Scales the lobe sum by `factor` > 0 (C_i *= factor^(1/n_i)), so a colour can be divided by it.
  */
 void scaleLobes(double* lobeParams, int lobes, double factor);
-
-// ---- small helpers both methods' fitters and models use ---------------------------------------
-
-/** Rounds to the nearest half float (clamped to its finite range). */
-float roundHalf(double x);
-/** Seed 001's per-texel error: mean over pairs of |measured - model| (RGB length). */
-double texelError(const std::vector<double>& rgb, const std::vector<float>& model);
-/** Values and bytes per texel of a fitted material's textures, by their storage kinds. */
-MemoryFootprint footprintOf(const FittedMaterial& file, std::size_t texels);
 
 }  // namespace osgBTF::lobes

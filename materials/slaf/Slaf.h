@@ -9,6 +9,9 @@
 // measured views T is blended with the direction interpolation of core/DirectionInterpolation.h
 // (the baked table the shader reads, so CPU == GPU). Values include the cosine term.
 //
+// The bracket, its storage and the fitter are LobeMaterial's (materials/laf/LobeMaterial.h),
+// shared with LAF, which is this model with T fixed at 1.
+//
 // Storage (seed 001 Table 2: 257 values, 508 bytes per texel at 81 views, k = 2): rho_d, rho_s
 // 8-bit (6 values, 6 bytes), lobes half (8 values, 16 bytes), T half (81 x 3 values, 486 bytes).
 #pragma once
@@ -16,11 +19,11 @@
 #include <vector>
 
 #include "core/DirectionInterpolation.h"
-#include "materials/Material.h"
+#include "materials/laf/LobeMaterial.h"
 
 namespace osgBTF {
 
-class SlafMaterial : public Material {
+class SlafMaterial : public LobeMaterial {
 public:
     SlafMaterial() = default;
     SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
@@ -45,13 +48,6 @@ public:
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
-    int lobeCount() const { return _lobes; }
-    bool cosine() const { return _cosine; }
-
-    /** RGB per texel, rows bottom-up, multiples of 1/255 in [0, 1] (8-bit storage). */
-    std::vector<float> rhoD, rhoS;
-    /** [lobe][y][x][Cx, Cy, Cz, n], half-representable values. */
-    std::vector<float> lobes;
     /** [view][y][x][rgb], half-representable values >= 0. */
     std::vector<float> scale;
 
@@ -62,8 +58,6 @@ private:
     /** Bakes the view interpolation table; called once the views are known. */
     void prepare();
 
-    int _lobes = 0;
-    bool _cosine = true;
     DirectionInterpolator::Baked _viewTable;
 };
 

@@ -1,0 +1,69 @@
+// osgBTF: the lobe model LAF and SLAF share, and its one fitter.
+//
+//   BTF(x, v, l) ~ T(x, v) * (rho_d(x) + rho_s(x) * sum_{i<k} max(C_i . (v * l), 0)^n_i) * l_z
+//
+// LAF (materials/laf/Laf.h) is this model with the view table T fixed at 1; SLAF
+// (materials/slaf/Slaf.h) stores T per texel and measured view. The class holds what both store
+// (RGB albedos as 8-bit fixed point, scalar lobes as half floats, the cosine option), evaluates the
+// bracket, writes, reads and binds those textures, and fits them: the per-texel luminance fit of
+// Lobes.h, the colours in closed form, SLAF's alternation with T, the storage rounding and the
+// divergence guard. The lobe functions and the luminance fit itself are in Lobes.h.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+class LobeMaterial : public Material {
+public:
+    int lobeCount() const { return _lobes; }
+    /** True when the bracket is multiplied by l_z (option cosine=1, the default). */
+    bool cosine() const { return _cosine; }
+
+    /** RGB per texel, rows bottom-up, multiples of 1/255 in [0, 1] (8-bit storage). */
+    std::vector<float> rhoD, rhoS;
+    /** [lobe][y][x][Cx, Cy, Cz, n], half-representable values. */
+    std::vector<float> lobes;
+
+protected:
+    LobeMaterial() = default;
+    LobeMaterial(const LobeMaterial& other, const osg::CopyOp& copyop);
+    ~LobeMaterial() override = default;
+
+    /** assignFrom's lobe part (the caller has run assignCommon). */
+    void assignLobes(const LobeMaterial& other);
+    /** Zero colours, zero lobes (n = 1), cosine on, for the current size. */
+    void initLobes(int lobeCount);
+
+    /** (rho_d + rho_s * sum of lobes) * (l_z or 1) at texel t: the whole model when T = 1. */
+    glm::vec3 bracket(std::size_t t, const glm::vec3& view, const glm::vec3& light) const;
+
+    /** Adds the parameters lobes, cosine and the textures rhoD, rhoS, lobes (in this order). */
+    void writeLobes(FittedMaterial& file) const;
+    /** Reads and checks the parameters lobes and cosine. */
+    void readLobeParameters(const FittedMaterial& file);
+    /** Reads the textures rhoD, rhoS and lobes (after readLobeParameters). */
+    void readLobeTextures(const FittedMaterial& file);
+    /** A texture of the file that must have this material's size, `depth` and `channels`. */
+    std::vector<float> readTexture(const FittedMaterial& file, const std::string& name, int depth,
+                                   int channels) const;
+    /** Binds rhoD, rhoS and the lobe atlas to units 0, 1, 2 as <prefix>RhoD, <prefix>RhoS,
+     *  <prefix>Lobes, and the uniforms <prefix>LobeCount and <prefix>Cosine. */
+    void addLobeState(osg::StateSet& stateSet, const std::string& prefix) const;
+
+    /** Fits every texel of `btf` into this material (created with its size and directions).
+     *  `scale` null: T fixed at 1 (LAF). Otherwise T is fitted, alternating `rounds` times with
+     *  the lobes, and stored there as [view][y][x][rgb] (SLAF). Sets the fit info seconds,
+     *  iterations, fallbacks and lobes. */
+    void fitLobes(const MeasuredBtf& btf, int iterations, int rounds, std::vector<float>* scale);
+
+    int _lobes = 0;
+    bool _cosine = true;
+};
+
+}  // namespace osgBTF
