@@ -1,5 +1,7 @@
 #include "GlTestEnv.h"
 
+#include "core/Directions.h"
+
 #include <gtest/gtest.h>
 
 #include <osg/Program>
@@ -94,6 +96,17 @@ float pixel(const osg::Image& image, int x, int y, int channel) {
     return data[4 * (static_cast<size_t>(y) * static_cast<size_t>(image.s()) +
                      static_cast<size_t>(x)) +
                 static_cast<size_t>(channel)];
+}
+
+PatchView patchViewFrom(float thetaDeg, float phiDeg, int imageSize, double halfExtent) {
+    PatchView view;
+    view.toEye = Direction{thetaDeg, phiDeg}.toVector();
+    const osg::Vec3d v(view.toEye.x, view.toEye.y, view.toEye.z), centre(0.5, 0.5, 0);
+    view.setup.view = osg::Matrixd::lookAt(centre + v * 2.0, centre, osg::Vec3d(0, 0, 1));
+    view.setup.projection =
+        osg::Matrixd::ortho(-halfExtent, halfExtent, -halfExtent, halfExtent, 0.1, 10.0);
+    view.setup.width = view.setup.height = imageSize;
+    return view;
 }
 
 }  // namespace osgBTF::test

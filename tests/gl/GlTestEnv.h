@@ -8,6 +8,7 @@
 #include <osg/Texture2D>
 #include <osg/Texture3D>
 
+#include <glm/vec3.hpp>
 #include <string>
 #include <vector>
 
@@ -34,5 +35,15 @@ osg::ref_ptr<osg::Texture2D> floatTexture2D(int width, int height, const std::ve
 
 /** Pixel (x, y) channel c of a GL_RGBA/GL_FLOAT image as OSG gives it (bottom-up rows). */
 float pixel(const osg::Image& image, int x, int y, int channel);
+
+/** An orthographic camera looking at the centre of the unit patch (z = 0) from (theta, phi) in
+ *  degrees, theta > 0 (up vector +Z), with an image of `imageSize` squared pixels showing
+ *  [-halfExtent, halfExtent] around the centre. `toEye` is the world (= patch-local) direction
+ *  toward the eye, what the CPU evaluator needs as the view direction. */
+struct PatchView {
+    CameraSetup setup;
+    glm::vec3 toEye;
+};
+PatchView patchViewFrom(float thetaDeg, float phiDeg, int imageSize, double halfExtent);
 
 }  // namespace osgBTF::test

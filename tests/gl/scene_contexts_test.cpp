@@ -41,20 +41,10 @@ osg::ref_ptr<PcaMaterial> fitSample() {
     return PcaMaterial::fit(makeSampleBtf(sample), FitOptions::parse("components=4 storage=float"));
 }
 
-struct View {
-    CameraSetup setup;
-    glm::vec3 toEye;  // world (= patch) direction toward the eye
-};
+using View = PatchView;
 
 View viewFrom(float thetaDeg, float phiDeg) {
-    View view;
-    view.toEye = Direction{thetaDeg, phiDeg}.toVector();
-    const osg::Vec3d v(view.toEye.x, view.toEye.y, view.toEye.z), centre(0.5, 0.5, 0);
-    view.setup.view = osg::Matrixd::lookAt(centre + v * 2.0, centre, osg::Vec3d(0, 0, 1));
-    view.setup.projection =
-        osg::Matrixd::ortho(-kHalfExtent, kHalfExtent, -kHalfExtent, kHalfExtent, 0.1, 10.0);
-    view.setup.width = view.setup.height = kImageSize;
-    return view;
+    return patchViewFrom(thetaDeg, phiDeg, kImageSize, kHalfExtent);
 }
 
 const osg::Vec3 kToLight = osg::Vec3(0.3f, -0.4f, 0.87f) / osg::Vec3(0.3f, -0.4f, 0.87f).length();

@@ -114,22 +114,10 @@ osg::ref_ptr<osg::LightSource> lightSource(int number, const osg::Vec4& position
     return source;
 }
 
-struct Camera {
-    CameraSetup setup;
-    glm::vec3 view;  // local = world direction toward the eye
-};
+using Camera = PatchView;
 
-/** Orthographic camera looking at the patch centre from (theta, phi); theta > 0 (the up vector
- *  is +Z). */
 Camera cameraFrom(float thetaDeg, float phiDeg) {
-    Camera camera;
-    camera.view = Direction{thetaDeg, phiDeg}.toVector();
-    const osg::Vec3d v(camera.view.x, camera.view.y, camera.view.z), centre(0.5, 0.5, 0);
-    camera.setup.view = osg::Matrixd::lookAt(centre + v * 2.0, centre, osg::Vec3d(0, 0, 1));
-    camera.setup.projection =
-        osg::Matrixd::ortho(-kHalfExtent, kHalfExtent, -kHalfExtent, kHalfExtent, 0.1, 10.0);
-    camera.setup.width = camera.setup.height = kImageSize;
-    return camera;
+    return patchViewFrom(thetaDeg, phiDeg, kImageSize, kHalfExtent);
 }
 
 /** The scene of the main test: four lights (directional at the root, directional under a
@@ -185,7 +173,7 @@ osg::Vec3d surfacePoint(const Camera& camera, int i, int j) {
     const double ex = -kHalfExtent + (i + 0.5) / kImageSize * 2 * kHalfExtent;
     const double ey = -kHalfExtent + (j + 0.5) / kImageSize * 2 * kHalfExtent;
     const osg::Vec3d origin = osg::Vec3d(ex, ey, 0) * osg::Matrixd::inverse(camera.setup.view);
-    const osg::Vec3d v(camera.view.x, camera.view.y, camera.view.z);
+    const osg::Vec3d v(camera.toEye.x, camera.toEye.y, camera.toEye.z);
     return origin - v * (origin.z() / v.z());
 }
 
@@ -218,7 +206,7 @@ Comparison compareWithCpu(const osg::Image& image, const Material& material, con
                 toLight.normalize();
                 const glm::vec3 l(toLight.x(), toLight.y(), toLight.z());
                 if (l.z <= 0) continue;
-                const glm::vec3 value = material.evaluate(int(fs), int(ft), camera.view, l);
+                const glm::vec3 value = material.evaluate(int(fs), int(ft), camera.toEye, l);
                 expected += glm::vec3(light.color.x(), light.color.y(), light.color.z()) * value;
             }
             for (int c = 0; c < 3; ++c) {
@@ -410,7 +398,7 @@ TEST(SceneRender, WithoutLightSourcesTheViewersHeadlightLights) {
     ASSERT_EQ(sharedRenderer().viewer().getLightingMode(), osg::View::HEADLIGHT);
     const osg::Vec4 diffuse = headlight->getDiffuse();
     const std::vector<WorldLight> lights = {
-        {osg::Vec4d(camera.view.x, camera.view.y, camera.view.z, 0),
+        {osg::Vec4d(camera.toEye.x, camera.toEye.y, camera.toEye.z, 0),
          osg::Vec3(diffuse.r(), diffuse.g(), diffuse.b())}};
     osg::ref_ptr<osg::Image> image = sharedRenderer().render(node.get(), camera.setup);
     const Comparison r = compareWithCpu(*image, *material, camera, lights);
