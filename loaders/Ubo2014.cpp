@@ -10,12 +10,8 @@
 #include <sstream>
 
 #include <Imath/half.h>
-#include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 
 #include "core/Error.h"
-#include "core/Progress.h"
 
 namespace osgBTF {
 
@@ -166,18 +162,15 @@ Direction toDirection(float thetaRadians, float phiRadians, const std::string& p
 
 struct Signature {
     const char* text;
-    Ubo2014Format format;
+    FactorModel model;
     bool extended;
     bool rotations;
 };
 
 const Signature kSignatures[] = {
-    {"!DFMF08FCR", Ubo2014Format::Dfmf, false, true},
-    {"!DFMF08FC", Ubo2014Format::Dfmf, false, false},
-    {"!FMF12FCER", Ubo2014Format::Fmf, true, true},
-    {"!FMF12FCE", Ubo2014Format::Fmf, true, false},
-    {"!FMF06FCR", Ubo2014Format::Fmf, false, true},
-    {"!FMF06FC", Ubo2014Format::Fmf, false, false},
+    {"!DFMF08FCR", FactorModel::Dfmf, false, true}, {"!DFMF08FC", FactorModel::Dfmf, false, false},
+    {"!FMF12FCER", FactorModel::Fmf, true, true},   {"!FMF12FCE", FactorModel::Fmf, true, false},
+    {"!FMF06FCR", FactorModel::Fmf, false, true},   {"!FMF06FC", FactorModel::Fmf, false, false},
 };
 
 std::string showBytes(const std::string& bytes) {
@@ -313,25 +306,10 @@ void readDirections(Reader& in, Ubo2014Factors& f) {
     }
 }
 
-void checkColorModel(const std::string& path, int model) {
-    switch (model) {
-        case 0:
-        case 1:
-        case 3:
-        case 4:
-        case 11:
-            return;
-        default:
-            fail(path, "DFMF colour model " + std::to_string(model) +
-                           " is not supported (supported: 0 RGB, 1 YUV, 3 PCA, 4 YCoCg, "
-                           "11 exp-YUV)");
-    }
-}
-
 void readDfmf(Reader& in, Ubo2014Factors& f) {
     f.maxComponents = in.u32("maximum component count");
     f.colorModel = in.get<std::int32_t>("colour model");
-    checkColorModel(in.path(), f.colorModel);
+    FactoredBtf::checkColorModel(in.path(), f.colorModel);
     for (float& v : f.colorMean) v = in.f32("colour mean");
     for (float& v : f.colorMatrix) v = in.f32("colour matrix");
     const std::uint64_t abrdfs = std::uint64_t(f.views.size()) * f.lights.size();
@@ -353,7 +331,7 @@ void readDfmf(Reader& in, Ubo2014Factors& f) {
                                 "; expected views*lights = " + std::to_string(abrdfs) +
                                 " and width*height = " + std::to_string(texels));
         guardFactors(in, rows, cols, k, k, scalarSize, channel + " factors");
-        Ubo2014Factor factor;
+        BtfFactor factor;
         factor.S = readVector(in, k, k, scalarSize, channel + " S");
         factor.U = readMatrix(in, rows, k, k, scalarSize, channel + " U");
         factor.SxV = readMatrix(in, cols, k, k, scalarSize, channel + " SxV");
@@ -395,53 +373,12 @@ void readFmf(Reader& in, Ubo2014Factors& f) {
     // btflib: K_b is the stride of every row and the length of S; the first min(K_a, K_b) count.
     const std::uint32_t use = std::min(kUsed, stride);
     guardFactors(in, rows, cols, stride, use, scalarSize, "factors");
-    Ubo2014Factor factor;
+    BtfFactor factor;
     factor.S = readVector(in, stride, use, scalarSize, "S");
     factor.U = readMatrix(in, rows, stride, use, scalarSize, "U");
     factor.SxV = readMatrix(in, cols, stride, use, scalarSize, "SxV");
     f.factors.push_back(std::move(factor));
 }
-
-/** Colour model (DFMF), then dynamic-range reduction (FMF), as btflib orders them. */
-struct ColorDecoder {
-    const Ubo2014Factors& f;
-    void operator()(const float v[3], float rgb[3]) const {
-        const float eps = f.eps;
-        if (f.format == Ubo2014Format::Fmf) {
-            for (int c = 0; c < 3; ++c) rgb[c] = f.drr() ? std::exp(v[c]) - eps : v[c];
-            return;
-        }
-        auto yuv = [&](float y, float u, float w) {
-            rgb[0] = y + 1.13983f * w;
-            rgb[1] = y - 0.39465f * u - 0.5806f * w;
-            rgb[2] = y + 2.03211f * u;
-        };
-        switch (f.colorModel) {
-            case 1:
-                yuv(v[0], v[1], v[2]);
-                break;
-            case 3:
-                for (int j = 0; j < 3; ++j)
-                    rgb[j] = v[0] * f.colorMatrix[0 * 3 + j] + v[1] * f.colorMatrix[1 * 3 + j] +
-                             v[2] * f.colorMatrix[2 * 3 + j] + f.colorMean[j];
-                break;
-            case 4:
-                rgb[0] = v[0] + v[1] - v[2];
-                rgb[1] = v[0] + v[2];
-                rgb[2] = v[0] - v[1] - v[2];
-                break;
-            case 11: {
-                const float y = std::exp(v[0]) - eps;
-                yuv(y, v[1] * (y + eps), v[2] * (y + eps));
-                break;
-            }
-            default:
-                rgb[0] = v[0];
-                rgb[1] = v[1];
-                rgb[2] = v[2];
-        }
-    }
-};
 
 void put(std::string& out, const void* data, std::size_t n) {
     out.append(static_cast<const char*>(data), n);
@@ -483,12 +420,12 @@ Ubo2014Factors readUbo2014(const std::string& path, const LoadOptions&) {
     f.source = path;
     const Signature& signature = readSignature(in);
     f.signature = signature.text;
-    f.format = signature.format;
+    f.model = signature.model;
     f.extendedHeader = signature.extended;
     f.hasRotations = signature.rotations;
     readMeta(in, f);
     readDirections(in, f);
-    if (f.format == Ubo2014Format::Dfmf)
+    if (f.model == FactorModel::Dfmf)
         readDfmf(in, f);
     else
         readFmf(in, f);
@@ -499,87 +436,10 @@ Ubo2014Factors readUbo2014(const std::string& path, const LoadOptions&) {
 }
 
 MeasuredBtf decodeUbo2014(const Ubo2014Factors& f, const LoadOptions& options) {
-    const std::string& path = f.source;
-    const std::size_t nL = f.lights.size(), nV = f.views.size(), images = nL * nV;
-    const std::size_t texels = std::size_t(f.width) * std::size_t(f.height);
-    const bool fmf = f.format == Ubo2014Format::Fmf;
-    if (f.factors.size() != (fmf ? 1u : 3u) || images == 0 || texels == 0)
-        fail(path, "inconsistent factors: " + std::to_string(f.factors.size()) + " factor sets");
-    for (const Ubo2014Factor& factor : f.factors)
-        if (std::size_t(factor.U.rows()) != images * (fmf ? 3 : 1) ||
-            std::size_t(factor.SxV.rows()) != texels || factor.U.cols() != factor.SxV.cols())
-            fail(path, "inconsistent factor matrix sizes");
-    if (!fmf) checkColorModel(path, f.colorModel);
-
-    std::ostringstream what;
-    what << path << ": BTF of " << f.width << "x" << f.height << " texels x " << nV << " views x "
-         << nL << " lights";
-    checkMemory(MeasuredBtf::bytesNeeded(f.width, f.height, nV, nL, options.storage), what.str());
-    MeasuredBtf btf(f.width, f.height, f.views, f.lights, options.storage);
-    btf.source = path;
-
-    // Images in blocks so each product is a matrix-matrix multiply of moderate size.
-    const std::size_t block =
-        std::clamp<std::size_t>((std::size_t(8) << 20) / (texels * 3 * sizeof(float) + 1), 1, 64);
-    std::vector<float> lightZ(nL);
-    for (std::size_t l = 0; l < nL; ++l) lightZ[l] = f.lights.vector(l).z;
-    const ColorDecoder decodeColor{f};
-    struct Scratch {
-        Eigen::MatrixXf products[3];
-        std::vector<float> image;
-    };
-    tbb::enumerable_thread_specific<Scratch> scratches;
-    Progress progress(options.progressLabel.empty()
-                          ? "decoding " + fs::path(path).filename().string()
-                          : options.progressLabel,
-                      images);
-    const int W = f.width, H = f.height;
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, images, block),
-        [&](const tbb::blocked_range<std::size_t>& range) {
-            Scratch& s = scratches.local();
-            const Eigen::Index first = Eigen::Index(range.begin()), n = Eigen::Index(range.size());
-            // products[c](texel, j) = value of channel c of image first + j (texel in file order).
-            if (fmf) {
-                const Ubo2014Factor& factor = f.factors[0];
-                s.products[0].noalias() =
-                    factor.SxV * factor.U.middleRows(first * 3, n * 3).transpose();
-            } else {
-                for (int c = 0; c < 3; ++c)
-                    s.products[c].noalias() =
-                        f.factors[c].SxV * f.factors[c].U.middleRows(first, n).transpose();
-            }
-            s.image.resize(texels * 3);
-            for (Eigen::Index j = 0; j < n; ++j) {
-                const std::size_t lv = std::size_t(first + j);
-                const std::size_t view = lv / nL, light = lv % nL;
-                // Divide by the cosine only where it is meaningful (theta < ~89.9 degrees).
-                const float z = lightZ[light];
-                const float cosineScale = f.cosine && z > 1e-3f ? 1.0f / z : 1.0f;
-                const float* col[3];
-                if (fmf) {
-                    for (int c = 0; c < 3; ++c) col[c] = s.products[0].col(j * 3 + c).data();
-                } else {
-                    for (int c = 0; c < 3; ++c) col[c] = s.products[c].col(j).data();
-                }
-                for (int y = 0; y < H; ++y) {
-                    // File row 0 is the top image row; MeasuredBtf rows count from the bottom.
-                    float* dst = s.image.data() + std::size_t(H - 1 - y) * W * 3;
-                    const std::size_t row = std::size_t(y) * W;
-                    for (int x = 0; x < W; ++x, dst += 3) {
-                        const float v[3] = {col[0][row + x], col[1][row + x], col[2][row + x]};
-                        decodeColor(v, dst);
-                        dst[0] *= cosineScale;
-                        dst[1] *= cosineScale;
-                        dst[2] *= cosineScale;
-                    }
-                }
-                btf.setImage(view, light, s.image.data());
-            }
-            progress.advance(range.size());
-        });
-    progress.finish();
-    return btf;
+    const std::string label = options.progressLabel.empty()
+                                  ? "decoding " + fs::path(f.source).filename().string()
+                                  : options.progressLabel;
+    return f.decode(options.storage, label);
 }
 
 MeasuredBtf loadUbo2014(const std::string& path, const LoadOptions& options) {
@@ -588,7 +448,7 @@ MeasuredBtf loadUbo2014(const std::string& path, const LoadOptions& options) {
 }
 
 void writeUbo2014(const Ubo2014Factors& f, const std::string& path) {
-    const bool fmf = f.format == Ubo2014Format::Fmf;
+    const bool fmf = f.model == FactorModel::Fmf;
     if (f.scalarSize != 2 && f.scalarSize != 4 && f.scalarSize != 8)
         fail(path, "cannot write scalar size " + std::to_string(f.scalarSize));
     if (f.metaVersion < 1 || f.metaVersion > 4)
@@ -639,7 +499,7 @@ void writeUbo2014(const Ubo2014Factors& f, const std::string& path) {
             for (float v : r) put(out, v);
     }
 
-    auto putFactor = [&](const Ubo2014Factor& factor) {
+    auto putFactor = [&](const BtfFactor& factor) {
         const Eigen::Index k = factor.U.cols();
         for (Eigen::Index i = 0; i < k; ++i)
             putScalar(out, i < factor.S.size() ? factor.S[i] : 1.0f, f.scalarSize);
@@ -656,7 +516,7 @@ void writeUbo2014(const Ubo2014Factors& f, const std::string& path) {
                 for (float h : f.heightMap) put(out, Imath::half(h).bits());
             }
         }
-        const Ubo2014Factor& factor = f.factors[0];
+        const BtfFactor& factor = f.factors[0];
         put(out, std::uint32_t(factor.U.cols()));
         put(out, std::uint8_t(f.scalarSize));
         put(out, std::uint32_t(factor.U.cols()));
@@ -668,7 +528,7 @@ void writeUbo2014(const Ubo2014Factors& f, const std::string& path) {
         put(out, std::int32_t(f.colorModel));
         for (float v : f.colorMean) put(out, v);
         for (float v : f.colorMatrix) put(out, v);
-        for (const Ubo2014Factor& factor : f.factors) {
+        for (const BtfFactor& factor : f.factors) {
             put(out, std::uint8_t(f.scalarSize));
             put(out, std::uint32_t(factor.U.cols()));
             put(out, std::uint32_t(factor.U.rows()));

@@ -53,7 +53,7 @@ DirectionSet views() {
 
 Ubo2014Factors tinyDfmf(int scalarSize, int colorModel = 0) {
     Ubo2014Factors f;
-    f.format = Ubo2014Format::Dfmf;
+    f.model = FactorModel::Dfmf;
     f.hasRotations = true;
     f.rotations.push_back({1, 0, 0, 0, 1, 0, 0, 0, 1});
     f.views = views();
@@ -67,7 +67,7 @@ Ubo2014Factors tinyDfmf(int scalarSize, int colorModel = 0) {
     f.xml = "<meta/>";
     const int ks[3] = {2, 3, 1};  // components may differ per channel
     for (int c = 0; c < 3; ++c) {
-        Ubo2014Factor factor;
+        BtfFactor factor;
         factor.U = filled(int(views().size() * lights().size()), ks[c], 11 * c);
         factor.SxV = filled(kW * kH, ks[c], 5 + 13 * c);
         factor.S = Eigen::VectorXf::Ones(ks[c]);
@@ -78,7 +78,7 @@ Ubo2014Factors tinyDfmf(int scalarSize, int colorModel = 0) {
 
 Ubo2014Factors tinyFmf(bool extended, int headerVersion, bool drr) {
     Ubo2014Factors f;
-    f.format = Ubo2014Format::Fmf;
+    f.model = FactorModel::Fmf;
     f.extendedHeader = extended;
     f.headerVersion = headerVersion;
     f.dynamicRangeReduction = drr ? 1 : 0;
@@ -92,7 +92,7 @@ Ubo2014Factors tinyFmf(bool extended, int headerVersion, bool drr) {
         f.heightMapHeight = 2;
         f.heightMap = {0.5f, 1.0f, 1.5f, 2.0f, -0.5f, -1.0f, 0.25f, 0.125f};
     }
-    Ubo2014Factor factor;
+    BtfFactor factor;
     factor.U = filled(int(views().size() * lights().size() * 3), 3, 1);
     factor.SxV = filled(kW * kH, 3, 2);
     factor.S = Eigen::VectorXf::Ones(3);
@@ -112,7 +112,7 @@ void expectedRgb(const Ubo2014Factors& f, int view, int light, int x, int yFile,
     const int nL = int(f.lights.size()), lv = view * nL + light, texel = yFile * f.width + x;
     double v[3];
     for (int c = 0; c < 3; ++c)
-        v[c] = f.format == Ubo2014Format::Fmf
+        v[c] = f.model == FactorModel::Fmf
                    ? product(f.factors[0].U, lv * 3 + c, f.factors[0].SxV, texel)
                    : product(f.factors[c].U, lv, f.factors[c].SxV, texel);
     const double eps = 1e-5;
@@ -121,7 +121,7 @@ void expectedRgb(const Ubo2014Factors& f, int view, int light, int x, int yFile,
         rgb[1] = y - 0.39465 * u - 0.5806 * w;
         rgb[2] = y + 2.03211 * u;
     };
-    if (f.format == Ubo2014Format::Fmf) {
+    if (f.model == FactorModel::Fmf) {
         for (int c = 0; c < 3; ++c) rgb[c] = f.dynamicRangeReduction ? std::exp(v[c]) - eps : v[c];
     } else if (f.colorModel == 1) {
         yuv(v[0], v[1], v[2]);
@@ -409,7 +409,7 @@ TEST(Ubo2014Loader, FmfWithDynamicRangeReductionAndHeightMap) {
     writeUbo2014(f, path);
     const Ubo2014Factors read = readUbo2014(path);
     EXPECT_EQ(read.signature, "!FMF12FCE");
-    EXPECT_EQ(read.format, Ubo2014Format::Fmf);
+    EXPECT_EQ(read.model, FactorModel::Fmf);
     EXPECT_TRUE(read.drr());
     ASSERT_EQ(read.heightMapWidth, 4);
     ASSERT_EQ(read.heightMapHeight, 2);

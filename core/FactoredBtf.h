@@ -1,0 +1,110 @@
+// osgBTF: a BTF kept as low-rank factors, B = U * SxV^T (seed 003 section 3: FMF; the UBO2014
+// ".btf" files store exactly this, formats.md section 2).
+//
+// The ABRDF matrix has one row per (view, light[, channel]) and one column per texel. U holds the
+// Eigen-ABRDFs (rows), SxV the Eigen-Textures with the singular values folded in (one row per
+// texel). Two layouts exist, both as the Bonn files define them:
+//   Dfmf: one factorisation per colour channel of a decorrelating colour model (per-channel ranks
+//         may differ); U row = view * lights + light.
+//   Fmf:  one factorisation with the colour interleaved in U's rows: (view * lights + light) * 3 +
+//   c,
+//         optionally of log(rgb + eps) ("dynamic-range reduction").
+// Decoding a value: the factor sums first, then the colour model (Dfmf) or exp (Fmf with DRR), then
+// the division by cos(theta_light) when the data include it. A full-size file is 22 GB decoded and
+// ~100 MB factored, so everything here works on blocks of images or texels and never needs the
+// decoded whole (decode() is for sizes that fit).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <glm/vec3.hpp>
+
+#include "core/Directions.h"
+#include "core/MeasuredBtf.h"
+
+namespace osgBTF {
+
+enum class FactorModel {
+    Dfmf,  ///< one factorisation per (decorrelated) colour channel (3 factors)
+    Fmf,   ///< one factorisation, colour interleaved in U's rows (1 factor)
+};
+
+/** Row-major so factor rows load straight from the files' row-major storage. */
+using FactorMatrix = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+/** One factorisation B = U * SxV^T with the singular values S already folded into SxV. */
+struct BtfFactor {
+    Eigen::VectorXf S;  ///< singular values as stored (not needed for decoding)
+    FactorMatrix U;     ///< Dfmf: views*lights rows; Fmf: views*lights*3 rows
+    FactorMatrix SxV;   ///< width*height rows, texel y*width+x with row 0 = the TOP image row
+};
+
+struct FactoredBtf {
+    FactorModel model = FactorModel::Dfmf;
+    std::string source;  ///< file name or description, used in messages
+
+    DirectionSet views, lights;  ///< the row order of U: view-major
+    int width = 0, height = 0;
+    bool cosine = false;  ///< values include cos(theta_light); decoding divides it out
+
+    // Dfmf only: btflib's colour models 0 RGB, 1 YUV, 3 PCA, 4 YCoCg, 11 exp-YUV.
+    int colorModel = 0;
+    std::array<float, 3> colorMean{};
+    std::array<float, 9>
+        colorMatrix{};  ///< row-major 3x3 (PCA: rgb_j = sum_i v_i M[i][j] + mean_j)
+
+    // Fmf only.
+    std::uint32_t dynamicRangeReduction = 0;  ///< non-zero: stored values are log(rgb + eps)
+    float eps = 1e-5f;                        ///< not stored in the files (formats.md 2.7)
+
+    /** Dfmf: one factor per channel (3); Fmf: exactly one. */
+    std::vector<BtfFactor> factors;
+
+    bool drr() const { return model == FactorModel::Fmf && dynamicRangeReduction != 0; }
+    std::size_t texelCount() const { return std::size_t(width) * std::size_t(height); }
+    std::size_t imageCount() const { return views.size() * lights.size(); }
+    /** Components of channel c's factor (Fmf: the one factor's for every c). */
+    int components(int channel) const;
+
+    /** Throws Error "<source>: ..." when the factor count, the matrix sizes or the colour model
+     *  do not fit the layout. */
+    void validate() const;
+    /** Throws Error "<source>: DFMF colour model N is not supported (...)". */
+    static void checkColorModel(const std::string& source, int model);
+
+    /** Colour model (Dfmf) or exp (Fmf with DRR) of the three factor sums, as btflib orders them.
+     */
+    void decodeColor(const float sums[3], float rgb[3]) const;
+    /** The factor of the cosine division for a light of local z = cos(theta): 1 / z when the data
+     *  include the cosine and z > 1e-3 (where the division is meaningful), else 1. */
+    float cosineScale(float lightZ) const {
+        return cosine && lightZ > 1e-3f ? 1.0f / lightZ : 1.0f;
+    }
+    /** SxV row of texel (x, y), y counted from the bottom as everywhere in osgBTF. */
+    std::size_t factorRow(int x, int y) const {
+        return std::size_t(height - 1 - y) * std::size_t(width) + std::size_t(x);
+    }
+
+    /** Decoded RGB of one texel (y from the bottom) at measured view and light. */
+    glm::vec3 value(std::size_t view, std::size_t light, int x, int y) const;
+    /** Decodes images [first, first + count) (image = view * lights + light) into `out`:
+     *  count * texels * 3 floats, each image as MeasuredBtf::image (rows bottom-up). */
+    void decodeImages(std::size_t first, std::size_t count, float* out) const;
+    /** Decodes the ABRDFs of the given texels (MeasuredBtf texel indices, y from the bottom) into
+     *  `out`: texels.size() * views * lights * 3 floats, each as MeasuredBtf::abrdf. */
+    void decodeAbrdfs(const std::vector<std::size_t>& texels, float* out) const;
+    /** Everything, decoded into a MeasuredBtf after checking memoryLimit(); in parallel blocks with
+     *  progress under `progressLabel`. */
+    MeasuredBtf decode(Storage storage = Storage::Float,
+                       const std::string& progressLabel = "") const;
+
+    /** Bytes of the factors as floats (U, SxV and S), and of the decoded data as floats. */
+    std::uint64_t factorBytes() const;
+    std::uint64_t decodedBytes() const;
+};
+
+}  // namespace osgBTF
