@@ -27,10 +27,15 @@ void timeGpuPass(const osgBTF::Material& material, int frames, int lights) {
     settings.frames = frames;
     settings.lights = lights;
     settings.textureScale = 16;  // every pixel fetches different texels, as on a real model
-    const osgBTF::PassTime t = osgBTF::timeMaterialPass(renderer, material, settings);
-    std::printf("| gpu pass 1024x1024 (%s, %d light%s) | %.2f ms (%s, median of %d frames) |\n",
-                renderer.glRenderer().c_str(), lights, lights == 1 ? "" : "s", t.ms,
-                t.clock.c_str(), frames);
+    const osgBTF::PassTarget target = osgBTF::passTarget("rgba16f");
+    const osgBTF::Calibration calibration = osgBTF::runCalibration(renderer, settings, target);
+    const osgBTF::MethodPass t =
+        osgBTF::timeMethodPass(renderer, material, settings, calibration, -1);
+    std::printf(
+        "| gpu pass 1024x1024 %s (%s, %d light%s) | %.2f ms, empty pass %.2f ms, difference %.2f "
+        "ms (%s, median of %d frames) |\n",
+        target.name.c_str(), renderer.glRenderer().c_str(), lights, lights == 1 ? "" : "s",
+        t.pass.ms, t.emptyMs, t.shadingMs, t.pass.clock.c_str(), frames);
 }
 
 }  // namespace

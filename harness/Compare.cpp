@@ -209,23 +209,28 @@ void gpuStage(const CompareOptions& options, const MeasuredBtf& btf, const fs::p
         }
     }
     {
-        Progress progress("pass timing", materials.size() + 1);
-        result.calibration = runCalibration(*renderer, options.pass);
-        progress.advance();
-        const double pixels = double(options.pass.width) * double(options.pass.height);
-        for (std::size_t i = 0; i < materials.size(); ++i) {
-            if (materials[i]) try {
-                    MethodResult& m = result.methods[i];
-                    m.pass = timeMaterialPass(*renderer, *materials[i], options.pass);
-                    if (m.cost.counted && result.calibration.fetchesPerSecond > 0) {
-                        m.floorMs = double(m.cost.tex(options.pass.lights)) * pixels /
-                                    result.calibration.fetchesPerSecond * 1e3;
-                        if (m.floorMs > 0 && m.pass.ms >= 0) m.floorRatio = m.pass.ms / m.floorMs;
-                    }
-                } catch (const Error& e) {
-                    result.gpuNote += "; " + result.methods[i].method + " pass timing: " + e.what();
-                }
+        const std::vector<PassTarget>& targets = options.pass.targets;
+        Progress progress("pass timing", targets.size() * (materials.size() + 1));
+        for (const PassTarget& target : targets) {
+            // Per target: its empty and calibration passes first, then every method, so each
+            // method is set against passes of the same run and target.
+            result.calibrations.push_back(runCalibration(*renderer, options.pass, target));
             progress.advance();
+            for (std::size_t i = 0; i < materials.size(); ++i) {
+                if (materials[i]) try {
+                        MethodResult& m = result.methods[i];
+                        m.passes.push_back(timeMethodPass(
+                            *renderer, *materials[i], options.pass, result.calibrations.back(),
+                            m.cost.counted ? m.cost.tex(options.pass.lights) : -1));
+                    } catch (const Error& e) {
+                        result.gpuNote += "; " + result.methods[i].method + " pass timing (" +
+                                          target.name + "): " + e.what();
+                        MethodPass unmeasured;  // keeps passes aligned with the calibrations
+                        unmeasured.target = target;
+                        result.methods[i].passes.push_back(unmeasured);
+                    }
+                progress.advance();
+            }
         }
     }
     {
@@ -369,8 +374,8 @@ void recommend(CompareResult& result) {
         if (m.failed) continue;
         if (result.maxBytesPerTexel > 0 && m.memory.bytesPerTexel > result.maxBytesPerTexel)
             continue;
-        if (result.maxMsPerPass > 0 && !(m.pass.ms >= 0 && m.pass.ms <= result.maxMsPerPass))
-            continue;
+        const MethodPass* pass = m.primaryPass();
+        if (result.maxMsPerPass > 0 && !(pass && pass->pass.ms <= result.maxMsPerPass)) continue;
         if (!best || m.error.average < best->error.average) best = &m;
     }
     std::string budgets;
@@ -379,6 +384,8 @@ void recommend(CompareResult& result) {
     if (result.maxMsPerPass > 0)
         budgets += std::string(budgets.empty() ? "" : " and ") + "at most " +
                    formatNumber(result.maxMsPerPass, 6) + " ms per pass (" +
+                   (result.pass.targets.empty() ? std::string()
+                                                : result.pass.targets.front().name + ", ") +
                    std::to_string(result.pass.width) + "x" + std::to_string(result.pass.height) +
                    ", " + std::to_string(result.pass.lights) + " light" +
                    (result.pass.lights == 1 ? "" : "s") + ")";

@@ -1,9 +1,9 @@
 // osgBTF harness: compare compression methods on one measured BTF (`btf compare`).
 //
 // runCompare() fits every method in a child process (reusing earlier fits), computes the error
-// tables on the CPU, spot-checks the GPU path, times one rendering pass per method against a
-// calibration pass, draws the pictures and writes report.md, results.csv and results.json into
-// the output folder. Table definitions: harness/README.md.
+// tables on the CPU, spot-checks the GPU path, times one rendering pass per method against the
+// empty pass and a calibration pass in each target, draws the pictures and writes report.md,
+// results.csv and results.json into the output folder. Table definitions: harness/README.md.
 #pragma once
 
 #include <cstdint>
@@ -57,9 +57,12 @@ struct MethodResult {
     double compressionRatio = 0;  ///< raw bytes per texel / bytes per texel
     ShaderCost cost;
     double gpuCpuMaxDifference = -1;  ///< -1: not checked
-    PassTime pass;                    ///< ms -1: not measured
-    double floorMs = -1;              ///< TEX x pixels / calibrated fetch rate
-    double floorRatio = -1;           ///< pass.ms / floorMs
+    /** One per pass target (CompareResult::calibrations' order); empty: not measured. */
+    std::vector<MethodPass> passes;
+    /** The pass in the first target (what the time budget reads), null when not measured. */
+    const MethodPass* primaryPass() const {
+        return passes.empty() || !passes.front().measured() ? nullptr : &passes.front();
+    }
 };
 
 struct ComparePicture {
@@ -80,7 +83,7 @@ struct CompareResult {
     std::string glRenderer, glVersion;
     bool softwareRenderer = false;
     PassSettings pass;
-    Calibration calibration;
+    std::vector<Calibration> calibrations;  ///< one per pass target, in PassSettings order
     std::vector<std::pair<std::size_t, std::size_t>> spotCheckPairs;  ///< (view, light) indices
     bool labelsDrawn = false;  ///< text labels in the pictures (a font was found)
     double errorMapMax = 0;    ///< the colour scale of the error maps: 0 .. this

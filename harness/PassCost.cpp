@@ -1,6 +1,7 @@
 #include "harness/PassCost.h"
 
 #include <algorithm>
+#include <cctype>
 #include <random>
 
 #include <osg/Texture2D>
@@ -12,9 +13,17 @@ namespace osgBTF {
 
 namespace {
 
-PassTime timeCurrentScene(HeadlessRenderer& renderer, int frames) {
+PassTime timeCurrentScene(HeadlessRenderer& renderer, const PassSettings& settings,
+                          const PassTarget& target) {
     PassTime t;
-    t.timing = renderer.timePasses(frames, GpuTimer::Auto);
+    renderer.setColorTarget(target.format, false);
+    try {
+        t.timing = renderer.timePasses(settings.frames, GpuTimer::Auto, settings.warmupFrames);
+    } catch (...) {
+        renderer.setColorTarget(GL_RGBA32F_ARB, true);
+        throw;
+    }
+    renderer.setColorTarget(GL_RGBA32F_ARB, true);
     if (!renderer.isSoftwareRenderer() && t.timing.gpuMs >= 0) {
         t.ms = t.timing.gpuMs;
         t.clock = "GL_TIME_ELAPSED";
@@ -29,9 +38,19 @@ void checkSettings(const PassSettings& s) {
     if (s.width < 1 || s.height < 1) throw Error("pass resolution must be at least 1x1");
     if (s.lights < 1 || s.lights > 8) throw Error("pass lights must be 1..8");
     if (s.frames < 1) throw Error("pass frames must be at least 1");
+    if (s.warmupFrames < 0) throw Error("pass warm-up frames must be at least 0");
 }
 
 }  // namespace
+
+PassTarget passTarget(const std::string& name) {
+    std::string lower = name;
+    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (lower == "rgba8") return {"RGBA8", GL_RGBA8};
+    if (lower == "rgba16f") return {"RGBA16F", GL_RGBA16F_ARB};
+    if (lower == "rgba32f") return {"RGBA32F", GL_RGBA32F_ARB};
+    throw Error("pass target '" + name + "': must be rgba8, rgba16f or rgba32f");
+}
 
 std::vector<osg::Vec3> defaultLightDirections(int count) {
     std::vector<osg::Vec3> directions;
@@ -73,7 +92,7 @@ osg::ref_ptr<osg::Geode> createTangentPatch(osg::StateSet* stateSet) {
 }
 
 PassTime timeMaterialPass(HeadlessRenderer& renderer, const Material& material,
-                          const PassSettings& settings) {
+                          const PassSettings& settings, const PassTarget& target) {
     checkSettings(settings);
     osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
     setDirectionalLights(*stateSet, defaultLightDirections(settings.lights));
@@ -82,12 +101,13 @@ PassTime timeMaterialPass(HeadlessRenderer& renderer, const Material& material,
         ->set(settings.textureScale);
     renderer.setScene(createTangentPatch(stateSet.get()).get());
     renderer.setCamera(orthoUnitSquare(settings.width, settings.height));
-    const PassTime t = timeCurrentScene(renderer, settings.frames);
+    const PassTime t = timeCurrentScene(renderer, settings, target);
     renderer.setScene(nullptr);
     return t;
 }
 
-Calibration runCalibration(HeadlessRenderer& renderer, const PassSettings& settings) {
+Calibration runCalibration(HeadlessRenderer& renderer, const PassSettings& settings,
+                           const PassTarget& target) {
     checkSettings(settings);
     if (settings.calibrationFetches < 1) throw Error("calibration fetches must be at least 1");
     constexpr int kSize = 512;
@@ -105,6 +125,7 @@ Calibration runCalibration(HeadlessRenderer& renderer, const PassSettings& setti
     texture->setFilter(osg::Texture::MAG_FILTER, osg::Texture::NEAREST);
 
     Calibration result;
+    result.target = target;
     result.fetchCount = settings.calibrationFetches;
     renderer.setCamera(orthoUnitSquare(settings.width, settings.height));
     for (int fetches : {0, settings.calibrationFetches}) {
@@ -115,13 +136,31 @@ Calibration runCalibration(HeadlessRenderer& renderer, const PassSettings& setti
         stateSet->addUniform(new osg::Uniform("calibrationFetches", fetches));
         renderer.setScene(createFullScreenQuad(stateSet.get()).get());
         (fetches == 0 ? result.empty : result.fetches) =
-            timeCurrentScene(renderer, settings.frames);
+            timeCurrentScene(renderer, settings, target);
     }
     renderer.setScene(nullptr);
     const double pixels = double(settings.width) * double(settings.height);
-    if (result.fetches.ms > 0)
-        result.fetchesPerSecond = double(result.fetchCount) * pixels / (result.fetches.ms * 1e-3);
+    // The reads alone: what the N fetches add to the pass without them.
+    const double readMs = result.fetches.ms - result.empty.ms;
+    if (result.empty.ms >= 0 && readMs > 0)
+        result.fetchesPerSecond = double(result.fetchCount) * pixels / (readMs * 1e-3);
     return result;
+}
+
+MethodPass timeMethodPass(HeadlessRenderer& renderer, const Material& material,
+                          const PassSettings& settings, const Calibration& calibration,
+                          int texPerPixel) {
+    MethodPass m;
+    m.target = calibration.target;
+    m.pass = timeMaterialPass(renderer, material, settings, calibration.target);
+    m.emptyMs = calibration.empty.ms;
+    m.shadingMs = m.pass.ms - m.emptyMs;
+    const double pixels = double(settings.width) * double(settings.height);
+    if (texPerPixel >= 0 && calibration.fetchesPerSecond > 0) {
+        m.floorMs = double(texPerPixel) * pixels / calibration.fetchesPerSecond * 1e3;
+        if (m.floorMs > 0) m.floorRatio = m.shadingMs / m.floorMs;
+    }
+    return m;
 }
 
 }  // namespace osgBTF

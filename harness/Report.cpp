@@ -1,5 +1,6 @@
 #include "harness/Report.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -61,7 +62,8 @@ nlohmann::json number(double value) {
 std::string passDescription(const CompareResult& r) {
     return std::to_string(r.pass.width) + "x" + std::to_string(r.pass.height) + " pixels, " +
            std::to_string(r.pass.lights) + " light" + (r.pass.lights == 1 ? "" : "s") +
-           ", median of " + std::to_string(r.pass.frames) + " frames, texture repeated " +
+           ", median of " + std::to_string(r.pass.frames) + " frames after " +
+           std::to_string(r.pass.warmupFrames) + " warm-up frames, texture repeated " +
            general(r.pass.textureScale, 3) + " times across the viewport";
 }
 
@@ -123,40 +125,75 @@ std::string reportMarkdown(const CompareResult& r) {
        << "ALU / TEX: static count of the fragment shader (harness/ShaderCost.h), fixed + per "
           "light, and the total at "
        << r.pass.lights << " light" << (r.pass.lights == 1 ? "" : "s") << ". ";
-    if (r.gpuRan) {
-        const std::string clock = r.calibration.fetches.clock;
+    if (r.gpuRan && !r.calibrations.empty()) {
+        const std::string clock = r.calibrations.front().empty.clock;
         md << "Time per pass: " << passDescription(r) << "; clock: " << clock
            << (clock == "GL_TIME_ELAPSED"
                    ? " (GPU timer queries around the camera's draw)"
-                   : " (software renderer: wall time of a frame ending with glFinish, read-back "
-                     "included; its GL timer queries are meaningless)")
-           << ", renderer " << r.glRenderer << ".\n\n"
-           << "Calibration in the same run: an empty pass took " << fixed(r.calibration.empty.ms, 3)
-           << " ms, " << r.calibration.fetchCount << " RGBA32F texelFetch per pixel took "
-           << fixed(r.calibration.fetches.ms, 3)
-           << " ms: " << general(r.calibration.fetchesPerSecond / 1e9, 4)
-           << " G fetches/s. Floor = TEX total x pixels / that rate; ratio = time / floor.\n\n";
+                   : " (software renderer: wall time of a frame ending with glFinish; its GL "
+                     "timer queries are meaningless)")
+           << ", renderer " << r.glRenderer << ". Each target is a renderbuffer of that format "
+           << "(never read back) and is timed on its own: its empty pass (the patch with a "
+              "constant colour: clear, raster, write), its calibration pass, then every method. "
+              "*- empty* = the method's pass minus the empty pass of the same target: what its "
+              "shading costs. Calibration: ";
+        for (std::size_t i = 0; i < r.calibrations.size(); ++i) {
+            const Calibration& c = r.calibrations[i];
+            md << (i ? "; " : "") << c.target.name << " " << c.fetchCount
+               << " RGBA32F texelFetch per pixel took " << fixed(c.fetches.ms, 3)
+               << " ms against an empty pass of " << fixed(c.empty.ms, 3) << " ms: "
+               << (c.fetchesPerSecond > 0 ? general(c.fetchesPerSecond / 1e9, 4) + " G fetches/s"
+                                          : std::string("no fetch rate (not above the empty "
+                                                        "pass)"));
+        }
+        md << ". Floor = TEX total x pixels / that rate (the reads alone); x floor = (method - "
+              "empty) / floor. A difference near 0 or below is within the clock's noise.\n\n";
     } else {
         md << "No pass times: " << r.gpuNote << ".\n\n";
     }
+    const std::vector<PassTarget>& targets = r.pass.targets;
     md << "| method | ALU fixed + per light | TEX fixed + per light | ALU total | TEX total | "
-          "count rule | ms per pass | floor ms | ratio to floor |\n"
-       << "|---|---|---|---|---|---|---|---|---|\n";
+          "count rule |";
+    for (const PassTarget& t : targets)
+        md << " " << t.name << " ms | " << t.name << " - empty | " << t.name << " x floor |";
+    md << "\n|---|---|---|---|---|---|" << [&] {
+        std::string cells;
+        for (std::size_t i = 0; i < targets.size(); ++i) cells += "---|---|---|";
+        return cells;
+    }() << "\n";
+    if (r.gpuRan && r.calibrations.size() == targets.size()) {
+        md << "| *empty pass* | 0 + 0 | 0 + 0 | 0 | 0 | no material |";
+        for (const Calibration& c : r.calibrations) md << " " << fixed(c.empty.ms, 3) << " | 0 | |";
+        md << "\n| *calibration* | | " << r.calibrations.front().fetchCount << " + 0 | | "
+           << r.calibrations.front().fetchCount << " | RGBA32F texelFetch |";
+        for (const Calibration& c : r.calibrations)
+            md << " " << fixed(c.fetches.ms, 3) << " | " << fixed(c.fetches.ms - c.empty.ms, 3)
+               << " | " << (c.fetchesPerSecond > 0 ? "1.00" : "n/a") << " |";
+        md << "\n";
+    }
     for (const MethodResult& m : r.methods) {
         md << "| " << m.method << " | ";
         if (m.failed) {
-            md << cell(m.failure) << " | | | | | | | |\n";
+            md << cell(m.failure) << " | | | | |" << std::string(3 * targets.size(), '|') << "\n";
             continue;
         }
         if (m.cost.counted)
             md << m.cost.fixedAlu << " + " << m.cost.perLightAlu << " | " << m.cost.fixedTex
                << " + " << m.cost.perLightTex << " | " << m.cost.alu(r.pass.lights) << " | "
-               << m.cost.tex(r.pass.lights) << " | " << cell(m.cost.formula) << " | ";
+               << m.cost.tex(r.pass.lights) << " | " << cell(m.cost.formula) << " |";
         else
-            md << "n/a | n/a | n/a | n/a | not counted | ";
-        md << (m.pass.ms >= 0 ? fixed(m.pass.ms, 3) : "n/a") << " | "
-           << (m.floorMs >= 0 ? fixed(m.floorMs, 3) : "n/a") << " | "
-           << (m.floorRatio >= 0 ? fixed(m.floorRatio, 2) : "n/a") << " |\n";
+            md << "n/a | n/a | n/a | n/a | not counted |";
+        for (std::size_t i = 0; i < targets.size(); ++i) {
+            const MethodPass* p =
+                i < m.passes.size() && m.passes[i].measured() ? &m.passes[i] : nullptr;
+            if (!p) {
+                md << " n/a | n/a | n/a |";
+                continue;
+            }
+            md << " " << fixed(p->pass.ms, 3) << " | " << fixed(p->shadingMs, 3) << " | "
+               << (p->floorMs > 0 ? fixed(p->floorRatio, 2) : "n/a") << " |";
+        }
+        md << "\n";
     }
 
     md << "\n## Fitting\n\n"
@@ -192,17 +229,25 @@ std::string reportMarkdown(const CompareResult& r) {
 
 std::string resultsCsv(const CompareResult& r) {
     std::ostringstream csv;
+    std::string passColumns;
+    for (const PassTarget& t : r.pass.targets) {
+        std::string n = t.name;
+        for (char& c : n) c = char(std::tolower(static_cast<unsigned char>(c)));
+        passColumns += n + "_ms," + n + "_empty_ms," + n + "_shading_ms," + n + "_floor_ms," + n +
+                       "_floor_ratio,";
+    }
     csv << "method,status,message,options,error_avg,error_min,error_max,rmse,psnr_db,"
            "nonfinite_values,gpu_cpu_max_diff,values_per_texel,bytes_per_texel,total_bytes,"
            "compression_ratio,alu_fixed,tex_fixed,alu_per_light,tex_per_light,alu_total,"
-           "tex_total,pass_ms,pass_clock,floor_ms,floor_ratio,fit_seconds,fit_process_seconds,"
-           "peak_rss_bytes,reused,fitted_file\n";
+           "tex_total,pass_clock,"
+        << passColumns << "fit_seconds,fit_process_seconds,peak_rss_bytes,reused,fitted_file\n";
     for (const MethodResult& m : r.methods) {
         csv << csvField(m.method) << "," << (m.failed ? "failed" : "ok") << ","
             << csvField(m.failed ? m.failure : "") << "," << csvField(optionText(m)) << ",";
         if (m.failed) {
-            // 22 empty measures (error_avg .. fit_seconds), then what the failed child reported.
-            csv << std::string(22, ',') << (m.fit.ok ? "" : full(m.fit.wallSeconds)) << ","
+            // Empty measures (error_avg .. fit_seconds), then what the failed child reported.
+            csv << std::string(19 + 5 * r.pass.targets.size(), ',')
+                << (m.fit.ok ? "" : full(m.fit.wallSeconds)) << ","
                 << (m.fit.ok ? "" : std::to_string(m.fit.peakRssBytes)) << ",,\n";
             continue;
         }
@@ -218,10 +263,22 @@ std::string resultsCsv(const CompareResult& r) {
                 << m.cost.tex(r.pass.lights) << ",";
         else
             csv << ",,,,,,";
-        csv << optional(m.pass.ms) << "," << m.pass.clock << "," << optional(m.floorMs) << ","
-            << optional(m.floorRatio) << "," << optional(m.fitSeconds) << ","
-            << full(m.fit.wallSeconds) << "," << m.fit.peakRssBytes << ","
-            << (m.fit.reused ? "yes" : "no") << "," << csvField(m.fittedFile) << "\n";
+        const MethodPass* primary = m.primaryPass();
+        csv << (primary ? primary->pass.clock : std::string()) << ",";
+        for (std::size_t i = 0; i < r.pass.targets.size(); ++i) {
+            const MethodPass* p =
+                i < m.passes.size() && m.passes[i].measured() ? &m.passes[i] : nullptr;
+            if (!p) {
+                csv << ",,,,,";
+                continue;
+            }
+            // The shading time and its ratio may be negative (noise): written as measured.
+            csv << full(p->pass.ms) << "," << full(p->emptyMs) << "," << full(p->shadingMs) << ","
+                << optional(p->floorMs) << "," << (p->floorMs > 0 ? full(p->floorRatio) : "")
+                << ",";
+        }
+        csv << optional(m.fitSeconds) << "," << full(m.fit.wallSeconds) << "," << m.fit.peakRssBytes
+            << "," << (m.fit.reused ? "yes" : "no") << "," << csvField(m.fittedFile) << "\n";
     }
     return csv.str();
 }
@@ -244,13 +301,22 @@ std::string resultsJson(const CompareResult& r) {
                  {"height", r.pass.height},
                  {"lights", r.pass.lights},
                  {"frames", r.pass.frames},
+                 {"warmup_frames", r.pass.warmupFrames},
                  {"texture_scale", r.pass.textureScale}};
-    if (r.gpuRan)
-        j["calibration"] = {{"fetches_per_pixel", r.calibration.fetchCount},
-                            {"empty_ms", r.calibration.empty.ms},
-                            {"fetch_ms", r.calibration.fetches.ms},
-                            {"fetches_per_second", r.calibration.fetchesPerSecond},
-                            {"clock", r.calibration.fetches.clock}};
+    nlohmann::json targetNames = nlohmann::json::array();
+    for (const PassTarget& t : r.pass.targets) targetNames.push_back(t.name);
+    j["pass"]["targets"] = targetNames;
+    if (r.gpuRan) {
+        nlohmann::json calibrations = nlohmann::json::array();
+        for (const Calibration& c : r.calibrations)
+            calibrations.push_back({{"target", c.target.name},
+                                    {"fetches_per_pixel", c.fetchCount},
+                                    {"empty_ms", c.empty.ms},
+                                    {"fetch_ms", c.fetches.ms},
+                                    {"fetches_per_second", c.fetchesPerSecond},
+                                    {"clock", c.fetches.clock}});
+        j["calibrations"] = calibrations;
+    }
     nlohmann::json pairs = nlohmann::json::array();
     for (const auto& [v, l] : r.spotCheckPairs) pairs.push_back({{"view", v}, {"light", l}});
     j["spot_check_pairs"] = pairs;
@@ -285,15 +351,25 @@ std::string resultsJson(const CompareResult& r) {
                 pass["alu_total"] = m.cost.alu(r.pass.lights);
                 pass["tex_total"] = m.cost.tex(r.pass.lights);
             }
-            if (m.pass.ms >= 0) {
-                pass["ms"] = m.pass.ms;
-                pass["clock"] = m.pass.clock;
-                pass["wall_ms"] = m.pass.timing.wallMs;
-                pass["cpu_ms"] = m.pass.timing.cpuMs;
-                pass["gpu_timer_ms"] = m.pass.timing.gpuMs;
+            nlohmann::json times = nlohmann::json::array();
+            for (const MethodPass& p : m.passes) {
+                nlohmann::json t{{"target", p.target.name}};
+                if (p.measured()) {
+                    t["ms"] = p.pass.ms;
+                    t["clock"] = p.pass.clock;
+                    t["empty_ms"] = p.emptyMs;
+                    t["shading_ms"] = p.shadingMs;
+                    t["wall_ms"] = p.pass.timing.wallMs;
+                    t["cpu_ms"] = p.pass.timing.cpuMs;
+                    t["gpu_timer_ms"] = p.pass.timing.gpuMs;
+                    if (p.floorMs > 0) {
+                        t["floor_ms"] = p.floorMs;
+                        t["floor_ratio"] = p.floorRatio;
+                    }
+                }
+                times.push_back(t);
             }
-            if (m.floorMs >= 0) pass["floor_ms"] = m.floorMs;
-            if (m.floorRatio >= 0) pass["floor_ratio"] = m.floorRatio;
+            pass["targets"] = times;
             e["pass"] = pass;
         }
         methods.push_back(e);

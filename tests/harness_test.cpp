@@ -4,6 +4,7 @@
 // tool_btf_test.cpp); the numbers it reports are recomputed here from its files.
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -86,6 +87,13 @@ TEST(Harness, UnknownMethodOrMalformedSettingIsAClearError) {
                             "compared methods"),
               std::string::npos)
         << r.output;
+    r = btfWithGl("compare " + shellQuote(zip) + " --methods pca --targets rgba8,rgb10 --out " +
+                  shellQuote(out.string()));
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("btf: error: --targets: pass target 'rgb10': must be rgba8, rgba16f "
+                            "or rgba32f"),
+              std::string::npos)
+        << r.output;
     EXPECT_TRUE(siblingsStartingWith(out).empty());
 }
 
@@ -153,8 +161,59 @@ TEST(Harness, TinySampleWritesEveryFileAndTablesMatchTheMethodApis) {
         EXPECT_EQ(entry["fit"]["reused"], false);
         // GPU path agrees with the CPU evaluator on llvmpipe (texelFetch everywhere).
         EXPECT_LT(entry["error"]["gpu_cpu_max_diff"].get<double>(), 1e-3);
-        EXPECT_GT(entry["pass"]["ms"].get<double>(), 0.0);
-        EXPECT_GT(entry["pass"]["floor_ratio"].get<double>(), 0.0);
+        // One time per target, set against that target's empty and calibration passes. Only
+        // the arithmetic is checked: timings never pass or fail.
+        const nlohmann::json& times = entry["pass"]["targets"];
+        ASSERT_EQ(times.size(), 2u) << entry.dump();
+        for (std::size_t i = 0; i < times.size(); ++i) {
+            const nlohmann::json& t = times[i];
+            const nlohmann::json& calibration = results["calibrations"][i];
+            EXPECT_EQ(t["target"], i == 0 ? "RGBA8" : "RGBA16F");
+            EXPECT_EQ(calibration["target"], t["target"]);
+            EXPECT_GT(t["ms"].get<double>(), 0.0);
+            EXPECT_EQ(t["empty_ms"].get<double>(), calibration["empty_ms"].get<double>());
+            EXPECT_EQ(t["shading_ms"].get<double>(),
+                      t["ms"].get<double>() - t["empty_ms"].get<double>());
+            const double readMs =
+                calibration["fetch_ms"].get<double>() - calibration["empty_ms"].get<double>();
+            if (readMs > 0) {
+                EXPECT_DOUBLE_EQ(calibration["fetches_per_second"].get<double>(),
+                                 4.0 * 32 * 32 / (readMs * 1e-3));
+                // lambert and pca are counted: TEX total x pixels / rate.
+                EXPECT_DOUBLE_EQ(t["floor_ms"].get<double>(),
+                                 entry["pass"]["tex_total"].get<double>() * 32 * 32 /
+                                     calibration["fetches_per_second"].get<double>() * 1e3);
+                EXPECT_DOUBLE_EQ(t["floor_ratio"].get<double>(),
+                                 t["shading_ms"].get<double>() / t["floor_ms"].get<double>());
+            }
+        }
+    }
+    EXPECT_EQ(results["pass"]["targets"], nlohmann::json::array({"RGBA8", "RGBA16F"}));
+    // The printed table has both targets and the empty pass; the CSV one column per header.
+    EXPECT_NE(r.output.find("RGBA8 ms   - empty  x floor   RGBA16F ms   - empty  x floor"),
+              std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("(empty pass)"), std::string::npos) << r.output;
+    EXPECT_NE(report.find("| *empty pass* | 0 + 0 | 0 + 0 | 0 | 0 | no material |"),
+              std::string::npos);
+    {
+        std::istringstream csv(readTextFile((out / "results.csv").string()));
+        std::string header, row;
+        std::getline(csv, header);
+        EXPECT_NE(header.find(",rgba8_ms,rgba8_empty_ms,rgba8_shading_ms,rgba8_floor_ms,"
+                              "rgba8_floor_ratio,rgba16f_ms,"),
+                  std::string::npos)
+            << header;
+        const auto fields = [](const std::string& line) {
+            std::size_t n = 1;
+            bool quoted = false;
+            for (char c : line) {
+                if (c == '"') quoted = !quoted;
+                n += !quoted && c == ',';
+            }
+            return n;
+        };
+        while (std::getline(csv, row)) EXPECT_EQ(fields(row), fields(header)) << row;
     }
     EXPECT_EQ(methodEntry(results, "pca")["options"]["components"], "3");
 
@@ -182,7 +241,10 @@ TEST(Harness, RecommendationPicksTheLowestErrorWithinBothBudgets) {
         m.method = name;
         m.error.average = error;
         m.memory.bytesPerTexel = bytes;
-        m.pass.ms = ms;
+        MethodPass pass;
+        pass.target = passTarget("rgba8");
+        pass.pass.ms = ms;
+        m.passes.push_back(pass);
         m.failed = failed;
         result.methods.push_back(m);
     };
@@ -203,10 +265,10 @@ TEST(Harness, RecommendationPicksTheLowestErrorWithinBothBudgets) {
     EXPECT_EQ(result.recommended, "");
     EXPECT_EQ(result.recommendation,
               "Recommendation: none; no completed method fits the budgets (at most 5 bytes per "
-              "texel and at most 10 ms per pass (256x256, 1 light))");
+              "texel and at most 10 ms per pass (RGBA8, 256x256, 1 light))");
     // A time budget needs a measured time.
     result.maxBytesPerTexel = 0;
-    result.methods[0].pass.ms = -1;
+    result.methods[0].passes[0].pass.ms = -1;
     recommend(result);
     EXPECT_EQ(result.recommended, "big") << "2 ms fits; 'cheap' has no measured time";
 }

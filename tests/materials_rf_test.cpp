@@ -260,3 +260,91 @@ TEST(RfFile, SaveLoadRoundTripIsExact) {
               dir.file("broken.exr") +
                   ": texture 'lobes' must be 5x3, 162 layer(s) of 4 channels, stored as half");
 }
+
+// The lobes are stored as half floats (seed 001 Table 2's 1785 bytes per texel) with exponents up
+// to 256, so rounding is amplified: a base b = (a, b, c) . l off by Db changes b^n by about
+// n b^(n-1) Db. This derives the bound from half precision (round to nearest: relative error at
+// most u = 2^-11 per stored value) and checks that rounding the lobes of lobe fields with
+// exponents from 1 to 256 never changes a reflectance field by more than it, at every measured
+// light. What the rounding does to a fit's error is measured in materials/rf/README.md.
+TEST(RfHalfLobes, RoundingStaysWithinTheBoundDerivedFromHalfPrecision) {
+    const DirectionSet bonn = DirectionSet::bonn81();
+    constexpr int kLobes = 2, kSize = 4;
+    osg::ref_ptr<RfMaterial> exact = RfMaterial::create(kSize, kSize, bonn, bonn, kLobes);
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const std::size_t texels = exact->texelCount();
+    const std::size_t views = bonn.size();
+    // rho_v on a 1/1024 grid and rho_d on 1/255: exact in their storage, so only lobes round.
+    for (float& v : exact->rhoV) v = std::round(unit(rng) * 1024.0f) / 1024.0f;
+    for (float& v : exact->rhoD) v = std::round(unit(rng) * 255.0f) / 255.0f;
+    const float exponents[] = {1.0f, 7.3f, 33.7f, 64.0f, 129.9f, 255.8f};
+    for (std::size_t layer = 0; layer < views * kLobes; ++layer)
+        for (std::size_t t = 0; t < texels; ++t) {
+            float* p = &exact->lobes[(layer * texels + t) * 4];
+            // An axis in the upper hemisphere; magnitude near 1, as the fitter leaves it (the lobe
+            // sum peaks at 1 over the measured lights), so the base reaches 1 and a little more.
+            const Direction axis{unit(rng) * 80.0f, unit(rng) * 360.0f};
+            const glm::vec3 a = axis.toVector() * (0.95f + 0.1f * unit(rng));
+            p[0] = a.x;
+            p[1] = a.y;
+            p[2] = a.z;
+            p[3] = exponents[(layer + t) % 6];
+        }
+    osg::ref_ptr<RfMaterial> stored = new RfMaterial(*exact);
+    stored->lobes = exact->lobes;
+    stored->roundToStorage();
+    ASSERT_EQ(stored->rhoV, exact->rhoV);
+    ASSERT_EQ(stored->rhoD, exact->rhoD);
+    ASSERT_NE(stored->lobes, exact->lobes);
+
+    const double u = std::ldexp(1.0, -11);
+    double worstRatio = 0, worstAt256 = 0;
+    for (std::size_t t = 0; t < texels; ++t)
+        for (std::size_t v = 0; v < views; ++v)
+            for (std::size_t l = 0; l < bonn.size(); ++l) {
+                const glm::vec3 light = bonn.vector(l);
+                // Bound of |sum_i stored lobe_i - exact lobe_i| in double, per lobe:
+                //  base: |Db| <= u m with m = sum_j |a_j l_j|; by the mean value theorem the
+                //        lobe moves by at most n' B^(n'-1) |Db|, B = b + |Db|, n' = n (1 + u) (or
+                //        n (1 - u) where B < 1: the larger of the two powers);
+                //  exponent: |Dn| <= u n moves b^n by at most max |b^(n (1 +- u)) - b^n|.
+                double bound = 0;
+                for (int i = 0; i < kLobes; ++i) {
+                    const float* p = &exact->lobes[((v * kLobes + i) * texels + t) * 4];
+                    const double b =
+                        double(p[0]) * light.x + double(p[1]) * light.y + double(p[2]) * light.z;
+                    const double m = std::abs(double(p[0]) * light.x) +
+                                     std::abs(double(p[1]) * light.y) +
+                                     std::abs(double(p[2]) * light.z);
+                    // Below 2^-14 half is subnormal: an absolute error of up to 2^-25 instead.
+                    const double db =
+                        u * m + std::ldexp(1.0, -25) *
+                                    (std::abs(light.x) + std::abs(light.y) + std::abs(light.z));
+                    const double n = p[3], hi = b + db;
+                    if (hi <= 0) continue;  // both the exact and the rounded lobe are 0 here
+                    const double power = hi >= 1 ? n * (1 + u) : n * (1 - u);
+                    bound += n * (1 + u) * std::pow(hi, power - 1) * db;
+                    if (b > 0)
+                        bound += std::max(std::abs(std::pow(b, n * (1 + u)) - std::pow(b, n)),
+                                          std::abs(std::pow(b, n * (1 - u)) - std::pow(b, n)));
+                }
+                // Float evaluation of both sums (pow and the dot product): a few ulp of each.
+                const double exactSum = exact->lobeSum(t, v, light);
+                const double storedSum = stored->lobeSum(t, v, light);
+                const double slack = 8 * std::ldexp(1.0, -24) * (1 + std::abs(exactSum));
+                const double difference = std::abs(storedSum - exactSum);
+                ASSERT_LE(difference, bound + slack)
+                    << "texel " << t << " view " << v << " light " << l << ": exact " << exactSum
+                    << " stored " << storedSum;
+                if (bound > 1e-4) worstRatio = std::max(worstRatio, difference / bound);
+                for (int i = 0; i < kLobes; ++i)
+                    if (exact->lobes[((v * kLobes + i) * texels + t) * 4 + 3] > 255.0f)
+                        worstAt256 = std::max(worstAt256, difference / (1 + exactSum));
+            }
+    // The bound is not loose by orders of magnitude: rounding reaches a good part of it.
+    EXPECT_GT(worstRatio, 0.05);
+    std::cout << "rf half lobes: largest change of a lobe sum " << worstAt256
+              << " (relative to 1 + sum) where n = 256; largest change / bound " << worstRatio
+              << "\n";
+}

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <sstream>
 
@@ -17,6 +18,7 @@
 #include "core/Error.h"
 #include "core/Progress.h"
 #include "examples/ExampleScenes.h"
+#include "examples/btf-examples/SceneBench.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 
@@ -38,13 +40,70 @@ struct Options {
     std::string outputDir;
     int size = 32;
     std::string methods = "lambert,laf,pca";
+    bool benchFps = false;
+    std::string benchResolution = "1920x1080", benchLights = "1,8", benchTarget = "rgba8";
+    SceneBenchOptions bench;
 };
 
-void run(const Options& options) {
+/** "WxH" with positive integers. */
+void parseSize(const std::string& text, int& width, int& height) {
+    const auto x = text.find('x');
+    try {
+        std::size_t used = 0, usedH = 0;
+        if (x != std::string::npos) {
+            width = std::stoi(text.substr(0, x), &used);
+            height = std::stoi(text.substr(x + 1), &usedH);
+            if (used == x && usedH == text.size() - x - 1 && width > 0 && height > 0) return;
+        }
+    } catch (const std::exception&) {
+    }
+    throw Error("--bench-resolution: '" + text + "' is not WxH (positive integers)");
+}
+
+/** Writes `text` to a temporary name beside `path`, then renames it. */
+void writeTextAtomically(const std::string& text, const std::filesystem::path& path) {
+    const std::filesystem::path temporary =
+        path.parent_path() /
+        ("." + path.filename().string() + ".tmp-" + std::to_string(::getpid()));
+    {
+        std::ofstream out(temporary);
+        out << text;
+        if (!out.flush()) fail(temporary.string(), "cannot write");
+    }
+    std::error_code error;
+    std::filesystem::rename(temporary, path, error);
+    if (error) {
+        std::filesystem::remove(temporary, error);
+        fail(path.string(), "cannot rename the temporary file into place");
+    }
+}
+
+void run(Options options) {
     namespace fs = std::filesystem;
     const std::vector<std::string> methods = splitList(options.methods);
     if (methods.empty()) throw Error("--methods: no method given");
     for (const std::string& method : methods) findMethod(method);  // unknown names fail first
+    if (options.benchFps) {  // bad benchmark options fail before anything is written
+        parseSize(options.benchResolution, options.bench.width, options.bench.height);
+        options.bench.lights.clear();
+        for (const std::string& l : splitList(options.benchLights)) {
+            std::size_t used = 0;
+            int count = 0;
+            try {
+                count = std::stoi(l, &used);
+            } catch (const std::exception&) {
+            }
+            if (used != l.size() || count < 1 || count > 8)
+                throw Error("--bench-lights: '" + l + "' is not a light count in 1..8");
+            options.bench.lights.push_back(count);
+        }
+        if (options.bench.lights.empty()) throw Error("--bench-lights: no light count given");
+        try {
+            options.bench.target = passTarget(options.benchTarget);
+        } catch (const Error& e) {
+            throw Error(std::string("--bench-target: ") + e.what());
+        }
+    }
 
     const fs::path dir(options.outputDir);
     std::error_code error;
@@ -99,6 +158,25 @@ void run(const Options& options) {
         writeNodeAtomically(*scene, (dir / spec.file).string());
         std::cout << "wrote " << (dir / spec.file).string() << "\n";
     }
+    if (!options.benchFps) return;
+
+    // 3. Frames per second of each scene with each method on every object.
+    std::vector<BenchScene> benchScenes;
+    for (const SceneSpec& spec : scenes)
+        benchScenes.push_back({fs::path(spec.file).stem().string(),
+                               [&spec, &readOptions](const std::vector<SceneItem>& sceneItems) {
+                                   return createSideBySideScene(spec.model.get(), sceneItems,
+                                                                spec.spacing, spec.textureScale,
+                                                                readOptions.get());
+                               }});
+    Progress progress("scene fps", benchScenes.size() * items.size() * options.bench.lights.size());
+    std::string renderer;
+    const std::vector<SceneFps> results = benchmarkScenes(
+        benchScenes, items, options.bench, [&] { progress.advance(); }, &renderer);
+    const std::string markdown = sceneFpsMarkdown(results, options.bench, renderer);
+    writeTextAtomically(markdown, dir / "bench-fps.md");
+    writeTextAtomically(sceneFpsCsv(results), dir / "bench-fps.csv");
+    std::cout << markdown << "wrote " << (dir / "bench-fps.md").string() << "\n";
 }
 
 }  // namespace
@@ -120,6 +198,27 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--methods", options.methods,
                    "Comma-separated fit methods (`btf fit --help` lists all; default options)")
+        ->capture_default_str();
+    app.add_flag("--bench-fps", options.benchFps,
+                 "After writing the scenes, time them headless (EGL: the GPU where there is one, "
+                 "else llvmpipe): for each scene, each method on every object and each light "
+                 "count, the median frame time and frames per second; writes DIR/bench-fps.md "
+                 "and DIR/bench-fps.csv");
+    app.add_option("--bench-resolution", options.benchResolution, "Viewport of --bench-fps, WxH")
+        ->capture_default_str();
+    app.add_option("--bench-lights", options.benchLights,
+                   "Comma-separated light counts of --bench-fps (1..8: the scene's key light, "
+                   "its fill light, then white directional lights)")
+        ->capture_default_str();
+    app.add_option("--bench-frames", options.bench.frames, "Timed frames per measurement")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    app.add_option("--bench-warmup", options.bench.warmupFrames,
+                   "Untimed frames before each measurement")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    app.add_option("--bench-target", options.benchTarget,
+                   "Colour target of --bench-fps: rgba8 (a window), rgba16f or rgba32f")
         ->capture_default_str();
     bool progress = ::isatty(STDERR_FILENO) != 0;
     app.add_flag("--progress,!--no-progress", progress, "Progress bars while fitting");

@@ -184,18 +184,35 @@ void HeadlessRenderer::setCamera(const CameraSetup& setup) {
     osg::Camera* cam = _viewer->getCamera();
     cam->setViewMatrix(setup.view);
     cam->setProjectionMatrix(setup.projection);
-    if (setup.width == _width && setup.height == _height) return;
-
+    if (setup.width == _width && setup.height == _height && _image) return;
     _width = setup.width;
     _height = setup.height;
     cam->setViewport(0, 0, _width, _height);
-    // headless.md pitfall 1: without the internal format OSG makes an RGBA8 renderbuffer.
+    attachTarget();
+}
+
+void HeadlessRenderer::setColorTarget(GLenum internalFormat, bool readBack) {
+    if (readBack && internalFormat != GL_RGBA32F_ARB)
+        throw Error("HeadlessRenderer: only the GL_RGBA32F target is read back");
+    if (internalFormat == _targetFormat && readBack == _readBack) return;
+    _targetFormat = internalFormat;
+    _readBack = readBack;
+    if (_width > 0) attachTarget();
+}
+
+void HeadlessRenderer::attachTarget() {
+    osg::Camera* cam = _viewer->getCamera();
+    // headless.md pitfall 1: without the internal format OSG makes an RGBA8 renderbuffer. The
+    // image is kept either way: it also marks that a camera size was set.
     _image = new osg::Image;
     _image->allocateImage(_width, _height, 1, GL_RGBA, GL_FLOAT);
     _image->setInternalTextureFormat(GL_RGBA32F_ARB);
     cam->detach(osg::Camera::COLOR_BUFFER0);
     cam->detach(osg::Camera::DEPTH_BUFFER);
-    cam->attach(osg::Camera::COLOR_BUFFER0, _image.get());
+    if (_readBack)
+        cam->attach(osg::Camera::COLOR_BUFFER0, _image.get());
+    else
+        cam->attach(osg::Camera::COLOR_BUFFER0, _targetFormat);
     cam->attach(osg::Camera::DEPTH_BUFFER, GL_DEPTH_COMPONENT24);
     cam->dirtyAttachmentMap();
 }
@@ -211,6 +228,8 @@ void HeadlessRenderer::frame() {
 }
 
 osg::ref_ptr<osg::Image> HeadlessRenderer::render() {
+    if (!_readBack)
+        throw Error("HeadlessRenderer: render() needs the read-back target (setColorTarget)");
     frame();
     return new osg::Image(*_image, osg::CopyOp::DEEP_COPY_ALL);
 }
@@ -221,10 +240,12 @@ osg::ref_ptr<osg::Image> HeadlessRenderer::render(osg::Node* scene, const Camera
     return render();
 }
 
-PassTiming HeadlessRenderer::timePasses(int frames, GpuTimer gpu) {
+PassTiming HeadlessRenderer::timePasses(int frames, GpuTimer gpu, int warmupFrames) {
     if (frames < 1) throw Error("HeadlessRenderer::timePasses: frames must be at least 1");
+    if (warmupFrames < 0)
+        throw Error("HeadlessRenderer::timePasses: warm-up frames must be at least 0");
     const bool useGpu = gpu == GpuTimer::On || (gpu == GpuTimer::Auto && !isSoftwareRenderer());
-    frame();  // warm-up: shader compilation, texture upload, FBO set-up
+    for (int i = 0; i < warmupFrames; ++i) frame();
     PassTiming timing;
     timing.frames = frames;
     _timer->gpuWanted = useGpu;

@@ -42,7 +42,7 @@ osg::ref_ptr<osg::Geometry> createFullScreenQuadGeometry();
 /** A Geode holding createFullScreenQuadGeometry(), with the given state set (may be null). */
 osg::ref_ptr<osg::Geode> createFullScreenQuad(osg::StateSet* stateSet = nullptr);
 
-/** Medians over the timed frames (the first, warm-up frame is never timed). */
+/** Medians over the timed frames (warm-up frames are never timed). */
 struct PassTiming {
     int frames = 0;
     double wallMs = 0;  // steady_clock around a frame that ends with glFinish (includes read-back)
@@ -87,6 +87,13 @@ public:
     void setCamera(const CameraSetup& setup);
     /** Default (0, 0, 0, 0). */
     void setClearColor(const osg::Vec4& colour);
+    /** The colour buffer the camera draws into. Default GL_RGBA32F_ARB read back after every
+     *  frame into the float image render() returns (what GPU == CPU checks need). With readBack
+     *  false the target is a renderbuffer of `internalFormat` (GL_RGBA8, GL_RGBA16F_ARB, ...) that
+     *  is never read: a viewer's frame, for timePasses(); render() then throws. Takes effect on
+     *  the next frame. */
+    void setColorTarget(GLenum internalFormat, bool readBack);
+    GLenum colorTargetFormat() const { return _targetFormat; }
 
     /** Renders one frame and returns a copy of the GL_RGBA / GL_FLOAT image, W x H, rows
      *  bottom-up as OSG gives them: pixel (x, y) is at getDataPointer() + 4 * (y * W + x) floats.
@@ -94,9 +101,10 @@ public:
     osg::ref_ptr<osg::Image> render();
     osg::ref_ptr<osg::Image> render(osg::Node* scene, const CameraSetup& setup);
 
-    /** Renders 1 warm-up frame, then `frames` timed frames of the current scene and camera, each
-     *  ending with glFinish. Throws osgBTF::Error for frames < 1. */
-    PassTiming timePasses(int frames, GpuTimer gpu = GpuTimer::Auto);
+    /** Renders `warmupFrames` untimed frames (shader compilation, uploads, caches), then
+     *  `frames` timed frames of the current scene and camera, each ending with glFinish. Throws
+     *  osgBTF::Error for frames < 1 or warmupFrames < 0. */
+    PassTiming timePasses(int frames, GpuTimer gpu = GpuTimer::Auto, int warmupFrames = 1);
 
     /** For what this class does not offer (state sets on the master camera, lighting mode). */
     osgViewer::Viewer& viewer() { return *_viewer; }
@@ -105,6 +113,7 @@ public:
 private:
     void init();
     void frame();
+    void attachTarget();
 
     osg::ref_ptr<HeadlessContext> _context;
     osg::ref_ptr<osgViewer::Viewer> _viewer;
@@ -112,6 +121,8 @@ private:
     osg::ref_ptr<osg::Image> _image;
     osg::ref_ptr<detail::FrameTimer> _timer;
     int _width = 0, _height = 0;
+    GLenum _targetFormat = GL_RGBA32F_ARB;
+    bool _readBack = true;
 };
 
 }  // namespace osgBTF

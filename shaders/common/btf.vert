@@ -15,7 +15,10 @@ void main() {
     vec4 eye = gl_ModelViewMatrix * gl_Vertex;
     btfEyePosition = eye.xyz / eye.w;
     btfEyeNormal = gl_NormalMatrix * gl_Normal;
-    btfEyeTangent = vec4(gl_NormalMatrix * osgBTF_tangent.xyz, osgBTF_tangent.w);
+    // A tangent is a direction in the surface: it transforms like a position difference (the
+    // modelview's upper 3x3), not like a normal. Under a non-uniform scale the normal matrix
+    // would turn it away from the texture's s axis; btf_main.glsl re-orthogonalises it.
+    btfEyeTangent = vec4(mat3(gl_ModelViewMatrix) * osgBTF_tangent.xyz, osgBTF_tangent.w);
     btfTexCoord = gl_MultiTexCoord0.st * osgBTF_textureScale;
     gl_Position = gl_ModelViewProjectionMatrix * gl_Vertex;
 }

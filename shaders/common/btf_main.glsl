@@ -35,8 +35,12 @@ void main() {
     }
     t = normalize(t);
     vec3 b = cross(n, t) * (btfEyeTangent.w < 0.0 ? -1.0 : 1.0);
-    // Orthographic projections have gl_ProjectionMatrix[3][3] == 1: the eye looks along -Z.
-    vec3 toEye = gl_ProjectionMatrix[3][3] == 1.0 ? vec3(0.0, 0.0, 1.0) : normalize(-btfEyePosition);
+    // The centre of projection in homogeneous eye coordinates, P^-1 (0, 0, -1, 0): the eye point
+    // (w > 0) of a perspective projection, the direction toward the eye (w = 0) of an
+    // orthographic one. No test of a matrix entry against an exact value: a projection is only
+    // defined up to a positive factor, and products or inverses of matrices round.
+    vec4 centre = -gl_ProjectionMatrixInverse[2];
+    vec3 toEye = normalize(centre.xyz - centre.w * btfEyePosition);
     vec3 view = vec3(dot(toEye, t), dot(toEye, b), dot(toEye, n));
     if (osgBTF_fixedView.w > 0.5) view = normalize(osgBTF_fixedView.xyz);
     ivec2 texel = btfTexel(btfTexCoord);

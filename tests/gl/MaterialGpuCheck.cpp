@@ -5,17 +5,72 @@
 #include <sstream>
 
 #include <glm/geometric.hpp>
+#include <osg/MatrixTransform>
 #include <osg/Uniform>
 
 #include "tests/gl/GlTestEnv.h"
 
 namespace osgBTF::test {
 
-GpuCpuComparison compareGpuWithCpu(const Material& material, const glm::vec3& viewIn,
-                                   const glm::vec3& lightIn) {
-    const glm::vec3 view = glm::normalize(viewIn), light = glm::normalize(lightIn);
-    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+namespace {
 
+glm::dvec3 toGlm(const osg::Vec3d& v) {
+    return {v.x(), v.y(), v.z()};
+}
+
+osg::Vec3d toOsg(const glm::dvec3& v) {
+    return {v.x, v.y, v.z};
+}
+
+}  // namespace
+
+glm::dmat3 patchFrame(const osg::Matrixd& model) {
+    const glm::dvec3 n = glm::normalize(
+        toGlm(osg::Matrixd::transform3x3(osg::Matrixd::inverse(model), osg::Vec3d(0, 0, 1))));
+    const glm::dvec3 s = toGlm(osg::Matrixd::transform3x3(osg::Vec3d(1, 0, 0), model));
+    const glm::dvec3 t = glm::normalize(s - n * glm::dot(n, s));
+    return glm::dmat3(t, glm::cross(n, t), n);
+}
+
+PatchRender orthoPatchRender(const Material& material, const glm::vec3& viewIn,
+                             const glm::vec3& lightIn, const osg::Matrixd& model) {
+    const glm::dmat3 frame = patchFrame(model);
+    const osg::Vec3d toEye = toOsg(frame * glm::normalize(glm::dvec3(viewIn)));
+    PatchRender render;
+    render.model = model;
+    render.toLight = toOsg(frame * glm::normalize(glm::dvec3(lightIn)));
+
+    // Looking at the patch centre along -toEye.
+    const osg::Vec3d centre = osg::Vec3d(0.5, 0.5, 0.0) * model;
+    const osg::Vec3d up = std::abs(toEye.z()) > 0.999 ? osg::Vec3d(0, 1, 0) : osg::Vec3d(0, 0, 1);
+    CameraSetup& camera = render.camera;
+    camera.view = osg::Matrixd::lookAt(centre + toEye * 2.0, centre, up);
+    // Extent of the patch and of one texel step in view space.
+    const osg::Matrixd modelView = model * camera.view;
+    double lo[2] = {1e9, 1e9}, hi[2] = {-1e9, -1e9};
+    for (double x : {0.0, 1.0})
+        for (double y : {0.0, 1.0}) {
+            const osg::Vec3d p = osg::Vec3d(x, y, 0) * modelView;
+            for (int a = 0; a < 2; ++a) {
+                lo[a] = std::min(lo[a], p[a]);
+                hi[a] = std::max(hi[a], p[a]);
+            }
+        }
+    const osg::Vec3d stepS =
+        osg::Matrixd::transform3x3(osg::Vec3d(1.0 / material.width(), 0, 0), modelView);
+    const osg::Vec3d stepT =
+        osg::Matrixd::transform3x3(osg::Vec3d(0, 1.0 / material.height(), 0), modelView);
+    const double texelOnScreen = std::min(osg::Vec2d(stepS.x(), stepS.y()).length(),
+                                          osg::Vec2d(stepT.x(), stepT.y()).length());
+    const double pixelSize = texelOnScreen / 4.0;  // ~4 pixels per texel along its shortest side
+    camera.width = std::clamp(int(std::ceil((hi[0] - lo[0]) / pixelSize)), 8, 2048);
+    camera.height = std::clamp(int(std::ceil((hi[1] - lo[1]) / pixelSize)), 8, 2048);
+    camera.projection = osg::Matrixd::ortho(lo[0], hi[0], lo[1], hi[1], 0.1, 10.0);
+    return render;
+}
+
+GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& render) {
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
     osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
     osg::ref_ptr<osg::Vec4Array> tangents =
         new osg::Vec4Array(quad->getVertexArray()->getNumElements());
@@ -23,36 +78,12 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const glm::vec3& vi
     quad->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(quad.get());
-    geode->setStateSet(stateSet.get());
+    osg::ref_ptr<osg::MatrixTransform> transform = new osg::MatrixTransform(render.model);
+    transform->addChild(geode.get());
+    transform->setStateSet(stateSet.get());
 
-    // Orthographic camera looking at the patch centre from direction `view`.
-    const osg::Vec3d centre(0.5, 0.5, 0.0), v(view.x, view.y, view.z);
-    const osg::Vec3d up = std::abs(view.z) > 0.999 ? osg::Vec3d(0, 1, 0) : osg::Vec3d(0, 0, 1);
-    CameraSetup camera;
-    camera.view = osg::Matrixd::lookAt(centre + v * 2.0, centre, up);
-    // Extent of the patch and of one texel step in view space.
-    double lo[2] = {1e9, 1e9}, hi[2] = {-1e9, -1e9};
-    for (double x : {0.0, 1.0})
-        for (double y : {0.0, 1.0}) {
-            const osg::Vec3d p = osg::Vec3d(x, y, 0) * camera.view;
-            for (int a = 0; a < 2; ++a) {
-                lo[a] = std::min(lo[a], p[a]);
-                hi[a] = std::max(hi[a], p[a]);
-            }
-        }
-    const osg::Vec3d stepS =
-        osg::Matrixd::transform3x3(osg::Vec3d(1.0 / material.width(), 0, 0), camera.view);
-    const osg::Vec3d stepT =
-        osg::Matrixd::transform3x3(osg::Vec3d(0, 1.0 / material.height(), 0), camera.view);
-    const double texelOnScreen = std::min(osg::Vec2d(stepS.x(), stepS.y()).length(),
-                                          osg::Vec2d(stepT.x(), stepT.y()).length());
-    const double pixelSize = texelOnScreen / 4.0;  // ~4 pixels per texel along its shortest side
-    camera.width = std::clamp(int(std::ceil((hi[0] - lo[0]) / pixelSize)), 8, 2048);
-    camera.height = std::clamp(int(std::ceil((hi[1] - lo[1]) / pixelSize)), 8, 2048);
-    camera.projection = osg::Matrixd::ortho(lo[0], hi[0], lo[1], hi[1], 0.1, 10.0);
-
-    const osg::Vec3d eyeLight =
-        osg::Matrixd::transform3x3(osg::Vec3d(light.x, light.y, light.z), camera.view);
+    const CameraSetup& camera = render.camera;
+    const osg::Vec3d eyeLight = osg::Matrixd::transform3x3(render.toLight, camera.view);
     stateSet->addUniform(new osg::Uniform("osgBTF_lightCount", 1));
     osg::ref_ptr<osg::Uniform> position =
         new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
@@ -63,24 +94,37 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const glm::vec3& vi
     color->setElement(0, osg::Vec3(1, 1, 1));
     stateSet->addUniform(color.get());
 
-    osg::ref_ptr<osg::Image> image = sharedRenderer().render(geode.get(), camera);
+    osg::ref_ptr<osg::Image> image = sharedRenderer().render(transform.get(), camera);
 
+    const glm::dmat3 frame = patchFrame(render.model);
+    const glm::dvec3 toLight = glm::normalize(toGlm(render.toLight));
+    const glm::vec3 light(glm::dot(toLight, frame[0]), glm::dot(toLight, frame[1]),
+                          glm::dot(toLight, frame[2]));
+    // Pixel centre -> the eye ray in patch coordinates, through the inverse of the whole chain.
+    const osg::Matrixd clipToWorld = osg::Matrixd::inverse(camera.view * camera.projection);
+    const osg::Matrixd worldToPatch = osg::Matrixd::inverse(render.model);
     GpuCpuComparison result;
-    const osg::Matrixd inverseView = osg::Matrixd::inverse(camera.view);
     for (int j = 0; j < camera.height; ++j) {
         for (int i = 0; i < camera.width; ++i) {
-            const double ex = lo[0] + (i + 0.5) / camera.width * (hi[0] - lo[0]);
-            const double ey = lo[1] + (j + 0.5) / camera.height * (hi[1] - lo[1]);
-            // The eye ray through this pixel, in patch coordinates, hits z = 0 at (s, t).
-            const osg::Vec3d origin = osg::Vec3d(ex, ey, 0) * inverseView;
-            const double along = origin.z() / v.z();
-            const double s = origin.x() - v.x() * along, t = origin.y() - v.y() * along;
+            const double x = (i + 0.5) / camera.width * 2.0 - 1.0;
+            const double y = (j + 0.5) / camera.height * 2.0 - 1.0;
+            const osg::Vec3d nearWorld = osg::Vec3d(x, y, -1.0) * clipToWorld;
+            const osg::Vec3d farWorld = osg::Vec3d(x, y, 1.0) * clipToWorld;
+            const osg::Vec3d a = nearWorld * worldToPatch, b = farWorld * worldToPatch;
+            if (std::abs(a.z() - b.z()) < 1e-12) continue;  // ray parallel to the patch
+            const double along = a.z() / (a.z() - b.z());
+            const double s = a.x() + (b.x() - a.x()) * along;
+            const double t = a.y() + (b.y() - a.y()) * along;
+            if (!(s > 0 && s < 1 && t > 0 && t < 1)) continue;
             const double fs = s * material.width(), ft = t * material.height();
-            if (s <= 0 || s >= 1 || t <= 0 || t >= 1) continue;
             const double edge = 0.2;  // skip pixels whose centre is near a texel edge
             if (fs - std::floor(fs) < edge || std::ceil(fs) - fs < edge ||
                 ft - std::floor(ft) < edge || std::ceil(ft) - ft < edge)
                 continue;
+            const glm::dvec3 toEye = glm::normalize(toGlm(nearWorld - farWorld));
+            const glm::vec3 view(glm::dot(toEye, frame[0]), glm::dot(toEye, frame[1]),
+                                 glm::dot(toEye, frame[2]));
+            if (view.z <= 0.0f) continue;  // the back of the patch renders black
             const int tx = int(fs), ty = int(ft);
             const glm::vec3 expected = material.evaluate(tx, ty, view, light);
             for (int c = 0; c < 3; ++c) {
@@ -88,8 +132,9 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const glm::vec3& vi
                 if (!(d <= result.maxAbsDifference)) {
                     result.maxAbsDifference = std::isnan(d) ? 1e30 : d;
                     std::ostringstream where;
-                    where << "texel (" << tx << ", " << ty << ") channel " << c << ": GPU "
-                          << pixel(*image, i, j, c) << " CPU " << expected[c];
+                    where << "pixel (" << i << ", " << j << ") texel (" << tx << ", " << ty
+                          << ") channel " << c << ": GPU " << pixel(*image, i, j, c) << " CPU "
+                          << expected[c];
                     result.worst = where.str();
                 }
             }
@@ -97,6 +142,11 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const glm::vec3& vi
         }
     }
     return result;
+}
+
+GpuCpuComparison compareGpuWithCpu(const Material& material, const glm::vec3& view,
+                                   const glm::vec3& light) {
+    return compareGpuWithCpu(material, orthoPatchRender(material, view, light));
 }
 
 }  // namespace osgBTF::test

@@ -348,6 +348,33 @@ void main() { gl_FragColor = vec4(gl_FragCoord.xy, 0.0, 1.0); }
     EXPECT_EQ(pixel(*image, 300, 200, 1), 200.5f);
 }
 
+// The colour target: a renderbuffer of a viewer's format for timing (never read back), and back
+// to the read-back RGBA32F one for images.
+TEST(HeadlessGl, ColorTargetForTimingAndBackForImages) {
+    HeadlessRenderer& r = sharedRenderer();
+    osg::ref_ptr<osg::StateSet> ss = programStateSet("", R"(#version 330 compatibility
+void main() { gl_FragColor = vec4(gl_FragCoord.xy, 0.0, 1.0); }
+)");
+    r.setScene(createFullScreenQuad(ss.get()));
+    r.setCamera(orthoUnitSquare(64, 32));
+    EXPECT_EQ(errorMessage([&] { r.setColorTarget(GL_RGBA16F_ARB, true); }),
+              "HeadlessRenderer: only the GL_RGBA32F target is read back");
+    for (GLenum format : {GLenum(GL_RGBA8), GLenum(GL_RGBA16F_ARB), GLenum(GL_RGBA32F_ARB)}) {
+        r.setColorTarget(format, false);
+        EXPECT_EQ(r.colorTargetFormat(), format);
+        EXPECT_EQ(errorMessage([&] { r.render(); }),
+                  "HeadlessRenderer: render() needs the read-back target (setColorTarget)");
+        const PassTiming timing = r.timePasses(2, GpuTimer::Auto, 0);
+        EXPECT_EQ(timing.wallMsPerFrame.size(), 2u);
+    }
+    EXPECT_EQ(errorMessage([&] { r.timePasses(1, GpuTimer::Auto, -1); }),
+              "HeadlessRenderer::timePasses: warm-up frames must be at least 0");
+    r.setColorTarget(GL_RGBA32F_ARB, true);
+    osg::ref_ptr<osg::Image> image = r.render();
+    EXPECT_EQ(pixel(*image, 40, 20, 0), 40.5f);  // unclamped: a float target again
+    EXPECT_EQ(pixel(*image, 40, 20, 1), 20.5f);
+}
+
 // A second context can be created and closed while the shared one lives on (EGL: the device
 // display is shared, so closing must not eglTerminate it under the first context's feet).
 TEST(HeadlessGl, SecondContextComesAndGoes) {

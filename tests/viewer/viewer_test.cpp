@@ -23,6 +23,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -359,6 +360,75 @@ TEST(Examples, AnUnknownMethodFailsBeforeAnythingIsWritten) {
               std::string::npos)
         << result.output;
     EXPECT_FALSE(fs::exists(out));
+}
+
+// --bench-fps: the command runs and prints a well-formed table (timings never pass or fail).
+TEST(Examples, BenchFpsWritesOneRowPerSceneAndMethod) {
+    TempDir dir;
+    const std::string out = dir.file("bench");
+    const CommandResult result = runCommand(
+        std::string(OSGBTF_BTF_EXAMPLES) + " --no-progress --out " + shellQuote(out) +
+        " --size 8 --methods lambert,pca --bench-fps --bench-resolution 64x36 --bench-frames 1 "
+        "--bench-warmup 0 --bench-lights 1,8");
+    ASSERT_EQ(result.exitCode, 0) << result.output;
+    const std::string table = osgBTF::test::readTextFile(out + "/bench-fps.md");
+    const auto count = [](const std::string& text, const std::string& what) {
+        std::size_t n = 0;
+        for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+        return n;
+    };
+    EXPECT_NE(result.output.find(table), std::string::npos) << "printed as written";
+    EXPECT_NE(table.find("Example scenes at 64x36, RGBA8 target, median of 1 frames after 0 "
+                         "warm-up frames; renderer "),
+              std::string::npos)
+        << table;
+    EXPECT_NE(table.find("| scene | method | fps 1 light | frame ms |"), std::string::npos);
+    EXPECT_NE(table.find(" fps 8 lights | frame ms |"), std::string::npos);
+    for (const std::string scene : {"spheres", "cloth", "vases"})
+        for (const std::string method : {"lambert", "pca"})
+            EXPECT_EQ(count(table, "| " + scene + " | " + method + " | "), 1u)
+                << scene << " " << method << "\n"
+                << table;
+    std::ifstream csv(out + "/bench-fps.csv");
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line, "scene,method,lights,frame_ms,fps,gpu_ms");
+    int rows = 0;
+    while (std::getline(csv, line)) {
+        ++rows;
+        std::vector<std::string> fields;
+        std::stringstream fieldStream(line);
+        std::string field;
+        while (std::getline(fieldStream, field, ',')) fields.push_back(field);
+        ASSERT_GE(fields.size(), 5u) << line;
+        EXPECT_TRUE(fields[2] == "1" || fields[2] == "8") << line;
+        EXPECT_GT(std::stod(fields[3]), 0.0) << line;
+        EXPECT_NEAR(std::stod(fields[4]), 1000.0 / std::stod(fields[3]),
+                    1e-3 * std::stod(fields[4]) + 1e-3)
+            << line;
+    }
+    EXPECT_EQ(rows, 3 * 2 * 2);
+}
+
+TEST(Examples, BadBenchOptionsFailBeforeAnythingIsWritten) {
+    TempDir dir;
+    const std::string out = dir.file("out");
+    const std::pair<std::string, std::string> cases[] = {
+        {"--bench-lights 1,9", "btf-examples: --bench-lights: '9' is not a light count in 1..8"},
+        {"--bench-resolution 640",
+         "btf-examples: --bench-resolution: '640' is not WxH "
+         "(positive integers)"},
+        {"--bench-target rgba9",
+         "btf-examples: --bench-target: pass target 'rgba9': must be "
+         "rgba8, rgba16f or rgba32f"}};
+    for (const auto& [option, message] : cases) {
+        const CommandResult result =
+            runCommand(std::string(OSGBTF_BTF_EXAMPLES) + " --out " + shellQuote(out) +
+                       " --size 8 --methods lambert --bench-fps " + option);
+        EXPECT_EQ(result.exitCode, 1) << result.output;
+        EXPECT_NE(result.output.find(message), std::string::npos) << result.output;
+        EXPECT_FALSE(fs::exists(out)) << option;
+    }
 }
 
 TEST(Examples, ScenesPutEachMaterialSideBySideUnderTwoLights) {

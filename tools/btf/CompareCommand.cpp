@@ -52,10 +52,11 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
         "process (reusing DIR/fits/<method>.exr when it is newer than INPUT and made with the "
         "same options), then writes DIR/report.md, results.csv, results.json and pictures/: "
         "error (CPU evaluator, GPU spot check), memory, pass cost (static ALU/TEX count, time "
-        "per pass against a fetch calibration pass), fit time and peak memory, and a "
+        "per pass in RGBA8 and RGBA16F targets, minus the empty pass of the same run, against a "
+        "fetch calibration pass), fit time and peak memory, and a "
         "recommendation. Definitions: harness/README.md");
     struct Options {
-        std::string input, output, methods = "all", resolution = "256";
+        std::string input, output, methods = "all", resolution = "256", targets = "rgba8,rgba16f";
         std::vector<std::string> settings;
         int lobes = 0, components = 0, clusters = 0;
         CompareOptions compare;
@@ -102,6 +103,16 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
     command
+        ->add_option("--warmup-frames", c.pass.warmupFrames,
+                     "Untimed frames before the timed ones of every pass")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    command
+        ->add_option("--targets", options->targets,
+                     "Comma-separated colour targets of the timed passes, each timed on its own "
+                     "(rgba8, rgba16f, rgba32f); the first is the one --max-ms-per-pass reads")
+        ->capture_default_str();
+    command
         ->add_option("--calibration-fetches", c.pass.calibrationFetches,
                      "RGBA32F texelFetch reads per pixel in the calibration pass")
         ->check(CLI::PositiveNumber)
@@ -136,6 +147,15 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
         compare.reuseFits = !options->noReuse;
         compare.gpu = !options->noGpu;
         parseResolution(options->resolution, compare.pass);
+        compare.pass.targets.clear();
+        for (const std::string& t : splitList(options->targets)) {
+            try {
+                compare.pass.targets.push_back(passTarget(t));
+            } catch (const Error& e) {
+                throw Error(std::string("--targets: ") + e.what());
+            }
+        }
+        if (compare.pass.targets.empty()) throw Error("--targets: no target named");
         compare.methods =
             options->methods == "all" ? allCompareMethods() : splitList(options->methods);
         if (compare.methods.empty()) throw Error("--methods: no method named");
@@ -169,10 +189,22 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
         std::cout << "compared " << result.methods.size() << " methods on " << result.input << " ("
                   << result.width << "x" << result.height << " texels, " << result.views << "x"
                   << result.lights << " directions); " << result.gpuNote << "\n";
+        // One line per method: error, memory, then per target the pass time, the time minus the
+        // empty pass (the shading), and that over the fetch-bound floor.
         std::cout << std::left << std::setw(14) << "method" << std::right << std::setw(10)
-                  << "avg error" << std::setw(12) << "bytes/tex" << std::setw(12) << "ms/pass"
-                  << std::setw(10) << "x floor"
-                  << "\n";
+                  << "avg error" << std::setw(12) << "bytes/tex";
+        for (const PassTarget& t : result.pass.targets)
+            std::cout << std::setw(13) << t.name + " ms" << std::setw(10) << "- empty"
+                      << std::setw(9) << "x floor";
+        std::cout << "\n";
+        if (result.calibrations.size() == result.pass.targets.size()) {
+            std::cout << std::left << std::setw(14) << "(empty pass)" << std::right << std::setw(22)
+                      << "";
+            for (const Calibration& cal : result.calibrations)
+                std::cout << std::fixed << std::setprecision(3) << std::setw(13) << cal.empty.ms
+                          << std::setw(10) << 0.0 << std::setw(9) << "" << std::defaultfloat;
+            std::cout << "\n";
+        }
         for (const MethodResult& m : result.methods) {
             std::cout << std::left << std::setw(14) << m.method << std::right;
             if (m.failed) {
@@ -180,9 +212,22 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
                 continue;
             }
             std::cout << std::fixed << std::setprecision(5) << std::setw(10) << m.error.average
-                      << std::setprecision(1) << std::setw(12) << m.memory.bytesPerTexel
-                      << std::setprecision(3) << std::setw(12) << m.pass.ms << std::setprecision(2)
-                      << std::setw(10) << m.floorRatio << std::defaultfloat << "\n";
+                      << std::setprecision(1) << std::setw(12) << m.memory.bytesPerTexel;
+            for (std::size_t i = 0; i < result.pass.targets.size(); ++i) {
+                if (i >= m.passes.size() || !m.passes[i].measured()) {
+                    std::cout << std::setw(13) << "n/a" << std::setw(10) << "n/a" << std::setw(9)
+                              << "n/a";
+                    continue;
+                }
+                const MethodPass& p = m.passes[i];
+                std::cout << std::setprecision(3) << std::setw(13) << p.pass.ms << std::setw(10)
+                          << p.shadingMs << std::setprecision(2) << std::setw(9);
+                if (p.floorMs > 0)
+                    std::cout << p.floorRatio;
+                else
+                    std::cout << "n/a";
+            }
+            std::cout << std::defaultfloat << "\n";
         }
         std::cout << result.recommendation << "\n"
                   << "wrote " << options->output << "/report.md\n";
