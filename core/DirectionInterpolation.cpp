@@ -4,7 +4,10 @@
 #include <cmath>
 #include <map>
 
+#include <glm/common.hpp>
+#include <glm/ext/scalar_constants.hpp>
 #include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
 
 #include "core/Error.h"
 
@@ -73,6 +76,98 @@ std::vector<std::array<int, 3>> delaunay(const std::vector<glm::dvec2>& input) {
     return result;
 }
 
+// Beyond this (in barycentric units) below zero a point counts as outside the triangulation;
+// float rounding on an interior edge stays far below it, and just outside a hull edge the
+// clamped triangle weights and the edge projection differ by less. Also in directions.glsl.
+constexpr float kOutsideHull = 1e-5f;
+
+// The float kernels below are written as shaders/common/directions.glsl writes them, operation
+// for operation, so the CPU reference and the GPU round alike.
+float cross2(const glm::vec2& u, const glm::vec2& v) {
+    return u.x * v.y - u.y * v.x;
+}
+
+glm::vec3 barycentric(const glm::vec2& a, const glm::vec2& b, const glm::vec2& c, float inverseArea,
+                      const glm::vec2& p) {
+    const float w0 = cross2(c - b, p - b) * inverseArea;
+    const float w1 = cross2(a - c, p - c) * inverseArea;
+    return {w0, w1, 1.0f - w0 - w1};
+}
+
+/** Closest point of segment ab to p: its parameter t along ab and the squared distance. */
+glm::vec2 projectOnEdge(const glm::vec2& a, const glm::vec2& b, const glm::vec2& p) {
+    const glm::vec2 e = b - a;
+    const float t = std::clamp(glm::dot(p - a, e) / glm::dot(e, e), 0.0f, 1.0f);
+    const glm::vec2 q = a + t * e - p;
+    return {t, glm::dot(q, q)};
+}
+
+/** The grid cell along one axis of disc coordinate x, as directions.glsl computes it. */
+int gridCell(float x, int grid) {
+    return std::clamp(int(std::floor((x + 1.0f) * (0.5f * float(grid)))), 0, grid - 1);
+}
+
+glm::vec3 clampAndNormalise(glm::vec3 w) {
+    w = glm::max(w, glm::vec3(0.0f));
+    return w / (w.x + w.y + w.z);
+}
+
+InterpolationWeights toWeights(const glm::vec3& w, int i0, int i1, int i2) {
+    InterpolationWeights out;
+    out.index = {i0, i1, i2};
+    out.weight = {w.x, w.y, w.z};
+    return out;
+}
+
+// ---- table construction (double, conservative) ------------------------------------------------
+
+struct Rect {
+    glm::dvec2 lo, hi;
+};
+
+double pointRectDistance(const glm::dvec2& p, const Rect& r) {
+    const glm::dvec2 d = glm::max(glm::max(r.lo - p, p - r.hi), glm::dvec2(0.0));
+    return glm::length(d);
+}
+
+double pointSegmentDistance(const glm::dvec2& p, const glm::dvec2& a, const glm::dvec2& b) {
+    const glm::dvec2 e = b - a;
+    const double t = std::clamp(glm::dot(p - a, e) / glm::dot(e, e), 0.0, 1.0);
+    return glm::length(a + t * e - p);
+}
+
+/** Separating-axis test of a convex polygon (2 or 3 vertices) against a rectangle: the axes are
+ *  the rectangle's and the polygon's edge normals. */
+bool overlaps(const std::vector<glm::dvec2>& poly, const Rect& r) {
+    glm::dvec2 lo(1e300), hi(-1e300);
+    for (const auto& v : poly) lo = glm::min(lo, v), hi = glm::max(hi, v);
+    if (hi.x < r.lo.x || lo.x > r.hi.x || hi.y < r.lo.y || lo.y > r.hi.y) return false;
+    const glm::dvec2 corners[4] = {r.lo, {r.hi.x, r.lo.y}, r.hi, {r.lo.x, r.hi.y}};
+    for (std::size_t e = 0; e < poly.size(); ++e) {
+        const glm::dvec2 a = poly[e], b = poly[(e + 1) % poly.size()];
+        const glm::dvec2 n(b.y - a.y, a.x - b.x);  // either side will do
+        double polyLo = 1e300, polyHi = -1e300, rectLo = 1e300, rectHi = -1e300;
+        for (const auto& v : poly) {
+            polyLo = std::min(polyLo, glm::dot(n, v));
+            polyHi = std::max(polyHi, glm::dot(n, v));
+        }
+        for (const auto& c : corners) {
+            rectLo = std::min(rectLo, glm::dot(n, c));
+            rectHi = std::max(rectHi, glm::dot(n, c));
+        }
+        if (polyHi < rectLo || rectHi < polyLo) return false;
+    }
+    return true;
+}
+
+double segmentRectDistance(const glm::dvec2& a, const glm::dvec2& b, const Rect& r) {
+    if (overlaps({a, b}, r)) return 0.0;
+    double d = std::min(pointRectDistance(a, r), pointRectDistance(b, r));
+    const glm::dvec2 corners[4] = {r.lo, {r.hi.x, r.lo.y}, r.hi, {r.lo.x, r.hi.y}};
+    for (const auto& c : corners) d = std::min(d, pointSegmentDistance(c, a, b));
+    return d;
+}
+
 }  // namespace
 
 glm::vec2 directionToDisc(const glm::vec3& direction) {
@@ -95,13 +190,19 @@ DirectionInterpolator::DirectionInterpolator(const DirectionSet& directions) {
                     "': interpolation needs at least 3 directions, got " +
                     std::to_string(directions.size()));
     for (std::size_t i = 0; i < directions.size(); ++i) {
-        _sampleDirections.push_back(directions.vector(i));
         const glm::dvec3 d = glm::dvec3(directions.vector(i));
         _points.push_back({d.x / (1.0 + d.z), d.y / (1.0 + d.z)});
+        // The float map of the sample itself, so a query at a measured direction lands on the
+        // vertex bit for bit and gets weight 1 there up to the rounding of 1 / area.
+        _discPoints.push_back(directionToDisc(directions.vector(i)));
     }
     _triangles = delaunay(_points);
     if (_triangles.empty())
         throw Error("direction set '" + directions.name() + "' is degenerate (all collinear)");
+    for (const auto& t : _triangles) {
+        const glm::dvec2 a(_discPoints[t[0]]), b(_discPoints[t[1]]), c(_discPoints[t[2]]);
+        _inverseArea.push_back(float(1.0 / cross(a, b, c)));
+    }
     // Hull edges: edges used by exactly one triangle.
     std::map<std::pair<int, int>, int> count;
     for (const auto& t : _triangles)
@@ -112,92 +213,204 @@ DirectionInterpolator::DirectionInterpolator(const DirectionSet& directions) {
 }
 
 InterpolationWeights DirectionInterpolator::weights(const glm::vec3& direction) const {
-    const glm::dvec2 p = glm::dvec2(directionToDisc(direction));
-    InterpolationWeights best;
-    double bestMin = -1e300;
-    for (const auto& t : _triangles) {
-        const glm::dvec2 &a = _points[t[0]], &b = _points[t[1]], &c = _points[t[2]];
-        const double area = cross(a, b, c);
-        const double w0 = cross(b, c, p) / area, w1 = cross(c, a, p) / area, w2 = 1.0 - w0 - w1;
-        const double lowest = std::min({w0, w1, w2});
-        if (lowest > bestMin) {
-            bestMin = lowest;
-            best.index = {t[0], t[1], t[2]};
-            best.weight = {float(w0), float(w1), float(w2)};
-        }
-        if (lowest >= 0.0) break;
-    }
-    if (bestMin < -1e-9) {
-        // Outside the hull: closest point on the boundary.
-        double bestDist = 1e300;
-        for (const auto& e : _hullEdges) {
-            const glm::dvec2 &a = _points[e[0]], &b = _points[e[1]];
-            const glm::dvec2 ab = b - a;
-            const double t = std::clamp(glm::dot(p - a, ab) / glm::dot(ab, ab), 0.0, 1.0);
-            const double dist = glm::length(a + t * ab - p);
-            if (dist < bestDist) {
-                bestDist = dist;
-                best.index = {e[0], e[1], e[0]};
-                best.weight = {float(1.0 - t), float(t), 0.0f};
-            }
-        }
-        return best;
-    }
-    // Inside (up to rounding): clamp tiny negatives and renormalise so the contract holds.
-    float sum = 0.0f;
-    for (float& w : best.weight) sum += (w = std::max(w, 0.0f));
-    for (float& w : best.weight) w /= sum;
-    return best;
-}
-
-DirectionInterpolator::Baked DirectionInterpolator::bake(int resolution) const {
-    if (resolution < 1) throw Error("interpolation table resolution must be positive");
-    Baked baked;
-    baked.resolution = resolution;
-    baked.indices.resize(std::size_t(resolution) * resolution * 3);
-    baked.weights.resize(baked.indices.size());
-    for (int j = 0; j < resolution; ++j) {
-        for (int i = 0; i < resolution; ++i) {
-            glm::vec2 p((i + 0.5f) / resolution * 2.0f - 1.0f,
-                        (j + 0.5f) / resolution * 2.0f - 1.0f);
-            if (glm::length(p) > 1.0f) p = glm::normalize(p);
-            const InterpolationWeights w = weights(discToDirection(p));
-            const std::size_t o = (std::size_t(j) * resolution + i) * 3;
-            for (int k = 0; k < 3; ++k) {
-                baked.indices[o + k] = float(w.index[k]);
-                baked.weights[o + k] = w.weight[k];
-            }
-        }
-    }
-    // Keep the table exact at the samples: the cell holding a measured direction returns it
-    // alone, so a shader reproduces measured (view, light) pairs as the CPU reference does.
-    for (std::size_t s = 0; s < _sampleDirections.size(); ++s) {
-        const std::size_t o = bakedCell(baked, _sampleDirections[s]) * 3;
-        baked.indices[o] = baked.indices[o + 1] = baked.indices[o + 2] = float(s);
-        baked.weights[o] = 1.0f;
-        baked.weights[o + 1] = baked.weights[o + 2] = 0.0f;
-    }
-    return baked;
-}
-
-std::size_t DirectionInterpolator::bakedCell(const Baked& baked, const glm::vec3& direction) {
-    // Float arithmetic in the order the shader uses (shaders/common/directions.glsl).
     const glm::vec2 p = directionToDisc(direction);
-    const int r = baked.resolution;
-    const int i = std::clamp(int(std::floor((p.x + 1.0f) * 0.5f * float(r))), 0, r - 1);
-    const int j = std::clamp(int(std::floor((p.y + 1.0f) * 0.5f * float(r))), 0, r - 1);
-    return std::size_t(j) * r + i;
+    float bestLowest = -3.0e38f;
+    glm::vec3 best(0.0f);
+    std::size_t bestTriangle = 0;
+    for (std::size_t i = 0; i < _triangles.size(); ++i) {
+        const auto& t = _triangles[i];
+        const glm::vec3 w = barycentric(_discPoints[t[0]], _discPoints[t[1]], _discPoints[t[2]],
+                                        _inverseArea[i], p);
+        const float lowest = std::min(std::min(w.x, w.y), w.z);
+        if (lowest > bestLowest) {
+            bestLowest = lowest;
+            best = w;
+            bestTriangle = i;
+        }
+        if (lowest >= 0.0f) break;
+    }
+    if (bestLowest < -kOutsideHull) {
+        // Outside the triangulation: the closest point of its boundary.
+        float bestDistance = 3.0e38f;
+        InterpolationWeights out;
+        for (const auto& e : _hullEdges) {
+            const glm::vec2 q = projectOnEdge(_discPoints[e[0]], _discPoints[e[1]], p);
+            if (q.y < bestDistance) {
+                bestDistance = q.y;
+                out = toWeights({1.0f - q.x, q.x, 0.0f}, e[0], e[1], e[0]);
+            }
+        }
+        return out;
+    }
+    const auto& t = _triangles[bestTriangle];
+    return toWeights(clampAndNormalise(best), t[0], t[1], t[2]);
 }
 
-InterpolationWeights DirectionInterpolator::lookupBaked(const Baked& baked,
-                                                        const glm::vec3& direction) {
-    const std::size_t o = bakedCell(baked, direction) * 3;
-    InterpolationWeights w;
-    for (int k = 0; k < 3; ++k) {
-        w.index[k] = int(baked.indices[o + k]);
-        w.weight[k] = baked.weights[o + k];
+DirectionTable DirectionInterpolator::table(int grid, int width) const {
+    if (grid < 1 || width < 1)
+        throw Error("direction table: grid and width must be positive, got " +
+                    std::to_string(grid) + " and " + std::to_string(width));
+    // Cells are widened by this margin (disc units) before the overlap tests, so a point that
+    // float rounding puts into a neighbouring cell still finds its triangle there.
+    const double margin = 1e-4;
+    DirectionTable table;
+    table.grid = grid;
+    std::vector<glm::dvec2> points;
+    for (const auto& p : _discPoints) points.emplace_back(p);
+    std::vector<glm::vec4> texels(std::size_t(grid) * grid);
+    auto recordTriangle = [&](std::size_t i) {
+        const auto& t = _triangles[i];
+        const glm::vec2 &a = _discPoints[t[0]], &b = _discPoints[t[1]], &c = _discPoints[t[2]];
+        texels.emplace_back(a.x, a.y, b.x, b.y);
+        texels.emplace_back(c.x, c.y, _inverseArea[i], 0.0f);
+        texels.emplace_back(float(t[0]), float(t[1]), float(t[2]), 0.0f);
+    };
+    auto recordEdge = [&](std::size_t i) {
+        const auto& e = _hullEdges[i];
+        const glm::vec2 &a = _discPoints[e[0]], &b = _discPoints[e[1]];
+        texels.emplace_back(a.x, a.y, b.x, b.y);
+        texels.emplace_back(float(e[0]), float(e[1]), float(e[0]), 0.0f);
+    };
+    for (int j = 0; j < grid; ++j) {
+        for (int i = 0; i < grid; ++i) {
+            Rect r{{-1.0 + 2.0 * i / grid - margin, -1.0 + 2.0 * j / grid - margin},
+                   {-1.0 + 2.0 * (i + 1) / grid + margin, -1.0 + 2.0 * (j + 1) / grid + margin}};
+            const std::size_t cell = std::size_t(j) * grid + i;
+            texels[cell].x = float(texels.size());
+            int triangles = 0;
+            for (std::size_t t = 0; t < _triangles.size(); ++t) {
+                const auto& v = _triangles[t];
+                if (!overlaps({points[v[0]], points[v[1]], points[v[2]]}, r)) continue;
+                recordTriangle(t);
+                ++triangles;
+            }
+            // The cell lies wholly inside the triangulation when no hull edge crosses it and its
+            // centre is inside; else points in it may need the nearest hull edge.
+            bool crossed = false;
+            for (const auto& e : _hullEdges) crossed |= overlaps({points[e[0]], points[e[1]]}, r);
+            const glm::dvec2 centre = 0.5 * (r.lo + r.hi);
+            bool centreInside = false;
+            for (const auto& t : _triangles)
+                centreInside |= cross(points[t[0]], points[t[1]], centre) >= 0 &&
+                                cross(points[t[1]], points[t[2]], centre) >= 0 &&
+                                cross(points[t[2]], points[t[0]], centre) >= 0;
+            int edges = 0;
+            const float firstEdge = float(texels.size());
+            if (crossed || !centreInside) {
+                // The nearest edge of any point q of the cell is no farther from q than any
+                // other edge, whose distance to q is at most its distance to the farthest
+                // corner (distance to a segment is convex): edges nearer than that bound are the
+                // only candidates.
+                const glm::dvec2 corners[4] = {r.lo, {r.hi.x, r.lo.y}, r.hi, {r.lo.x, r.hi.y}};
+                double bound = 1e300;
+                for (const auto& e : _hullEdges) {
+                    double farthest = 0;
+                    for (const auto& c : corners)
+                        farthest =
+                            std::max(farthest, pointSegmentDistance(c, points[e[0]], points[e[1]]));
+                    bound = std::min(bound, farthest);
+                }
+                for (std::size_t e = 0; e < _hullEdges.size(); ++e) {
+                    const auto& v = _hullEdges[e];
+                    if (segmentRectDistance(points[v[0]], points[v[1]], r) > bound + margin)
+                        continue;
+                    recordEdge(e);
+                    ++edges;
+                }
+            }
+            texels[cell].y = float(triangles);
+            texels[cell].z = firstEdge;
+            texels[cell].w = float(edges);
+            table.maxTriangleCandidates = std::max(table.maxTriangleCandidates, triangles);
+            table.maxEdgeCandidates = std::max(table.maxEdgeCandidates, edges);
+        }
     }
-    return w;
+    if (texels.size() >= std::size_t(1) << 24)
+        throw Error("direction table: " + std::to_string(texels.size()) +
+                    " texels, more than float addresses reach");
+    table.width = width;
+    table.height = int((texels.size() + width - 1) / width);
+    table.texels.assign(std::size_t(table.width) * table.height * 4, 0.0f);
+    for (std::size_t k = 0; k < texels.size(); ++k)
+        for (int c = 0; c < 4; ++c) table.texels[k * 4 + c] = texels[k][c];
+
+    // How much a lookup tests, over directions uniform on the hemisphere (for ShaderCost).
+    const int samples = 200;
+    double tested = 0, edgesTested = 0, outside = 0, total = 0;
+    for (int a = 0; a < samples; ++a)
+        for (int b = 0; b < samples; ++b) {
+            const double z = (a + 0.5) / samples,
+                         phi = 2.0 * glm::pi<double>() * (b + 0.5) / samples;
+            const double s = std::sqrt(1.0 - z * z);
+            const glm::vec3 d(float(s * std::cos(phi)), float(s * std::sin(phi)), float(z));
+            const glm::vec2 p = directionToDisc(d);
+            const glm::vec4& cell =
+                texels[std::size_t(gridCell(p.y, grid)) * grid + gridCell(p.x, grid)];
+            int n = 0;
+            float bestLowest = -3.0e38f;
+            for (int k = 0; k < int(cell.y); ++k) {
+                ++n;
+                const glm::vec4 ab = texels[std::size_t(cell.x) + 3 * k];
+                const glm::vec4 c = texels[std::size_t(cell.x) + 3 * k + 1];
+                const glm::vec3 w = barycentric({ab.x, ab.y}, {ab.z, ab.w}, {c.x, c.y}, c.z, p);
+                bestLowest = std::max(bestLowest, std::min(std::min(w.x, w.y), w.z));
+                if (bestLowest >= 0.0f) break;
+            }
+            tested += n;
+            if (bestLowest < -kOutsideHull && cell.w > 0.0f) {
+                outside += 1;
+                edgesTested += cell.w;
+            }
+            total += 1;
+        }
+    table.meanTrianglesTested = tested / total;
+    table.meanEdgesTested = edgesTested / total;
+    table.outsideShare = outside / total;
+    return table;
+}
+
+InterpolationWeights DirectionInterpolator::lookupTable(const DirectionTable& table,
+                                                        const glm::vec3& direction) {
+    const auto texel = [&](int address) {
+        const float* t = table.texels.data() + std::size_t(address) * 4;
+        return glm::vec4(t[0], t[1], t[2], t[3]);
+    };
+    const int g = table.grid;
+    const glm::vec2 p = directionToDisc(direction);
+    const glm::vec4 range = texel(gridCell(p.y, g) * g + gridCell(p.x, g));
+    float bestLowest = -3.0e38f;
+    glm::vec3 best(0.0f);
+    int bestIndices = -1;
+    const int trianglesEnd = int(range.x) + 3 * int(range.y);
+    for (int r = int(range.x); r < trianglesEnd; r += 3) {
+        const glm::vec4 ab = texel(r), c = texel(r + 1);
+        const glm::vec3 w = barycentric({ab.x, ab.y}, {ab.z, ab.w}, {c.x, c.y}, c.z, p);
+        const float lowest = std::min(std::min(w.x, w.y), w.z);
+        if (lowest > bestLowest) {
+            bestLowest = lowest;
+            best = w;
+            bestIndices = r + 2;
+        }
+        if (lowest >= 0.0f) break;
+    }
+    if (bestLowest < -kOutsideHull && range.w > 0.0f) {
+        float bestDistance = 3.0e38f;
+        const int edgesEnd = int(range.z) + 2 * int(range.w);
+        for (int r = int(range.z); r < edgesEnd; r += 2) {
+            const glm::vec4 ab = texel(r);
+            const glm::vec2 q = projectOnEdge({ab.x, ab.y}, {ab.z, ab.w}, p);
+            if (q.y < bestDistance) {
+                bestDistance = q.y;
+                best = glm::vec3(1.0f - q.x, q.x, 0.0f);
+                bestIndices = r + 1;
+            }
+        }
+    } else {
+        best = clampAndNormalise(best);
+    }
+    if (bestIndices < 0) return {};  // an empty cell: the table builder never makes one
+    const glm::vec4 index = texel(bestIndices);
+    return toWeights(best, int(index.x + 0.5f), int(index.y + 0.5f), int(index.z + 0.5f));
 }
 
 }  // namespace osgBTF

@@ -128,16 +128,6 @@ void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::strin
     stateSet.addUniform(new osg::Uniform(sampler.c_str(), unit));
 }
 
-void addDirectionTable(osg::StateSet& stateSet, const DirectionInterpolator::Baked& baked,
-                       const std::string& prefix, int unitIndices, int unitWeights) {
-    MaterialTexture indices{prefix + "Indices",     baked.resolution, baked.resolution, 1, 3,
-                            MaterialTexture::Float, baked.indices};
-    MaterialTexture weights{prefix + "Weights",     baked.resolution, baked.resolution, 1, 3,
-                            MaterialTexture::Float, baked.weights};
-    addTexture(stateSet, createFloatTexture(indices).get(), prefix + "Indices", unitIndices);
-    addTexture(stateSet, createFloatTexture(weights).get(), prefix + "Weights", unitWeights);
-}
-
 void addCommonState(osg::StateSet& stateSet, const std::string& method, int width, int height) {
     stateSet.setAttributeAndModes(methodProgram(method).get(), osg::StateAttribute::ON);
     stateSet.addUniform(new osg::Uniform(shader::kSize, width, height));

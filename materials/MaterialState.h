@@ -1,4 +1,5 @@
-// osgBTF: building blocks of every method's StateSet (float textures, direction tables).
+// osgBTF: building blocks of every method's StateSet (float textures, common uniforms; the
+// direction tables are materials/DirectionLookup.h's).
 #pragma once
 
 #include <string>
@@ -8,14 +9,9 @@
 #include <osg/Texture2DArray>
 #include <osg/Texture3D>
 
-#include "core/DirectionInterpolation.h"
 #include "core/FittedMaterialFile.h"
 
 namespace osgBTF {
-
-/** Resolution of the baked direction-interpolation tables. Odd, so the pole and the phi = 0
- *  axis (where Bonn samples lie) fall on cell centres, not on cell edges. */
-constexpr int kDirectionTableResolution = 65;
 
 /** NEAREST-filtered, clamped float texture of 1-4 channels (GL_R32F ... GL_RGBA32F, or the 16F
  *  formats for half data), NPOT resize off (float data would be normalised otherwise). For a
@@ -29,11 +25,6 @@ osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& texture
  *  opened after another closed gets the freed ID) is allocated but never filled. Every material
  *  array texture is made with this. */
 osg::ref_ptr<osg::Texture2DArray> newTexture2DArray();
-
-/** Two textures for a direction set's baked interpolation (indices, weights), bound to
- *  uniforms "<prefix>Indices" and "<prefix>Weights" on the given units. */
-void addDirectionTable(osg::StateSet& stateSet, const DirectionInterpolator::Baked& baked,
-                       const std::string& prefix, int unitIndices, int unitWeights);
 
 /** A sampler uniform + texture on a unit. */
 void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::string& sampler,

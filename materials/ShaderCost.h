@@ -34,9 +34,20 @@ struct ShaderCost {
     // The light loop body around btfEvaluate: direction select + normalize 4, 3 dots, horizon
     // test 1, colour multiply-add 2.
     static constexpr int kLightLoopAlu = 10;
-    // shaders/common/directions.glsl btfLookupDirections: disc map 4, cell 6, index rounding 1;
-    // the index and weight tables are 2 fetches.
-    static constexpr int kLookupAlu = 11, kLookupTex = 2;
+    // shaders/common/directions.glsl btfLookupDirections, exact Delaunay weights: disc map 4,
+    // cell 4, cell address 2 + texel address 2, loop bound 2, outside test 3, index address 2 +
+    // rounding 1 = 20 ALU and 2 fetches (cell, indices); per candidate triangle tested: loop 2,
+    // 2 texel addresses 5, barycentric weights 14, lowest 2, best test 1 + index address 1, break
+    // test 1 = 26 ALU, 2 fetches; inside the triangulation clamp and normalise 4; outside it the
+    // loop bound 2 and per hull edge tested: loop 2, texel address 2, projection 9, distance 1,
+    // best test 1 + weights and index address 2 = 17 ALU, 1 fetch. How many candidates a lookup
+    // tests depends on the direction (it stops at the triangle that holds it): those loops are
+    // counted at their mean over directions uniform on the hemisphere, measured on the material's
+    // own table (DirectionLookup::cost), not at the worst cell.
+    static constexpr int kLookupAlu = 20, kLookupTex = 2;
+    static constexpr int kLookupTriangleAlu = 26, kLookupTriangleTex = 2;
+    static constexpr int kLookupInsideAlu = 4, kLookupOutsideAlu = 2;
+    static constexpr int kLookupEdgeAlu = 17, kLookupEdgeTex = 1;
 
     /** The count of a method whose btfEvaluate costs `evaluateAlu` / `evaluateTex`: the shared
      *  frame set-up as the fixed part, the light loop body plus btfEvaluate per light. */

@@ -24,4 +24,13 @@ constexpr const char* kSize = "osgBTF_size";                    ///< ivec2, texe
 constexpr const char* kFixedView = "osgBTF_fixedView";          ///< vec4, w = 1: fixed local view
 constexpr const char* kTextureScale = "osgBTF_textureScale";    ///< float, tiling
 
+/** Grid and texel row width of the direction lookup tables (materials/DirectionLookup.h):
+ *  shaders/common/directions.glsl's `const int btfDirectionGrid` and `btfDirectionTableWidth`
+ *  (a power of 2: the shader splits addresses with a mask). 32 cells across the disc keep the
+ *  candidate lists short (1.6 triangles tested per lookup on average for the Bonn set). */
+constexpr int kDirectionGrid = 32;
+constexpr const char* kDirectionGridName = "btfDirectionGrid";
+constexpr int kDirectionTableWidth = 1024;
+constexpr const char* kDirectionTableWidthName = "btfDirectionTableWidth";
+
 }  // namespace osgBTF::shader

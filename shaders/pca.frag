@@ -9,10 +9,8 @@ uniform sampler2DArray pcaEigenTextures;
 // Layer = measured view, texel (k, light): RGB weight of component k; k = pcaComponents: the bias
 // (unorm8 offsets folded into the weights).
 uniform sampler2DArray pcaWeights;
-uniform sampler2D pcaViewIndices;
-uniform sampler2D pcaViewWeights;
-uniform sampler2D pcaLightIndices;
-uniform sampler2D pcaLightWeights;
+uniform sampler2D pcaViewTable;   // exact view interpolation (common/directions.glsl)
+uniform sampler2D pcaLightTable;
 uniform int pcaComponents;
 uniform int pcaTileColumns;
 
@@ -29,8 +27,8 @@ vec3 pcaCombination(ivec2 texel, int view, int light) {
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
     ivec3 vi, li;
     vec3 vw, lw;
-    btfLookupDirections(pcaViewIndices, pcaViewWeights, view, vi, vw);
-    btfLookupDirections(pcaLightIndices, pcaLightWeights, light, li, lw);
+    btfLookupDirections(pcaViewTable, view, vi, vw);
+    btfLookupDirections(pcaLightTable, light, li, lw);
     vec3 sum = vec3(0.0);
     for (int i = 0; i < 3; ++i) {
         if (!(vw[i] > 0.0)) continue;

@@ -1,7 +1,7 @@
 #version 330 compatibility
 // Method "rf" (materials/rf/Rf.h): reflectance fields, one per measured view,
 //   RF_v(x, l) = rho_d(x) + rho_v(x, v) * sum_i max(0, (a, b, c)_vi(x) . l)^n_vi(x),
-// blended over the 3 measured views around the view direction with the baked Delaunay weights.
+// blended over the 3 measured views around the view direction with the exact Delaunay weights.
 // Same float math and order as RfMaterial::evaluate, so GPU == CPU.
 #pragma include "common/btf_main.glsl"
 #pragma include "common/directions.glsl"
@@ -9,8 +9,7 @@
 uniform sampler2D rfRhoD;         // RGB, 8-bit
 uniform sampler2DArray rfRhoV;    // RGB half, layer = view
 uniform sampler2DArray rfLobes;   // (a, b, c, n) half, layer = view * rfLobeCount + lobe
-uniform sampler2D rfViewIndices;  // baked view interpolation (common/directions.glsl)
-uniform sampler2D rfViewWeights;
+uniform sampler2D rfViewTable;    // view interpolation (common/directions.glsl)
 uniform int rfLobeCount;
 
 float rfLobeSum(ivec2 texel, int view, vec3 light) {
@@ -27,7 +26,7 @@ float rfLobeSum(ivec2 texel, int view, vec3 light) {
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
     ivec3 index;
     vec3 weight;
-    btfLookupDirections(rfViewIndices, rfViewWeights, view, index, weight);
+    btfLookupDirections(rfViewTable, view, index, weight);
     vec3 color = texelFetch(rfRhoD, texel, 0).rgb;
     for (int j = 0; j < 3; ++j) {
         if (weight[j] > 0.0) {

@@ -1,6 +1,6 @@
 #version 330 compatibility
 // Method "slaf" (materials/slaf/Slaf.h): T(v) * (rho_d + rho_s * sum_i max(dot(C_i, v * l), 0)^n_i) * l_z,
-// T blended between measured views with the baked direction table.
+// T blended between measured views with the exact Delaunay weights (common/directions.glsl).
 #pragma include "common/btf_main.glsl"
 #pragma include "common/directions.glsl"
 
@@ -8,15 +8,14 @@ uniform sampler2D slafRhoD;        // RGB, 8-bit
 uniform sampler2D slafRhoS;        // RGB, 8-bit
 uniform sampler2D slafLobes;       // (Cx, Cy, Cz, n), lobe i in rows [i * height, (i + 1) * height)
 uniform sampler2DArray slafScale;  // T, one layer per measured view
-uniform sampler2D slafViewIndices;
-uniform sampler2D slafViewWeights;
+uniform sampler2D slafViewTable;
 uniform int slafLobeCount;
 uniform int slafCosine;  // the model's own l_z factor (see laf.frag)
 
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
     ivec3 index;
     vec3 weight;
-    btfLookupDirections(slafViewIndices, slafViewWeights, view, index, weight);
+    btfLookupDirections(slafViewTable, view, index, weight);
     vec3 T = vec3(0.0);
     T += weight.x * texelFetch(slafScale, ivec3(texel, index.x), 0).rgb;
     T += weight.y * texelFetch(slafScale, ivec3(texel, index.y), 0).rgb;

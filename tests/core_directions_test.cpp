@@ -1,8 +1,12 @@
+#include <algorithm>
 #include <cmath>
+#include <iostream>
+#include <map>
 #include <random>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 
 #include "core/DirectionInterpolation.h"
 #include "core/Directions.h"
@@ -97,13 +101,37 @@ TEST(DirectionInterpolation, TriangulationHasEulerTriangleCount) {
 class InterpolationOnSet : public ::testing::TestWithParam<DirectionSet> {};
 
 namespace {
-bool cellHoldsASample(const DirectionSet& set, const DirectionInterpolator::Baked& baked,
-                      const glm::vec3& d) {
-    const std::size_t cell = DirectionInterpolator::bakedCell(baked, d);
-    for (std::size_t s = 0; s < set.size(); ++s)
-        if (DirectionInterpolator::bakedCell(baked, set.vector(s)) == cell) return true;
-    return false;
+
+/** The weights as a map index -> summed weight (slots may repeat an index, e.g. at hull edges). */
+std::map<int, float> byIndex(const InterpolationWeights& w) {
+    std::map<int, float> m;
+    for (int k = 0; k < 3; ++k)
+        if (w.weight[k] != 0.0f) m[w.index[k]] += w.weight[k];
+    return m;
 }
+
+/** Largest difference of the weight any direction index gets. */
+float weightDifference(const InterpolationWeights& a, const InterpolationWeights& b) {
+    std::map<int, float> ma = byIndex(a), mb = byIndex(b);
+    float worst = 0;
+    for (const auto& [i, w] : ma) worst = std::max(worst, std::abs(w - mb[i]));
+    for (const auto& [i, w] : mb) worst = std::max(worst, std::abs(w - ma[i]));
+    return worst;
+}
+
+/** The steepest barycentric weight in the disc map: 1 / the smallest triangle height. */
+double steepestWeight(const DirectionInterpolator& interp) {
+    double smallest = 1e300;
+    for (const auto& t : interp.triangles())
+        for (int k = 0; k < 3; ++k) {
+            const glm::dvec2 a(interp.discPoints()[t[k]]), b(interp.discPoints()[t[(k + 1) % 3]]),
+                c(interp.discPoints()[t[(k + 2) % 3]]);
+            const double area = std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+            smallest = std::min(smallest, area / glm::length(c - b));  // height from a
+        }
+    return 1.0 / smallest;
+}
+
 }  // namespace
 
 TEST_P(InterpolationOnSet, ExactAtSamples) {
@@ -159,33 +187,86 @@ TEST_P(InterpolationOnSet, OutsideTheHullBlendsTheNearestBoundarySamples) {
     EXPECT_NEAR(below.weight[0] + below.weight[1] + below.weight[2], 1.0f, 1e-5);
 }
 
-TEST_P(InterpolationOnSet, BakedTableAgreesWithExactWeightsAtCellCentres) {
+TEST_P(InterpolationOnSet, ShaderTableGivesTheExactWeights) {
+    // The table is exact, not sampled: wherever the query lands (random points, the cell borders
+    // of the grid where rounding may pick either cell, the samples, the midpoints of every
+    // triangle edge, outside the hull) it gives the reference's weights, up to rounding.
     const DirectionSet set = GetParam();
-    DirectionInterpolator interp(set);
-    const auto baked = interp.bake(32);
-    ASSERT_EQ(baked.indices.size(), 32u * 32 * 3);
-    for (int j = 0; j < 32; ++j)
-        for (int i = 0; i < 32; ++i) {
-            const glm::vec2 p((i + 0.5f) / 16 - 1, (j + 0.5f) / 16 - 1);
-            if (glm::length(p) > 0.99f) continue;
-            const glm::vec3 d = discToDirection(p);
-            if (cellHoldsASample(set, baked, d)) continue;
-            const InterpolationWeights a = interp.weights(d),
-                                       b = DirectionInterpolator::lookupBaked(baked, d);
-            for (int k = 0; k < 3; ++k) {
-                EXPECT_EQ(a.index[k], b.index[k]);
-                EXPECT_FLOAT_EQ(a.weight[k], b.weight[k]);
-            }
+    const DirectionInterpolator interp(set);
+    const int grid = 32;
+    const DirectionTable table = interp.table(grid, 1024);
+    EXPECT_EQ(table.width, 1024);
+    EXPECT_EQ(table.texels.size(), std::size_t(table.width) * table.height * 4);
+    std::vector<glm::vec2> queries;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> uniform(-1, 1);
+    while (queries.size() < 20000) {
+        const glm::vec2 p(uniform(rng), uniform(rng));
+        if (glm::length(p) <= 1.0f) queries.push_back(p);
+    }
+    for (int i = 0; i <= grid; ++i)
+        for (int n = 0; n < 200; ++n) {
+            const float border = -1.0f + 2.0f * float(i) / float(grid), along = uniform(rng);
+            for (const glm::vec2 p : {glm::vec2(border, along), glm::vec2(along, border)})
+                if (glm::length(p) <= 1.0f) queries.push_back(p);
         }
+    for (const glm::vec2& p : interp.discPoints()) queries.push_back(p);
+    for (const auto& t : interp.triangles())
+        for (int k = 0; k < 3; ++k)
+            queries.push_back(0.5f *
+                              (interp.discPoints()[t[k]] + interp.discPoints()[t[(k + 1) % 3]]));
+    float worst = 0;
+    for (const glm::vec2& p : queries) {
+        const glm::vec3 d = discToDirection(p);
+        const float difference =
+            weightDifference(interp.weights(d), DirectionInterpolator::lookupTable(table, d));
+        worst = std::max(worst, difference);
+        ASSERT_LT(difference, 1e-5f) << "disc point (" << p.x << ", " << p.y << ")";
+    }
+    std::cout << set.name() << ": table vs reference, largest weight difference " << worst
+              << " over " << queries.size() << " queries; per lookup " << table.meanTrianglesTested
+              << " triangles and " << table.meanEdgesTested
+              << " hull edges tested on average, at most " << table.maxTriangleCandidates << " and "
+              << table.maxEdgeCandidates << " candidates in a cell\n";
 }
 
-TEST_P(InterpolationOnSet, BakedTableIsExactAtSamples) {
+TEST_P(InterpolationOnSet, WeightsAreContinuous) {
+    // Along a dense path (a great circle from horizon to horizon through triangles, vertices and
+    // the region outside the hull) no weight changes by more than the steepest barycentric slope
+    // allows for the step: the weights have no jumps.
     const DirectionSet set = GetParam();
-    const auto baked = DirectionInterpolator(set).bake(64);
-    for (std::size_t s = 0; s < set.size(); ++s) {
-        const InterpolationWeights w = DirectionInterpolator::lookupBaked(baked, set.vector(s));
-        EXPECT_EQ(w.index[0], int(s));
-        EXPECT_EQ(w.weight[0], 1.0f);
+    const DirectionInterpolator interp(set);
+    const double slope = steepestWeight(interp);
+    const DirectionTable table = interp.table(32, 1024);
+    const int steps = 4000;
+    InterpolationWeights previous, previousTable;
+    glm::vec2 previousPoint(0);
+    for (int n = 0; n <= steps; ++n) {
+        const float angle = glm::radians(-89.0f + 178.0f * float(n) / steps);
+        // Tilted so the path does not run along the rings' symmetry axes.
+        const glm::vec3 d = glm::normalize(
+            glm::vec3(std::sin(angle) * 0.93f, std::sin(angle) * 0.37f + 0.05f, std::cos(angle)));
+        const InterpolationWeights w = interp.weights(d),
+                                   t = DirectionInterpolator::lookupTable(table, d);
+        const glm::vec2 p = directionToDisc(d);
+        if (n > 0) {
+            // Two weights change per step (slope each), plus float rounding.
+            const float bound = float(2.0 * slope * glm::length(p - previousPoint)) + 1e-5f;
+            ASSERT_LE(weightDifference(w, previous), bound) << "step " << n;
+            ASSERT_LE(weightDifference(t, previousTable), bound) << "step " << n;
+        }
+        previous = w;
+        previousTable = t;
+        previousPoint = p;
+    }
+}
+
+TEST(DirectionInterpolation, TableNeedsAPositiveGrid) {
+    try {
+        DirectionInterpolator(DirectionSet::bonn81()).table(0, 1024);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "direction table: grid and width must be positive, got 0 and 1024");
     }
 }
 

@@ -41,6 +41,16 @@ TEST(ShaderInterface, GlslDeclaresTheSameNamesAndLimits) {
     EXPECT_EQ(kMaxLights, shader::kMaxLights);
 }
 
+TEST(ShaderInterface, DirectionLookupConstantsAgree) {
+    const std::string glsl = commonShader("directions.glsl");
+    EXPECT_TRUE(declares(glsl, std::string("const int ") + shader::kDirectionGridName + " = " +
+                                   std::to_string(shader::kDirectionGrid) + ";"));
+    EXPECT_TRUE(declares(glsl, std::string("const int ") + shader::kDirectionTableWidthName +
+                                   " = " + std::to_string(shader::kDirectionTableWidth) + ";"));
+    // The shader splits table addresses with a mask.
+    EXPECT_EQ(shader::kDirectionTableWidth & (shader::kDirectionTableWidth - 1), 0);
+}
+
 TEST(ShaderInterface, ProgramsBindTheTangentAttribute) {
     osg::ref_ptr<osg::Program> program = methodProgram("lambert");
     const auto& bindings = program->getAttribBindingList();

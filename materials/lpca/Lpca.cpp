@@ -20,8 +20,8 @@ LpcaMaterial::LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop)
       eigenBrdfs(other.eigenBrdfs),
       _clusters(other._clusters),
       _components(other._components),
-      _viewTable(other._viewTable),
-      _lightTable(other._lightTable) {}
+      _viewLookup(other._viewLookup),
+      _lightLookup(other._lightLookup) {}
 
 void LpcaMaterial::assignFrom(const Material& other) {
     const LpcaMaterial& o = assignCommon<LpcaMaterial>(other);
@@ -30,8 +30,8 @@ void LpcaMaterial::assignFrom(const Material& other) {
     eigenBrdfs = o.eigenBrdfs;
     _clusters = o._clusters;
     _components = o._components;
-    _viewTable = o._viewTable;
-    _lightTable = o._lightTable;
+    _viewLookup = o._viewLookup;
+    _lightLookup = o._lightLookup;
 }
 
 osg::ref_ptr<LpcaMaterial> LpcaMaterial::ofShape(int width, int height, const DirectionSet& views,
@@ -56,8 +56,8 @@ void LpcaMaterial::finishSetup(int clusters, int components) {
         weights.size() != texelCount() * std::size_t(components) ||
         eigenBrdfs.size() != std::size_t(clusters) * components * eigenBrdfSize())
         throw Error("lpca: array sizes do not match the model's shape");
-    _viewTable = DirectionInterpolator(_views).bake(kDirectionTableResolution);
-    _lightTable = DirectionInterpolator(_lights).bake(kDirectionTableResolution);
+    _viewLookup = DirectionLookup(_views);
+    _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
 }
 
 glm::vec3 LpcaMaterial::evaluate(int x, int y, const glm::vec3& view,
@@ -65,8 +65,8 @@ glm::vec3 LpcaMaterial::evaluate(int x, int y, const glm::vec3& view,
     // The shader's arithmetic, in its order: per component the 3x3 interpolated Eigen-BRDF value,
     // then the weighted sum (lpca.frag).
     const std::size_t t = std::size_t(y) * _width + x;
-    const InterpolationWeights wv = DirectionInterpolator::lookupBaked(_viewTable, view);
-    const InterpolationWeights wl = DirectionInterpolator::lookupBaked(_lightTable, light);
+    const InterpolationWeights wv = _viewLookup.weights(view);
+    const InterpolationWeights wl = _lightLookup.weights(light);
     const int k = clusterOf[t];
     const std::size_t lights = _lights.size();
     glm::vec3 sum(0.0f);
@@ -256,8 +256,8 @@ osg::ref_ptr<osg::StateSet> LpcaMaterial::createStateSet() const {
     addTexture(*stateSet, createTextureArray(file.texture("weights")).get(), "lpcaWeights", 1);
     addTexture(*stateSet, createTextureArray(file.texture("eigenBrdfs")).get(), "lpcaEigenBrdfs",
                2);
-    addDirectionTable(*stateSet, _viewTable, "lpcaView", 3, 4);
-    addDirectionTable(*stateSet, _lightTable, "lpcaLight", 5, 6);
+    _viewLookup.addToStateSet(*stateSet, "lpcaViewTable", 3);
+    _lightLookup.addToStateSet(*stateSet, "lpcaLightTable", 4);
     stateSet->addUniform(new osg::Uniform("lpcaComponents", _components));
     return stateSet;
 }
@@ -280,10 +280,13 @@ const bool registered = registerMethod([] {
     m.shaderCost = [](const Material& material) {
         // Cluster fetch and decode 2; two lookups; per component: alpha address 2 and fetch,
         // 9 x (weight product, row index 2, multiply-add 2, one fetch), weighted add 2.
-        const int c = static_cast<const LpcaMaterial&>(material).components();
-        return ShaderCost::ofEvaluate(2 + 2 * ShaderCost::kLookupAlu + 49 * c,
-                                      1 + 2 * ShaderCost::kLookupTex + 10 * c,
-                                      "ALU 49c+34, TEX 10c+5 (c components)");
+        const LpcaMaterial& m = static_cast<const LpcaMaterial&>(material);
+        const int c = m.components();
+        const DirectionLookup::Cost v = m.viewLookup().cost(), l = m.lightLookup().cost();
+        return ShaderCost::ofEvaluate(
+            2 + v.alu + l.alu + 49 * c, 1 + v.tex + l.tex + 10 * c,
+            "ALU 49c+12+L, TEX 10c+1+T (c components; L = " + std::to_string(v.alu + l.alu) +
+                ", T = " + std::to_string(v.tex + l.tex) + ": view and light lookups)");
     };
     m.order = 50;
     m.quickFitOptions = "clusters=2 components=2";

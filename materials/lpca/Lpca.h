@@ -20,7 +20,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/DirectionInterpolation.h"
+#include "materials/DirectionLookup.h"
 #include "materials/Material.h"
 
 namespace osgBTF {
@@ -71,6 +71,8 @@ public:
 
     int clusters() const { return _clusters; }
     int components() const { return _components; }
+    const DirectionLookup& viewLookup() const { return _viewLookup; }
+    const DirectionLookup& lightLookup() const { return _lightLookup; }
     /** Values of one Eigen-BRDF: views * lights * 3. */
     std::size_t eigenBrdfSize() const { return _views.size() * _lights.size() * 3; }
     /** Eigen-BRDF i of cluster k, [view][light][rgb] (the layout of MeasuredBtf::abrdf). */
@@ -85,7 +87,8 @@ public:
     /** Per cluster: c Eigen-BRDFs, [cluster][component][view][light][rgb]; half values. */
     std::vector<float> eigenBrdfs;
 
-    /** Call after changing the arrays' shape by hand: checks sizes, rebuilds direction tables. */
+    /** Call after changing the arrays' shape by hand: checks sizes, rebuilds the direction
+     *  lookups. */
     void finishSetup(int clusters, int components);
 
 protected:
@@ -94,7 +97,7 @@ protected:
 private:
     friend struct LpcaFitter;
     int _clusters = 0, _components = 0;
-    DirectionInterpolator::Baked _viewTable, _lightTable;
+    DirectionLookup _viewLookup, _lightLookup;
 };
 
 /** A Texture2DArray for `texture` even when its depth is 1 (createFloatTexture makes a Texture2D

@@ -97,8 +97,8 @@ PcaMaterial::PcaMaterial(const PcaMaterial& other, const osg::CopyOp& copyop)
       weights(other.weights),
       _components(other._components),
       _tileColumns(other._tileColumns),
-      _viewTable(other._viewTable),
-      _lightTable(other._lightTable) {}
+      _viewLookup(other._viewLookup),
+      _lightLookup(other._lightLookup) {}
 
 void PcaMaterial::assignFrom(const Material& other) {
     const PcaMaterial& o = assignCommon<PcaMaterial>(other);
@@ -106,8 +106,8 @@ void PcaMaterial::assignFrom(const Material& other) {
     weights = o.weights;
     _components = o._components;
     _tileColumns = o._tileColumns;
-    _viewTable = o._viewTable;
-    _lightTable = o._lightTable;
+    _viewLookup = o._viewLookup;
+    _lightLookup = o._lightLookup;
 }
 
 void PcaMaterial::setShape(int width, int height, const DirectionSet& views,
@@ -136,11 +136,9 @@ void PcaMaterial::setShape(int width, int height, const DirectionSet& views,
         {}};
 }
 
-void PcaMaterial::bakeDirectionTables() {
-    _viewTable = DirectionInterpolator(_views).bake(kDirectionTableResolution);
-    _lightTable = _lights == _views
-                      ? _viewTable
-                      : DirectionInterpolator(_lights).bake(kDirectionTableResolution);
+void PcaMaterial::prepareLookups() {
+    _viewLookup = DirectionLookup(_views);
+    _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
 }
 
 osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
@@ -159,7 +157,7 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const MeasuredBtf& btf, const FitOpti
 
     osg::ref_ptr<PcaMaterial> m = new PcaMaterial;
     m->setShape(btf.width(), btf.height(), btf.views(), btf.lights(), components, storage);
-    m->bakeDirectionTables();
+    m->prepareLookups();
     m->eigenTextures.data.assign(m->eigenTextures.valueCount(), 0.0f);
     m->weights.data.assign(m->weights.valueCount(), 0.0f);
 
@@ -247,9 +245,9 @@ glm::vec3 PcaMaterial::combination(int x, int y, std::size_t view, std::size_t l
 }
 
 glm::vec3 PcaMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
-    // The shader's loop: 3 view x 3 light neighbours from the baked tables.
-    const InterpolationWeights wv = DirectionInterpolator::lookupBaked(_viewTable, view);
-    const InterpolationWeights wl = DirectionInterpolator::lookupBaked(_lightTable, light);
+    // The shader's loop: 3 view x 3 light neighbours of the exact interpolation.
+    const InterpolationWeights wv = _viewLookup.weights(view);
+    const InterpolationWeights wl = _lightLookup.weights(light);
     glm::vec3 sum(0.0f);
     for (int i = 0; i < 3; ++i) {
         if (!(wv.weight[i] > 0.0f)) continue;
@@ -330,7 +328,7 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(const FittedMaterial& file) {
     check(m->weights, w);
     m->eigenTextures.data = eigen.data;
     m->weights.data = w.data;
-    m->bakeDirectionTables();
+    m->prepareLookups();
     return m;
 }
 
@@ -339,8 +337,8 @@ osg::ref_ptr<osg::StateSet> PcaMaterial::createStateSet() const {
     addCommonState(*stateSet, methodName(), _width, _height);
     addTexture(*stateSet, createFloatTexture(eigenTextures).get(), "pcaEigenTextures", 0);
     addTexture(*stateSet, createFloatTexture(weights).get(), "pcaWeights", 1);
-    addDirectionTable(*stateSet, _viewTable, "pcaView", 2, 3);
-    addDirectionTable(*stateSet, _lightTable, "pcaLight", 4, 5);
+    _viewLookup.addToStateSet(*stateSet, "pcaViewTable", 2);
+    _lightLookup.addToStateSet(*stateSet, "pcaLightTable", 3);
     stateSet->addUniform(new osg::Uniform("pcaComponents", _components));
     stateSet->addUniform(new osg::Uniform("pcaTileColumns", _tileColumns));
     return stateSet;
@@ -371,10 +369,13 @@ const bool registered = registerMethod([] {
         // View + light lookups; 3 view-weight tests; per (view, light) pair (9): weight product
         // and test, bias fetch, per component: tile address 4, multiply-add 2 and 2 fetches;
         // weighted add 2.
-        const int c = static_cast<const PcaMaterial&>(material).components();
-        return ShaderCost::ofEvaluate(2 * ShaderCost::kLookupAlu + 3 + 9 * (4 + 6 * c),
-                                      2 * ShaderCost::kLookupTex + 9 * (1 + 2 * c),
-                                      "ALU 54c+71, TEX 18c+13 (c components)");
+        const PcaMaterial& m = static_cast<const PcaMaterial&>(material);
+        const int c = m.components();
+        const DirectionLookup::Cost v = m.viewLookup().cost(), l = m.lightLookup().cost();
+        return ShaderCost::ofEvaluate(
+            v.alu + l.alu + 3 + 9 * (4 + 6 * c), v.tex + l.tex + 9 * (1 + 2 * c),
+            "ALU 54c+49+L, TEX 18c+9+T (c components; L = " + std::to_string(v.alu + l.alu) +
+                ", T = " + std::to_string(v.tex + l.tex) + ": view and light lookups)");
     };
     m.order = 40;
     m.quickFitOptions = "components=2";

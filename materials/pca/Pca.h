@@ -10,7 +10,7 @@
 // subspace", but eq. 1 and seed 001 eq. 6 have none, and the 3888 values of seed 001 Table 2 =
 // 81 x 16 x 3 leave no room for one): we follow the equations, a linear rank-c subspace.
 // N(v), N(l) are the (up to) 3 measured directions of the Delaunay interpolation and w their
-// barycentric weights, read from the baked tables exactly as the shader does.
+// exact barycentric weights (materials/DirectionLookup.h, the same on CPU and GPU).
 //
 // Storage (option storage): Eigen-Textures as unorm8 (the default, as seed 001 Table 2 counts:
 // 1 byte per value), half or float. For unorm8 every Eigen-Texture channel is mapped to [0, 1] by
@@ -27,7 +27,7 @@
 
 #include <vector>
 
-#include "core/DirectionInterpolation.h"
+#include "materials/DirectionLookup.h"
 #include "materials/Material.h"
 
 namespace osgBTF {
@@ -70,6 +70,8 @@ public:
     glm::vec3 combination(int x, int y, std::size_t view, std::size_t light) const;
 
     int components() const { return _components; }
+    const DirectionLookup& viewLookup() const { return _viewLookup; }
+    const DirectionLookup& lightLookup() const { return _lightLookup; }
     int tileColumns() const { return _tileColumns; }
 
     /** Index of texel (x, y) of component k of view v in eigenTextures.data (RGB follows). */
@@ -92,11 +94,11 @@ protected:
     ~PcaMaterial() override = default;
 
 private:
-    void bakeDirectionTables();
+    void prepareLookups();
 
     int _components = 0;
     int _tileColumns = 1;
-    DirectionInterpolator::Baked _viewTable, _lightTable;
+    DirectionLookup _viewLookup, _lightLookup;
 };
 
 }  // namespace osgBTF

@@ -81,7 +81,7 @@ RfMaterial::RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop)
       rhoV(other.rhoV),
       lobes(other.lobes),
       _lobes(other._lobes),
-      _viewTable(other._viewTable),
+      _viewLookup(other._viewLookup),
       _lightVectors(other._lightVectors) {}
 
 void RfMaterial::assignFrom(const Material& other) {
@@ -90,7 +90,7 @@ void RfMaterial::assignFrom(const Material& other) {
     rhoV = o.rhoV;
     lobes = o.lobes;
     _lobes = o._lobes;
-    _viewTable = o._viewTable;
+    _viewLookup = o._viewLookup;
     _lightVectors = o._lightVectors;
 }
 
@@ -112,7 +112,7 @@ void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSe
     const std::size_t texels = std::size_t(width) * std::size_t(height);
     checkMemory(std::uint64_t(texels) * (3 + views.size() * (3 + 4 * lobeCount)) * sizeof(float),
                 "rf model");
-    _viewTable = DirectionInterpolator(views).bake(kDirectionTableResolution);
+    _viewLookup = DirectionLookup(views);
     _lightVectors.clear();
     for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
     _lobes = lobeCount;
@@ -577,7 +577,7 @@ glm::vec3 RfMaterial::reflectanceField(std::size_t texel, std::size_t view,
 
 glm::vec3 RfMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
     const std::size_t t = std::size_t(y) * _width + x;
-    const InterpolationWeights w = DirectionInterpolator::lookupBaked(_viewTable, view);
+    const InterpolationWeights w = _viewLookup.weights(view);
     glm::vec3 color(rhoD[t * 3], rhoD[t * 3 + 1], rhoD[t * 3 + 2]);
     for (int j = 0; j < 3; ++j)
         if (w.weight[j] > 0.0f) color += w.weight[j] * reflectanceField(t, w.index[j], light);
@@ -663,7 +663,7 @@ osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
                                 a.channels, a.kind, this->*a.member};
         addTexture(*stateSet, createFloatTexture(t).get(), a.sampler, unit++);
     }
-    addDirectionTable(*stateSet, _viewTable, "rfView", unit, unit + 1);
+    _viewLookup.addToStateSet(*stateSet, "rfViewTable", unit);
     stateSet->addUniform(new osg::Uniform("rfLobeCount", _lobes));
     return stateSet;
 }
@@ -701,10 +701,13 @@ const bool registered = registerMethod([] {
     m.shaderCost = [](const Material& material) {
         // View lookup, rhoD; per blended view (3): weight test, rhoV fetch, per lobe: layer index
         // 2, 3-term dot 5, test, select, pow, add; then 3 for the weighted add.
-        const int k = static_cast<const RfMaterial&>(material).lobeCount();
-        return ShaderCost::ofEvaluate(ShaderCost::kLookupAlu + 3 * (4 + 11 * k),
-                                      ShaderCost::kLookupTex + 1 + 3 * (1 + k),
-                                      "ALU 33k+33, TEX 3k+6 (k lobes per view)");
+        const RfMaterial& m = static_cast<const RfMaterial&>(material);
+        const int k = m.lobeCount();
+        const DirectionLookup::Cost v = m.viewLookup().cost();
+        return ShaderCost::ofEvaluate(
+            v.alu + 3 * (4 + 11 * k), v.tex + 1 + 3 * (1 + k),
+            "ALU 33k+22+L, TEX 3k+4+T (k lobes per view; L = " + std::to_string(v.alu) +
+                ", T = " + std::to_string(v.tex) + ": the view lookup)");
     };
     m.order = 30;
     return m;

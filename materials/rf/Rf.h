@@ -7,7 +7,7 @@
 //   l_z)^n_vi(x)
 //
 // and a view that was not measured blends the three nearest measured views with the Delaunay
-// interpolation weights of core/DirectionInterpolation.h (baked table, the same on CPU and GPU):
+// interpolation weights of materials/DirectionLookup.h (exact, the same on CPU and GPU):
 //
 //   BTF(x, v, l) ~ sum_j w_j(v) RF_{v_j}(x, l)
 //
@@ -33,7 +33,7 @@
 
 #include <vector>
 
-#include "core/DirectionInterpolation.h"
+#include "materials/DirectionLookup.h"
 #include "materials/Material.h"
 
 namespace osgBTF {
@@ -79,6 +79,7 @@ public:
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
     int lobeCount() const { return _lobes; }
+    const DirectionLookup& viewLookup() const { return _viewLookup; }
     /** The reflectance field of measured view `view` without rho_d: rho_v * lobe sum. */
     glm::vec3 reflectanceField(std::size_t texel, std::size_t view, const glm::vec3& light) const;
     /** sum_i max(0, (a, b, c)_i . light)^n_i of one texel and measured view. */
@@ -98,11 +99,11 @@ protected:
     ~RfMaterial() override = default;
 
 private:
-    /** Sizes the arrays and builds the view interpolation table. */
+    /** Sizes the arrays and builds the view interpolation. */
     void setShape(int width, int height, DirectionSet views, DirectionSet lights, int lobes);
 
     int _lobes = 0;
-    DirectionInterpolator::Baked _viewTable;
+    DirectionLookup _viewLookup;
     std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
 };
 

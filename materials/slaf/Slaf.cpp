@@ -10,13 +10,13 @@ namespace osgBTF {
 // ---- model -----------------------------------------------------------------------------------
 
 SlafMaterial::SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop)
-    : LobeMaterial(other, copyop), scale(other.scale), _viewTable(other._viewTable) {}
+    : LobeMaterial(other, copyop), scale(other.scale), _viewLookup(other._viewLookup) {}
 
 void SlafMaterial::assignFrom(const Material& other) {
     const SlafMaterial& o = assignCommon<SlafMaterial>(other);
     assignLobes(o);
     scale = o.scale;
-    _viewTable = o._viewTable;
+    _viewLookup = o._viewLookup;
 }
 
 osg::ref_ptr<SlafMaterial> SlafMaterial::create(int width, int height, int lobeCount,
@@ -31,7 +31,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::create(int width, int height, int lobeC
 }
 
 void SlafMaterial::prepare() {
-    _viewTable = DirectionInterpolator(_views).bake(kDirectionTableResolution);
+    _viewLookup = DirectionLookup(_views);
 }
 
 // ---- fitter: LobeMaterial's, with the view table T fitted ------------------------------------
@@ -55,8 +55,8 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const MeasuredBtf& btf, const FitOp
 glm::vec3 SlafMaterial::evaluate(int x, int y, const glm::vec3& view,
                                  const glm::vec3& light) const {
     const std::size_t t = std::size_t(y) * _width + x, texels = texelCount();
-    // The same baked lookup and blend order as shaders/slaf.frag.
-    const InterpolationWeights w = DirectionInterpolator::lookupBaked(_viewTable, view);
+    // The same interpolation and blend order as shaders/slaf.frag.
+    const InterpolationWeights w = _viewLookup.weights(view);
     glm::vec3 T(0.0f);
     for (int i = 0; i < 3; ++i) {
         const float* s = &scale[(std::size_t(w.index[i]) * texels + t) * 3];
@@ -119,7 +119,7 @@ osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
                    {"scale", _width, _height, int(_views.size()), 3, MaterialTexture::Half, scale})
                    .get(),
                "slafScale", 3);
-    addDirectionTable(*stateSet, _viewTable, "slafView", 4, 5);
+    _viewLookup.addToStateSet(*stateSet, "slafViewTable", 4);
     return stateSet;
 }
 
@@ -147,10 +147,13 @@ const bool registered = registerMethod([] {
     m.createInstance = []() -> osg::Object* { return new SlafMaterial; };
     m.shaderCost = [](const Material& material) {
         // View lookup; T: 3 multiply-adds and 3 fetches; v*l 1; lobes as LAF; bracket 5; T* 1.
-        const int k = static_cast<const SlafMaterial&>(material).lobeCount();
-        return ShaderCost::ofEvaluate(ShaderCost::kLookupAlu + 6 + 1 + 6 * k + 5 + 1,
-                                      ShaderCost::kLookupTex + 3 + k + 2,
-                                      "ALU 6k+34, TEX k+7 (k lobes)");
+        const SlafMaterial& m = static_cast<const SlafMaterial&>(material);
+        const int k = m.lobeCount();
+        const DirectionLookup::Cost v = m.viewLookup().cost();
+        return ShaderCost::ofEvaluate(
+            v.alu + 6 + 1 + 6 * k + 5 + 1, v.tex + 3 + k + 2,
+            "ALU 6k+23+L, TEX k+5+T (k lobes; L = " + std::to_string(v.alu) +
+                ", T = " + std::to_string(v.tex) + ": the view lookup)");
     };
     m.order = 20;
     return m;

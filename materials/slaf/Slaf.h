@@ -7,7 +7,8 @@
 // to luminance lobes with a specular albedo) scaled per texel by an RGB table T over the measured
 // view directions, which captures view-dependent masking and parallax that lobes cannot. Between
 // measured views T is blended with the direction interpolation of core/DirectionInterpolation.h
-// (the baked table the shader reads, so CPU == GPU). Values include the cosine term.
+// (exact Delaunay weights, materials/DirectionLookup.h, the same on CPU and GPU). Values include
+// the cosine term.
 //
 // The bracket, its storage and the fitter are LobeMaterial's (materials/laf/LobeMaterial.h),
 // shared with LAF, which is this model with T fixed at 1.
@@ -18,7 +19,7 @@
 
 #include <vector>
 
-#include "core/DirectionInterpolation.h"
+#include "materials/DirectionLookup.h"
 #include "materials/laf/LobeMaterial.h"
 
 namespace osgBTF {
@@ -42,6 +43,7 @@ public:
                                              const DirectionSet& views, const DirectionSet& lights);
 
     std::string methodName() const override { return "slaf"; }
+    const DirectionLookup& viewLookup() const { return _viewLookup; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
@@ -55,10 +57,10 @@ protected:
     ~SlafMaterial() override = default;
 
 private:
-    /** Bakes the view interpolation table; called once the views are known. */
+    /** Builds the view interpolation; called once the views are known. */
     void prepare();
 
-    DirectionInterpolator::Baked _viewTable;
+    DirectionLookup _viewLookup;
 };
 
 }  // namespace osgBTF

@@ -5,8 +5,12 @@
 #include <sstream>
 
 #include <glm/geometric.hpp>
+#include <osg/Geode>
 #include <osg/MatrixTransform>
 #include <osg/Uniform>
+
+#include "core/ShaderSource.h"
+#include "harness/PassCost.h"
 
 #include "tests/gl/GlTestEnv.h"
 
@@ -147,6 +151,118 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& 
 GpuCpuComparison compareGpuWithCpu(const Material& material, const glm::vec3& view,
                                    const glm::vec3& light) {
     return compareGpuWithCpu(material, orthoPatchRender(material, view, light));
+}
+
+}  // namespace osgBTF::test
+
+namespace osgBTF::test {
+
+namespace {
+
+/** Registers the probe "methods" once: btfEvaluate returns one of its inputs. */
+void addProbeShaders() {
+    static const bool added = [] {
+        const std::string head =
+            "#version 330 compatibility\n#pragma include \"common/btf_main.glsl\"\n"
+            "vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) { return ";
+        addShaderSource("osgbtf-probe-view.frag", head + "view; }\n");
+        addShaderSource("osgbtf-probe-light.frag", head + "light; }\n");
+        addShaderSource("osgbtf-probe-texel.frag", head + "vec3(vec2(texel), 1.0); }\n");
+        return true;
+    }();
+    (void)added;
+}
+
+glm::vec3 rgb(const osg::Image& image, int x, int y) {
+    return {pixel(image, x, y, 0), pixel(image, x, y, 1), pixel(image, x, y, 2)};
+}
+
+}  // namespace
+
+ProbedRender renderProbed(const Material& material, osg::Drawable* drawable,
+                          const CameraSetup& camera,
+                          const std::function<void(osg::StateSet&)>& configure) {
+    addProbeShaders();
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+    configure(*stateSet);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(drawable);
+    geode->setStateSet(stateSet.get());
+    ProbedRender out;
+    out.width = camera.width;
+    out.height = camera.height;
+    const std::size_t n = std::size_t(out.width) * out.height;
+    out.color.resize(n);
+    out.view.resize(n);
+    out.light.resize(n);
+    out.texel.resize(n);
+    out.shaded.resize(n);
+    for (const char* pass : {"", "osgbtf-probe-view", "osgbtf-probe-light", "osgbtf-probe-texel"}) {
+        if (*pass)
+            stateSet->setAttributeAndModes(methodProgram(pass).get(), osg::StateAttribute::ON);
+        osg::ref_ptr<osg::Image> image = sharedRenderer().render(geode.get(), camera);
+        for (int y = 0; y < out.height; ++y)
+            for (int x = 0; x < out.width; ++x) {
+                const std::size_t i = out.at(x, y);
+                const glm::vec3 v = rgb(*image, x, y);
+                const std::string name = pass;
+                if (name.empty()) {
+                    out.color[i] = v;
+                } else if (name == "osgbtf-probe-view") {
+                    out.view[i] = v;
+                    out.shaded[i] = glm::length(v) > 0.5f;
+                } else if (name == "osgbtf-probe-light") {
+                    out.light[i] = v;
+                } else {
+                    out.texel[i] = glm::ivec2(int(std::lround(v.x)), int(std::lround(v.y)));
+                }
+            }
+    }
+    sharedRenderer().setScene(nullptr);
+    return out;
+}
+
+ProbedRender renderProbedSphere(const Material& material, const SphereSetting& setting, int size,
+                                float textureScale) {
+    // renderSphere's camera (harness/Pictures.cpp).
+    const double e = osg::DegreesToRadians(double(setting.cameraElevation));
+    const double distance = 3.2;
+    CameraSetup camera;
+    camera.view =
+        osg::Matrixd::lookAt(osg::Vec3d(0, distance * std::sin(e), distance * std::cos(e)),
+                             osg::Vec3d(0, 0, 0), osg::Vec3d(0, std::cos(e), -std::sin(e)));
+    camera.projection = osg::Matrixd::perspective(40.0, 1.0, 0.5, 10.0);
+    camera.width = camera.height = size;
+    osg::ref_ptr<osg::Geometry> sphere = createTangentSphere();
+    return renderProbed(material, sphere.get(), camera, [&](osg::StateSet& s) {
+        setDirectionalLights(s, {setting.lightDirection});
+        s.getOrCreateUniform("osgBTF_textureScale", osg::Uniform::FLOAT)->set(textureScale);
+    });
+}
+
+GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRender& render) {
+    GpuCpuComparison result;
+    for (int y = 0; y < render.height; ++y)
+        for (int x = 0; x < render.width; ++x) {
+            const std::size_t i = render.at(x, y);
+            if (!render.shaded[i]) continue;
+            const glm::ivec2 t = render.texel[i];
+            const glm::vec3 expected = material.evaluate(t.x, t.y, render.view[i], render.light[i]);
+            for (int c = 0; c < 3; ++c) {
+                const double d = std::abs(double(render.color[i][c]) - expected[c]);
+                if (!(d <= result.maxAbsDifference)) {
+                    result.maxAbsDifference = std::isnan(d) ? 1e30 : d;
+                    std::ostringstream where;
+                    where << "pixel (" << x << ", " << y << ") texel (" << t.x << ", " << t.y
+                          << ") view (" << render.view[i].x << ", " << render.view[i].y << ", "
+                          << render.view[i].z << ") channel " << c << ": GPU " << render.color[i][c]
+                          << " CPU " << expected[c];
+                    result.worst = where.str();
+                }
+            }
+            ++result.pixelsCompared;
+        }
+    return result;
 }
 
 }  // namespace osgBTF::test

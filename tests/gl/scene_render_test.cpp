@@ -384,7 +384,11 @@ TEST(SceneRender, PseudoLoaderAndOsgconvRoundTripRenderTheSame) {
     osg::ref_ptr<osg::Node> converted = osgDB::readRefNodeFile(dir.file("converted.osgb"));
     ASSERT_TRUE(converted.valid());
     osg::ref_ptr<osg::Image> after = sharedRenderer().render(converted.get(), camera.setup);
-    EXPECT_EQ(maxDifference(*before, *after), 0.0);
+    // The same up to float rounding: .osgt text does not keep every bit of a float (re-reading
+    // scene.osgt without osgconv differs as much), and the exact direction interpolation is
+    // continuous, so a last-bit change of a frame or light vector moves a pixel by ~1e-7 where
+    // the old nearest-cell table hid it.
+    EXPECT_LE(maxDifference(*before, *after), 1e-6);
 }
 
 TEST(SceneRender, WithoutLightSourcesTheViewersHeadlightLights) {
