@@ -7,6 +7,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include "core/Error.h"
 #include "core/Progress.h"
@@ -191,17 +192,21 @@ MeasuredBtf FactoredBtf::decode(Storage storage, const std::string& progressLabe
     tbb::enumerable_thread_specific<std::vector<float>> scratches;
     Progress progress(progressLabel.empty() ? "decoding " + source : progressLabel, images);
     const std::size_t nL = lights.size();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, images, block),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                          std::vector<float>& decoded = scratches.local();
-                          decoded.resize(range.size() * texels * 3);
-                          decodeImages(range.begin(), range.size(), decoded.data());
-                          for (std::size_t j = 0; j < range.size(); ++j) {
-                              const std::size_t image = range.begin() + j;
-                              btf.setImage(image / nL, image % nL, decoded.data() + j * texels * 3);
-                          }
-                          progress.advance(range.size());
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, images, block),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            std::vector<float>& decoded = scratches.local();
+            decoded.resize(range.size() * texels * 3);
+            decodeImages(range.begin(), range.size(), decoded.data());
+            for (std::size_t j = 0; j < range.size(); ++j) {
+                const std::size_t image = range.begin() + j;
+                btf.setImage(image / nL, image % nL, decoded.data() + j * texels * 3);
+            }
+            progress.advance(range.size());
+        },
+        // The default partitioner hands out ranges far above the grain, and the
+        // scratch above grows with the range: keep each block at `block` images.
+        tbb::simple_partitioner());
     progress.finish();
     return btf;
 }
