@@ -552,4 +552,35 @@ void writeUbo2014(const Ubo2014Factors& f, const std::string& path) {
     if (ec) fail(path, "cannot rename " + tmp + ": " + ec.message());
 }
 
+void writeFactorsAsUbo2014(const FactoredBtf& factors, const std::string& path, int scalarSize,
+                           const Ubo2014Factors* meta) {
+    if (scalarSize != 2 && scalarSize != 4)
+        fail(path,
+             "cannot write scalar size " + std::to_string(scalarSize) + " (2 half or 4 float)");
+    factors.validate();
+    Ubo2014Factors f;
+    if (meta) {
+        f.measurementSetup = meta->measurementSetup;
+        f.imageSensor = meta->imageSensor;
+        f.lightSource = meta->lightSource;
+        f.ppmm = meta->ppmm;
+        f.rgbScale = meta->rgbScale;
+        f.xml = meta->xml;
+    }
+    static_cast<FactoredBtf&>(f) = factors;
+    f.metaVersion = 4;
+    f.channelNames = {"R", "G", "B"};
+    f.hasRotations = false;
+    f.scalarSize = scalarSize;
+    if (f.model == FactorModel::Fmf) {
+        f.extendedHeader = true;
+        f.headerVersion = 1;  // the DRR field, no height map
+    } else {
+        int k = 0;
+        for (const BtfFactor& factor : f.factors) k = std::max(k, int(factor.U.cols()));
+        f.maxComponents = std::uint32_t(k);
+    }
+    writeUbo2014(f, path);
+}
+
 }  // namespace osgBTF
