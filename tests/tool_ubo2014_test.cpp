@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "core/FloatImage.h"
+#include "loaders/Ubo2014.h"
 #include "tests/HandWrittenUbo2014.h"
 #include "tests/TestUtil.h"
 
@@ -17,6 +19,11 @@ namespace {
 
 CommandResult btf(const std::string& arguments) {
     return runCommand(std::string(OSGBTF_BTF_TOOL) + " --no-progress " + arguments);
+}
+/** For commands that open an OpenGL context (Mesa's EGL leaks a little per context). */
+CommandResult btfWithGl(const std::string& arguments) {
+    return runCommand("ASAN_OPTIONS=detect_leaks=0 " + std::string(OSGBTF_BTF_TOOL) +
+                      " --no-progress " + arguments);
 }
 
 nlohmann::json infoJson(const std::string& arguments) {
@@ -140,4 +147,36 @@ TEST(BtfToolUbo2014, InfoNeedsNoMemoryForTheDecodedData) {
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("more than the memory limit of 3.0 KiB"), std::string::npos)
         << r.output;
+}
+
+TEST(BtfToolUbo2014, EvalRendersTheStoredFactors) {
+    TempDir dir;
+    const HandWrittenBtf f = handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    const osgBTF::Ubo2014Factors factors = osgBTF::readUbo2014(path);
+    // View 2 (40, 120) and light 5 (60, 150) of the file: a measured pair.
+    const std::size_t view = 2, light = 5;
+    for (const char* mode : {"", " --cpu"}) {
+        SCOPED_TRACE(mode);
+        const std::string image = dir.file("eval.exr");
+        const CommandResult r =
+            btfWithGl("eval " + shellQuote(path) + " --view 40,120 --light 60,150 -o " +
+                      shellQuote(image) + mode);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find("(fmf, 4x3, "), std::string::npos) << r.output;
+        const osgBTF::FloatImage got = osgBTF::readFloatImage(image);
+        ASSERT_EQ(got.width, 4);
+        ASSERT_EQ(got.height, 3);
+        // Image rows top-down; FactoredBtf::value counts y from the bottom. Same float math on
+        // both sides except the GPU's: 1e-3 relative.
+        for (int row = 0; row < 3; ++row)
+            for (int x = 0; x < 4; ++x) {
+                const glm::vec3 want = factors.value(view, light, x, 2 - row);
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(got.at(x, row, c), want[c],
+                                1e-3 * std::max(1.0f, std::abs(want[c])))
+                        << "x " << x << " row " << row << " channel " << c;
+            }
+    }
 }

@@ -15,7 +15,9 @@
 #include <gtest/gtest.h>
 
 #include "core/FactoredBtf.h"
+#include "harness/sample/SampleBtf.h"
 #include "loaders/Ubo2014.h"
+#include "materials/fmf/Fmf.h"
 #include "tests/TestUtil.h"
 
 using namespace osgBTF;
@@ -296,4 +298,91 @@ TEST(Ubo2014Write, RefusesWhatItCannotWrite) {
               "hand-made: inconsistent factor matrix sizes: U is 36x4, SxV 3x4");
     EXPECT_FALSE(std::filesystem::exists(path));
     EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+}
+
+TEST(Ubo2014Write, FittedFmfMaterialWritesExactlyItsFactors) {
+    TempDir dir;
+    SampleOptions sample;
+    sample.width = 6;
+    sample.height = 4;  // not square: a transposed SxV would show
+    const MeasuredBtf btf = makeSampleBtf(sample);
+    for (const char* storage : {"half", "float"}) {
+        SCOPED_TRACE(storage);
+        osg::ref_ptr<FmfMaterial> m = FmfMaterial::fit(
+            btf, FitOptions::parse(std::string("components=5 storage=") + storage));
+        const int scalarSize = m->storage() == MaterialTexture::Float ? 4 : 2;
+        EXPECT_EQ(scalarSize, std::string(storage) == "float" ? 4 : 2);
+        const std::string path = dir.file(std::string(storage) + ".btf");
+        writeFactorsAsUbo2014(m->factors(), path, scalarSize);
+        std::unique_ptr<ParsedBtf> p;
+        try {
+            p = std::make_unique<ParsedBtf>(readTextFile(path));
+        } catch (const std::exception& e) {
+            FAIL() << e.what();
+        }
+        EXPECT_EQ(p->signature, "!FMF12FCE");
+        EXPECT_EQ(p->headerVersion, 1);
+        EXPECT_EQ(p->drr, 0u);
+        EXPECT_EQ(p->cosine, 0u);  // the fitted values include the cosine, as measured
+        ASSERT_EQ(p->factors.size(), 1u);
+        EXPECT_EQ(p->factors[0].k, 5u);
+        EXPECT_EQ(p->factors[0].rows, 81u * 81u * 3u);
+        EXPECT_EQ(p->factors[0].cols, 24u);
+        // Half storage: the material's factors are already rounded to half, so they are stored
+        // exactly in either case.
+        expectFactorsEqual(*p, m->factors(), scalarSize);
+        // The file's own formula (formats.md 2.6, FMF without DRR: U . SxV) at a measured pair
+        // equals the material there; texel (x, y) from the bottom is file row height - 1 - y.
+        const auto& f = p->factors[0];
+        const std::size_t view = 40, light = 17, image = view * 81 + light;
+        const int x = 4, y = 1, fileTexel = (4 - 1 - y) * 6 + x;
+        const glm::vec3 want =
+            m->evaluate(x, y, btf.views().vector(view), btf.lights().vector(light));
+        for (int c = 0; c < 3; ++c) {
+            double sum = 0;
+            for (std::uint32_t k = 0; k < f.k; ++k)
+                sum += f.u[(image * 3 + std::size_t(c)) * f.k + k] *
+                       f.sxv[std::size_t(fileTexel) * f.k + k];
+            EXPECT_NEAR(sum, want[c], 1e-5 * std::max(1.0f, std::abs(want[c]))) << c;
+        }
+    }
+}
+
+TEST(Ubo2014Write, BtfFitWritesAUbo2014FileOnlyForFmf) {
+    TempDir dir;
+    const std::string tool = std::string(OSGBTF_BTF_TOOL) + " --no-progress ";
+    const std::string zip = dir.file("s.zip"), out = dir.file("out.btf");
+    auto r = test::runCommand(tool + "sample --size 8 -o " + test::shellQuote(zip));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    r = test::runCommand(tool + "fit " + test::shellQuote(zip) + " -m lambert -o " +
+                         test::shellQuote(out));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("btf: error: " + out +
+                            ": only method fmf writes a UBO2014 .btf file (its factors are the "
+                            "format's); save lambert as .btfmat or .exr"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out));
+
+    r = test::runCommand(tool + "fit " + test::shellQuote(zip) + " -m fmf --components 4 -o " +
+                         test::shellQuote(out));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("wrote " + out), std::string::npos) << r.output;
+    try {
+        const ParsedBtf p(readTextFile(out));
+        EXPECT_EQ(p.signature, "!FMF12FCE");
+        EXPECT_EQ(p.headerVersion, 1);
+        EXPECT_EQ(p.drr, 0u);
+        EXPECT_EQ(p.width, 8u);
+        ASSERT_EQ(p.factors.size(), 1u);
+        EXPECT_EQ(p.factors[0].k, 4u);
+        EXPECT_EQ(p.factors[0].scalarSize, 2);  // fmf's default storage, half
+        EXPECT_EQ(p.views.size(), 81u);
+    } catch (const std::exception& e) {
+        FAIL() << e.what();
+    }
+    // And it opens again as stored: `btf info` reads it from its header and factors.
+    r = test::runCommand(tool + "info " + test::shellQuote(out));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("factors:  FMF, rank 4"), std::string::npos) << r.output;
 }

@@ -13,6 +13,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 #include <nlohmann/json.hpp>
 
 #include "core/MeasuredBtf.h"
@@ -94,14 +95,18 @@ ValueStats scan(const FactoredBtf& f, const std::string& label) {
     tbb::enumerable_thread_specific<std::vector<float>> buffers;
     tbb::enumerable_thread_specific<ValueStats> partial;
     Progress progress(label, images);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, images, block),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                          std::vector<float>& decoded = buffers.local();
-                          decoded.resize(range.size() * texels * 3);
-                          f.decodeImages(range.begin(), range.size(), decoded.data());
-                          partial.local().add(decoded.data(), decoded.size());
-                          progress.advance(range.size());
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, images, block),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            std::vector<float>& decoded = buffers.local();
+            decoded.resize(range.size() * texels * 3);
+            f.decodeImages(range.begin(), range.size(), decoded.data());
+            partial.local().add(decoded.data(), decoded.size());
+            progress.advance(range.size());
+        },
+        // Only the simple partitioner keeps every range within `block`; the default
+        // one hands out ranges many blocks long.
+        tbb::simple_partitioner());
     progress.finish();
     ValueStats s;
     for (const ValueStats& p : partial) s.merge(p);
