@@ -70,12 +70,12 @@ struct RowBlockSource {
 struct StreamedSvdOptions {
     /** Up to this many columns: exact, through the cols x cols Gram matrix (accumulated in double
      *  over the row blocks), then one more pass for U. Beyond: randomised. */
-    std::size_t gramColumns = 2048;
+    std::size_t gramColumns = 512;
     /** Randomised range finder (Halko, Martinsson, Tropp 2011, algorithms 4.4 and 5.1): rank +
      *  oversampling Gaussian test vectors, powerIterations subspace iterations (each
      *  re-orthonormalised), seeded and therefore deterministic. */
     int oversampling = 16;
-    int powerIterations = 3;
+    int powerIterations = 2;
     unsigned seed = 1;
     /** Called after each block with the rows it covered (progress over all passes: passes()). */
     std::function<void(std::size_t rows)> progress;

@@ -466,7 +466,7 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const MeasuredBtf& btf, const FitOpti
     // Rows (image, channel) in blocks of whole images, read straight from the BTF's storage:
     // the only copies are one block per thread, de-interleaved into A^T's columns.
     const std::size_t blockImages =
-        std::clamp<std::size_t>((std::size_t(4) << 20) / (texels * 3 + 1), 1, 64);
+        std::clamp<std::size_t>((std::size_t(16) << 20) / (texels * 3 + 1), 1, 256);
     RowBlockSource source;
     source.rows = rows;
     source.cols = texels;
