@@ -20,8 +20,9 @@
  *     MODEL is any file osgDB reads; MATERIAL a fitted-material file (any extension), a
  *     UBO2014 .btf (as stored, or fitted with method=) or a measured BTF (.zip, or a folder of
  *     UBO2003 images) fitted on load; scale=S is the texture scale (the material repeats S times
- *     per texture-coordinate unit); other KEY=VALUE pairs are fit options, as with -O. The parentheses let names and values contain dots;
- *     names cannot contain ',' or ')'. Quote the name in a shell.
+ *     per texture-coordinate unit); other KEY=VALUE pairs are fit options, as with -O. The
+ *     parentheses let names and values contain dots; names cannot contain ',' or ')'. Quote the
+ *     name in a shell.
  *
  * Options (-O "...", words separated by spaces; unknown words belong to other plugins):
  *   method=NAME      fit method for measured BTFs (default lpca; `btf fit --help` lists them);
