@@ -648,3 +648,29 @@ TEST(Ubo2014HandWritten, BadFilesAreRefusedWithTheirProblem) {
                            ": DFMF colour model 7 is not supported (supported: 0 RGB, 1 YUV, "
                            "3 PCA, 4 YCoCg, 11 exp-YUV)");
 }
+
+TEST(Ubo2014HandWritten, HeaderOnlyReadSkipsTheMatricesButChecksTheirSizes) {
+    TempDir dir;
+    const test::HandWrittenBtf f = test::handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    LoadOptions header;
+    header.headerOnly = true;
+    const Ubo2014Factors read = readUbo2014(path, header);
+    ASSERT_EQ(read.factors.size(), 3u);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(read.components(c), f.ranks[std::size_t(c)]);
+        EXPECT_EQ(read.factors[std::size_t(c)].U.rows(), 0);
+        EXPECT_EQ(read.factors[std::size_t(c)].S.size(), f.ranks[std::size_t(c)]);
+    }
+    EXPECT_EQ(read.colorModel, 11);
+    // A file one byte short or long is refused as by the full read.
+    writeTextFile(path, f.bytes.substr(0, f.bytes.size() - 1));
+    EXPECT_EQ(errorOf([&] {
+                  readUbo2014(path, header);
+              }).rfind(path + ": unexpected end of file while reading channel 2 factors", 0),
+              0u);
+    writeTextFile(path, f.bytes + "x");
+    EXPECT_EQ(errorOf([&] { readUbo2014(path, header); }),
+              path + ": 1 unexpected trailing bytes after the last factor matrix");
+}

@@ -156,14 +156,23 @@ void printStats(const nlohmann::json& out) {
 
 /** btf info on a UBO2014 file: the header and the factors as read, nothing decoded unless
  *  `stats`. */
-void infoFactored(const std::string& input, bool json, bool stats, const LoadOptions& load) {
+void infoFactored(const std::string& input, bool json, bool stats, LoadOptions load) {
     const auto start = std::chrono::steady_clock::now();
+    // Without --stats the matrices are skipped, not read: a full-size file answers at once.
+    load.headerOnly = !stats;
     const Ubo2014Factors f = readUbo2014(input, load);
     const double readSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const bool fmf = f.model == FactorModel::Fmf;
     std::error_code ec;
     const std::uint64_t fileBytes = std::filesystem::file_size(input, ec);
+    // FactoredBtf::factorBytes() as it would be after a full read (U rows x K, texels x K, S).
+    std::uint64_t factorValues = 0;
+    for (const BtfFactor& factor : f.factors)
+        factorValues +=
+            (f.imageCount() * (fmf ? 3 : 1) + f.texelCount()) * std::uint64_t(factor.U.cols()) +
+            std::uint64_t(factor.S.size());
+    const std::uint64_t factorBytes = factorValues * sizeof(float);
     nlohmann::json out = {
         {"file", input},
         {"format", fmf ? "UBO2014 FMF" : "UBO2014 DFMF"},
@@ -177,7 +186,7 @@ void infoFactored(const std::string& input, bool json, bool stats, const LoadOpt
         {"scalar", scalarName(f.scalarSize)},
         {"cosine", f.cosine},
         {"file_bytes", fileBytes},
-        {"factor_bytes", f.factorBytes()},
+        {"factor_bytes", factorBytes},
         {"decoded_float_bytes", f.decodedBytes()},
         {"decoded_half_bytes", f.decodedBytes() / 2},
         {"meta",
@@ -236,10 +245,11 @@ void infoFactored(const std::string& input, bool json, bool stats, const LoadOpt
                   << colorModelName(f.colorModel) << ")\n";
     std::cout << "cosine:   " << (f.cosine ? "in the data (divided out when decoding)" : "no")
               << "\n"
-              << "bytes:    " << formatBytes(fileBytes) << " file, " << formatBytes(f.factorBytes())
+              << "bytes:    " << formatBytes(fileBytes) << " file, " << formatBytes(factorBytes)
               << " factors as float; decoded " << formatBytes(f.decodedBytes()) << " as float, "
               << formatBytes(f.decodedBytes() / 2) << " as half\n"
-              << std::setprecision(2) << "read:     " << readSeconds << " s (nothing decoded)\n"
+              << std::setprecision(2) << "read:     " << readSeconds
+              << (stats ? " s (factors, nothing decoded)\n" : " s (header, factors skipped)\n")
               << std::setprecision(4);
     if (stats) {
         printStats(out);
