@@ -129,7 +129,6 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFactors(FactoredBtf factors,
                                                    MaterialTexture::PixelKind storage) {
     osg::ref_ptr<FmfMaterial> m = new FmfMaterial;
     m->setFactors(std::move(factors), storage);
-    m->sourceFile = m->_factors.source;
     return m;
 }
 
@@ -340,8 +339,10 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(const FittedMaterial& file) {
             }
         }
         if (values.size() != n)
-            fail(file.source, "parameter '" + key + "' must be " + std::to_string(n) +
-                                  " comma-separated numbers, got '" + file.parameter(key) + "'");
+            fail(file.source, "parameter '" + key + "' must be " +
+                                  (n == 1 ? std::string("a number")
+                                          : std::to_string(n) + " comma-separated numbers") +
+                                  ", got '" + file.parameter(key) + "'");
         return values;
     };
     const std::vector<float> ks = numbers("components", fmf ? 1 : 3);
