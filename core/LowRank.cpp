@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
 #include <string>
 
@@ -136,9 +137,14 @@ TruncatedSvd truncatedSvd(const float* matrix, std::size_t rows, std::size_t col
 
 namespace {
 
-/** The passes over a streamed matrix: each reads every row block once, in parallel. */
+/** The passes over a streamed matrix: each reads every row block once, in parallel. Sums over
+ *  blocks go into a fixed number of chunks of consecutive blocks, each summed in order, and the
+ *  chunks are added in order: the result does not depend on how TBB schedules the blocks, so the
+ *  fit is deterministic (per-thread sums were not, in the last bits). */
 class StreamedPasses {
 public:
+    static constexpr std::size_t kChunks = 4;
+
     StreamedPasses(const RowBlockSource& a, const StreamedSvdOptions& options)
         : _a(a), _options(options) {
         _blocks = (a.rows + a.blockRows - 1) / a.blockRows;
@@ -147,57 +153,64 @@ public:
     /** Y = A X (rows x k) for X (cols x k); with `squares`, also ||A||_F^2. */
     MatrixF times(const MatrixF& x, double* squares = nullptr) const {
         MatrixF y(Eigen::Index(_a.rows), x.cols());
-        tbb::enumerable_thread_specific<double> partial(0.0);
-        forEachBlock([&](std::size_t first, const MatrixF& block) {
+        std::vector<double> partial(kChunks, 0.0);
+        forEachBlock([&](std::size_t chunk, std::size_t first, const MatrixF& block) {
             y.middleRows(Eigen::Index(first), block.cols()).noalias() = block.transpose() * x;
-            if (squares) partial.local() += block.cast<double>().squaredNorm();
+            if (squares) partial[chunk] += block.cast<double>().squaredNorm();
         });
-        if (squares) *squares = partial.combine(std::plus<double>());
+        if (squares) *squares = std::accumulate(partial.begin(), partial.end(), 0.0);
         return y;
     }
 
-    /** Z = A^T Y (cols x k) for Y (rows x k): per-thread sums of the blocks' products. */
+    /** Z = A^T Y (cols x k) for Y (rows x k). */
     MatrixD transposedTimes(const MatrixF& y) const {
-        // Float per thread (a few hundred blocks each: rounding ~1e-5 relative at worst, far
-        // below what the subspace iteration needs), the threads' sums in double.
-        tbb::enumerable_thread_specific<MatrixF> sums(
-            [&] { return MatrixF::Zero(Eigen::Index(_a.cols), y.cols()); });
-        forEachBlock([&](std::size_t first, const MatrixF& block) {
-            sums.local().noalias() += block * y.middleRows(Eigen::Index(first), block.cols());
+        // Float per chunk (a few hundred blocks each: rounding ~1e-5 relative at worst, far below
+        // what the subspace iteration needs), the chunks' sums in double.
+        std::vector<MatrixF> sums(kChunks);
+        forEachBlock([&](std::size_t chunk, std::size_t first, const MatrixF& block) {
+            MatrixF& sum = sums[chunk];
+            if (sum.size() == 0) sum = MatrixF::Zero(Eigen::Index(_a.cols), y.cols());
+            sum.noalias() += block * y.middleRows(Eigen::Index(first), block.cols());
         });
         MatrixD z = MatrixD::Zero(Eigen::Index(_a.cols), y.cols());
-        for (const MatrixF& s : sums) z += s.cast<double>();
+        for (const MatrixF& s : sums)
+            if (s.size() != 0) z += s.cast<double>();
         return z;
     }
 
     /** G = A^T A (cols x cols), lower triangle, in double. */
     MatrixD gram() const {
         const Eigen::Index n = Eigen::Index(_a.cols);
-        tbb::enumerable_thread_specific<MatrixD> sums([&] { return MatrixD::Zero(n, n); });
-        forEachBlock([&](std::size_t, const MatrixF& block) {
-            sums.local().selfadjointView<Eigen::Lower>().rankUpdate(block.cast<double>());
+        std::vector<MatrixD> sums(kChunks);
+        forEachBlock([&](std::size_t chunk, std::size_t, const MatrixF& block) {
+            MatrixD& sum = sums[chunk];
+            if (sum.size() == 0) sum = MatrixD::Zero(n, n);
+            sum.selfadjointView<Eigen::Lower>().rankUpdate(block.cast<double>());
         });
         MatrixD g = MatrixD::Zero(n, n);
-        for (const MatrixD& s : sums) g += s;
+        for (const MatrixD& s : sums)
+            if (s.size() != 0) g += s;
         return g;
     }
 
 private:
+    /** f(chunk, first row, block) for every block; a chunk's blocks in order on one thread. */
     template <typename F>
     void forEachBlock(F&& f) const {
         tbb::enumerable_thread_specific<MatrixF> scratch;
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, _blocks, 1),
-                          [&](const tbb::blocked_range<std::size_t>& range) {
-                              MatrixF& block = scratch.local();
-                              for (std::size_t b = range.begin(); b != range.end(); ++b) {
-                                  const std::size_t first = b * _a.blockRows;
-                                  const std::size_t count = std::min(_a.blockRows, _a.rows - first);
-                                  block.resize(Eigen::Index(_a.cols), Eigen::Index(count));
-                                  _a.fill(first, count, block.data());
-                                  f(first, block);
-                                  if (_options.progress) _options.progress(count);
-                              }
-                          });
+        tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t chunk) {
+            MatrixF& block = scratch.local();
+            const std::size_t begin = _blocks * chunk / kChunks,
+                              end = _blocks * (chunk + 1) / kChunks;
+            for (std::size_t b = begin; b < end; ++b) {
+                const std::size_t first = b * _a.blockRows;
+                const std::size_t count = std::min(_a.blockRows, _a.rows - first);
+                block.resize(Eigen::Index(_a.cols), Eigen::Index(count));
+                _a.fill(first, count, block.data());
+                f(chunk, first, block);
+                if (_options.progress) _options.progress(count);
+            }
+        });
     }
 
     const RowBlockSource& _a;

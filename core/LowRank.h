@@ -84,7 +84,8 @@ struct StreamedSvdOptions {
 };
 
 /** Truncated SVD of a streamed matrix, 1 <= rank <= min(rows, cols), in parallel over row blocks
- *  (TBB, one block of scratch per thread; Eigen single-threaded inside). Returns u (rows x rank),
+ *  (TBB, one block of scratch per thread, 4 fixed chunks of blocks summed in order so results are
+ *  deterministic; Eigen single-threaded inside). Returns u (rows x rank),
  *  v (cols x rank), the leading singular values (all min(rows, cols) on the Gram path, the
  *  rank + oversampling estimated ones on the randomised path) and totalSquared. Components of
  *  singular values that are zero up to rounding are zero columns. Throws Error on invalid sizes. */

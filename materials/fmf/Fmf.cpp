@@ -129,7 +129,6 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFactors(FactoredBtf factors,
                                                    MaterialTexture::PixelKind storage) {
     osg::ref_ptr<FmfMaterial> m = new FmfMaterial;
     m->setFactors(std::move(factors), storage);
-    m->sourceFile = m->_factors.source;
     return m;
 }
 
@@ -340,8 +339,10 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(const FittedMaterial& file) {
             }
         }
         if (values.size() != n)
-            fail(file.source, "parameter '" + key + "' must be " + std::to_string(n) +
-                                  " comma-separated numbers, got '" + file.parameter(key) + "'");
+            fail(file.source, "parameter '" + key + "' must be " +
+                                  (n == 1 ? std::string("a number")
+                                          : std::to_string(n) + " comma-separated numbers") +
+                                  ", got '" + file.parameter(key) + "'");
         return values;
     };
     const std::vector<float> ks = numbers("components", fmf ? 1 : 3);
@@ -554,21 +555,20 @@ const bool registered = registerMethod([] {
     };
     m.createInstance = []() -> osg::Object* { return new FmfMaterial; };
     m.shaderCost = [](const Material& material) {
-        // shaders/fmf.frag. View + light lookups; building the 9 combinations: weight product,
-        // test, row and layer address 3 each (5 x 9). Shared SxV (fmf): per group of 4
-        // components, 1 SxV fetch and per channel 9 U fetches with a multiply-add each, the dot
-        // and its add (3 x (9 x 2 + 2)); per channel (dfmf): per group 1 SxV fetch, 9 U fetches
-        // with multiply-add, dot + add. Decode: up to 8 (model 11: exp, 2 products and YUV),
-        // cosine test and divide 3.
+        // shaders/fmf.frag. View + light lookups 2 x 11; the 9 combinations: weight product,
+        // test, row address, count (4 x 9); decode at worst (model 11): 5 model tests, exp, 3
+        // adds, 2 products, YUV 8; cosine: 3 tests, divide, multiply. Shared SxV (fmf): per group
+        // of 4 components 1 SxV fetch and per channel 9 x (U fetch, address add, multiply, add)
+        // + dot + add; per channel (dfmf): per group the same for one channel + the layer add.
         const auto& fmf = static_cast<const FmfMaterial&>(material);
         const bool shared = fmf.factors().model == FactorModel::Fmf;
         const int g = shared ? fmf.groups(0) : fmf.groups(0) + fmf.groups(1) + fmf.groups(2);
-        const int alu = 2 * ShaderCost::kLookupAlu + 45 + (shared ? 60 * g : 20 * g) + 11;
+        const int alu = 2 * ShaderCost::kLookupAlu + 36 + 19 + 5 + (shared ? 87 * g : 30 * g);
         const int tex = 2 * ShaderCost::kLookupTex + (shared ? 28 * g : 10 * g);
         return ShaderCost::ofEvaluate(
             alu, tex,
-            shared ? "ALU 60g+78, TEX 28g+4 (g = components / 4)"
-                   : "ALU 20g+78, TEX 10g+4 (g = sum of the channels' components / 4)");
+            shared ? "ALU 87g+82, TEX 28g+4 (g = components / 4)"
+                   : "ALU 30g+82, TEX 10g+4 (g = sum of the channels' components / 4)");
     };
     // Seed 003 is the latest of the papers: last in the paper order.
     m.order = 70;
