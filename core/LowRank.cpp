@@ -3,11 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
+#include <random>
 #include <string>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 
 #include "core/Error.h"
 
@@ -39,6 +45,12 @@ SymmetricEigen symmetricEigen(const double* matrix, int n) {
 }
 
 double TruncatedSvd::residualSquared() const {
+    if (totalSquared >= 0) {
+        double kept = 0;
+        for (std::size_t i = 0; i < std::size_t(rank) && i < singularValues.size(); ++i)
+            kept += singularValues[i] * singularValues[i];
+        return std::max(0.0, totalSquared - kept);
+    }
     double sum = 0;
     for (std::size_t i = std::size_t(rank); i < singularValues.size(); ++i)
         sum += singularValues[i] * singularValues[i];
@@ -120,6 +132,166 @@ TruncatedSvd truncatedSvd(const float* matrix, std::size_t rows, std::size_t col
     const MatrixF v = (wide ? otherSide : gramSide).cast<float>();
     svd.u.assign(u.data(), u.data() + u.size());
     svd.v.assign(v.data(), v.data() + v.size());
+    return svd;
+}
+
+namespace {
+
+/** The passes over a streamed matrix: each reads every row block once, in parallel. Sums over
+ *  blocks go into a fixed number of chunks of consecutive blocks, each summed in order, and the
+ *  chunks are added in order: the result does not depend on how TBB schedules the blocks, so the
+ *  fit is deterministic (per-thread sums were not, in the last bits). */
+class StreamedPasses {
+public:
+    static constexpr std::size_t kChunks = 4;
+
+    StreamedPasses(const RowBlockSource& a, const StreamedSvdOptions& options)
+        : _a(a), _options(options) {
+        _blocks = (a.rows + a.blockRows - 1) / a.blockRows;
+    }
+
+    /** Y = A X (rows x k) for X (cols x k); with `squares`, also ||A||_F^2. */
+    MatrixF times(const MatrixF& x, double* squares = nullptr) const {
+        MatrixF y(Eigen::Index(_a.rows), x.cols());
+        std::vector<double> partial(kChunks, 0.0);
+        forEachBlock([&](std::size_t chunk, std::size_t first, const MatrixF& block) {
+            y.middleRows(Eigen::Index(first), block.cols()).noalias() = block.transpose() * x;
+            if (squares) partial[chunk] += block.cast<double>().squaredNorm();
+        });
+        if (squares) *squares = std::accumulate(partial.begin(), partial.end(), 0.0);
+        return y;
+    }
+
+    /** Z = A^T Y (cols x k) for Y (rows x k). */
+    MatrixD transposedTimes(const MatrixF& y) const {
+        // Float per chunk (a few hundred blocks each: rounding ~1e-5 relative at worst, far below
+        // what the subspace iteration needs), the chunks' sums in double.
+        std::vector<MatrixF> sums(kChunks);
+        forEachBlock([&](std::size_t chunk, std::size_t first, const MatrixF& block) {
+            MatrixF& sum = sums[chunk];
+            if (sum.size() == 0) sum = MatrixF::Zero(Eigen::Index(_a.cols), y.cols());
+            sum.noalias() += block * y.middleRows(Eigen::Index(first), block.cols());
+        });
+        MatrixD z = MatrixD::Zero(Eigen::Index(_a.cols), y.cols());
+        for (const MatrixF& s : sums)
+            if (s.size() != 0) z += s.cast<double>();
+        return z;
+    }
+
+    /** G = A^T A (cols x cols), lower triangle, in double. */
+    MatrixD gram() const {
+        const Eigen::Index n = Eigen::Index(_a.cols);
+        std::vector<MatrixD> sums(kChunks);
+        forEachBlock([&](std::size_t chunk, std::size_t, const MatrixF& block) {
+            MatrixD& sum = sums[chunk];
+            if (sum.size() == 0) sum = MatrixD::Zero(n, n);
+            sum.selfadjointView<Eigen::Lower>().rankUpdate(block.cast<double>());
+        });
+        MatrixD g = MatrixD::Zero(n, n);
+        for (const MatrixD& s : sums)
+            if (s.size() != 0) g += s;
+        return g;
+    }
+
+private:
+    /** f(chunk, first row, block) for every block; a chunk's blocks in order on one thread. */
+    template <typename F>
+    void forEachBlock(F&& f) const {
+        tbb::enumerable_thread_specific<MatrixF> scratch;
+        tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t chunk) {
+            MatrixF& block = scratch.local();
+            const std::size_t begin = _blocks * chunk / kChunks,
+                              end = _blocks * (chunk + 1) / kChunks;
+            for (std::size_t b = begin; b < end; ++b) {
+                const std::size_t first = b * _a.blockRows;
+                const std::size_t count = std::min(_a.blockRows, _a.rows - first);
+                block.resize(Eigen::Index(_a.cols), Eigen::Index(count));
+                _a.fill(first, count, block.data());
+                f(chunk, first, block);
+                if (_options.progress) _options.progress(count);
+            }
+        });
+    }
+
+    const RowBlockSource& _a;
+    const StreamedSvdOptions& _options;
+    std::size_t _blocks = 0;
+};
+
+/** Orthonormal basis of the columns of m (thin Householder QR, in double). */
+MatrixD orthonormalise(const MatrixD& m) {
+    Eigen::HouseholderQR<MatrixD> qr(m);
+    return qr.householderQ() * MatrixD::Identity(m.rows(), m.cols());
+}
+
+}  // namespace
+
+TruncatedSvd streamedTruncatedSvd(const RowBlockSource& a, int rank,
+                                  const StreamedSvdOptions& options) {
+    const std::size_t small = std::min(a.rows, a.cols);
+    if (a.rows == 0 || a.cols == 0 || a.blockRows == 0 || !a.fill)
+        throw Error("streamedTruncatedSvd: empty matrix");
+    if (rank < 1 || std::size_t(rank) > small)
+        throw Error("streamedTruncatedSvd: rank " + std::to_string(rank) + " outside 1.." +
+                    std::to_string(small));
+    const StreamedPasses passes(a, options);
+    const Eigen::Index rows = Eigen::Index(a.rows), cols = Eigen::Index(a.cols);
+    TruncatedSvd svd;
+    svd.rows = a.rows;
+    svd.cols = a.cols;
+    svd.rank = rank;
+
+    if (a.cols <= options.gramColumns) {
+        // Exact: A^T A = V S^2 V^T, then U = A V S^-1 (the cut-off as in truncatedSvd).
+        const MatrixD g = passes.gram();
+        svd.totalSquared = g.diagonal().sum();
+        const SymmetricEigen eigen = symmetricEigen(g.data(), int(cols));
+        svd.singularValues.resize(small);
+        for (std::size_t i = 0; i < small; ++i)
+            svd.singularValues[i] = std::sqrt(std::max(0.0, eigen.values[i]));
+        const double cutoff = std::max(0.0, eigen.values[0]) * double(cols) * double(rows) *
+                              std::numeric_limits<double>::epsilon();
+        MatrixF v = MatrixF::Zero(cols, rank);
+        for (int k = 0; k < rank && eigen.values[std::size_t(k)] > cutoff; ++k)
+            for (Eigen::Index r = 0; r < cols; ++r)
+                v(r, k) = float(eigen.vectors[std::size_t(k) * std::size_t(cols) + std::size_t(r)]);
+        MatrixF u = passes.times(v);
+        for (int k = 0; k < rank; ++k) {
+            const double s = svd.singularValues[std::size_t(k)];
+            if (eigen.values[std::size_t(k)] > cutoff)
+                u.col(k) /= float(s);
+            else
+                u.col(k).setZero();
+        }
+        svd.u.assign(u.data(), u.data() + u.size());
+        svd.v.assign(v.data(), v.data() + v.size());
+        return svd;
+    }
+
+    // Randomised: Q spans A's leading column space (subspace iteration from a Gaussian start),
+    // then the small SVD of B = Q^T A gives the factors. Oversampling and the iterations make
+    // the result's error indistinguishable from the optimum on data whose spectrum decays.
+    const Eigen::Index l = Eigen::Index(std::min(small, std::size_t(rank + options.oversampling)));
+    std::mt19937 rng(options.seed);
+    std::normal_distribution<float> gauss(0.0f, 1.0f);
+    MatrixF omega(cols, l);
+    for (Eigen::Index j = 0; j < l; ++j)
+        for (Eigen::Index i = 0; i < cols; ++i) omega(i, j) = gauss(rng);
+    double total = 0;
+    MatrixF q = orthonormalise(passes.times(omega, &total).cast<double>()).cast<float>();
+    svd.totalSquared = total;
+    for (int it = 0; it < options.powerIterations; ++it) {
+        const MatrixF z = orthonormalise(passes.transposedTimes(q)).cast<float>();
+        q = orthonormalise(passes.times(z).cast<double>()).cast<float>();
+    }
+    // B^T = A^T Q (cols x l); its SVD B^T = Vb Sb Ub^T gives A ~ (Q Ub) Sb Vb^T.
+    const MatrixF bt = passes.transposedTimes(q).cast<float>();
+    const TruncatedSvd small2 = truncatedSvd(bt.data(), std::size_t(cols), std::size_t(l), rank);
+    svd.singularValues = small2.singularValues;
+    const Eigen::Map<const MatrixF> ub(small2.v.data(), l, rank);
+    const MatrixF u = q * ub;
+    svd.u.assign(u.data(), u.data() + u.size());
+    svd.v = small2.u;
     return svd;
 }
 

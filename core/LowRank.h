@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 namespace osgBTF {
@@ -33,8 +34,12 @@ struct TruncatedSvd {
     std::vector<float> u;                ///< rows x rank, column-major, orthonormal columns
     std::vector<float> v;                ///< cols x rank, column-major, orthonormal columns
     std::vector<double> singularValues;  ///< ALL min(rows, cols) of them, descending
+    /** ||A||_F^2 when known (streamedTruncatedSvd sets it; its randomised path estimates only the
+     *  leading singular values), else -1. */
+    double totalSquared = -1;
     /** sum of the squared singular values beyond `rank`: the squared Frobenius error of the best
-     *  rank-`rank` approximation. */
+     *  rank-`rank` approximation (with totalSquared: totalSquared minus the kept squares, the
+     *  error of the returned factors). */
     double residualSquared() const;
 };
 
@@ -50,5 +55,41 @@ TruncatedSvd truncatedSvd(const float* matrix, std::size_t rows, std::size_t col
  *  zero columns of A get zero coefficients instead of a failure. Returns X (n x m, column-major).
  *  Accurate when A's columns are well conditioned (e.g. near-orthogonal bases). */
 std::vector<float> leastSquares(const float* a, std::size_t rows, int n, const float* b, int m);
+
+/** A matrix A (rows x cols) that is read in blocks of rows and never stored whole (a measured BTF
+ *  of gigabytes). fill(first, count, out) writes rows [first, first + count) of A into `out` as a
+ *  cols x count column-major matrix (row r of A becomes column r - first). It is called with
+ *  first a multiple of blockRows and count = blockRows (less for the last block), from several
+ *  threads at once. */
+struct RowBlockSource {
+    std::size_t rows = 0, cols = 0;
+    std::size_t blockRows = 1;
+    std::function<void(std::size_t first, std::size_t count, float* out)> fill;
+};
+
+struct StreamedSvdOptions {
+    /** Up to this many columns: exact, through the cols x cols Gram matrix (accumulated in double
+     *  over the row blocks), then one more pass for U. Beyond: randomised. */
+    std::size_t gramColumns = 512;
+    /** Randomised range finder (Halko, Martinsson, Tropp 2011, algorithms 4.4 and 5.1): rank +
+     *  oversampling Gaussian test vectors, powerIterations subspace iterations (each
+     *  re-orthonormalised), seeded and therefore deterministic. */
+    int oversampling = 16;
+    int powerIterations = 2;
+    unsigned seed = 1;
+    /** Called after each block with the rows it covered (progress over all passes: passes()). */
+    std::function<void(std::size_t rows)> progress;
+    /** Passes over A the chosen path makes, for progress totals. */
+    int passes(std::size_t cols) const { return cols <= gramColumns ? 2 : 2 * powerIterations + 2; }
+};
+
+/** Truncated SVD of a streamed matrix, 1 <= rank <= min(rows, cols), in parallel over row blocks
+ *  (TBB, one block of scratch per thread, 4 fixed chunks of blocks summed in order so results are
+ *  deterministic; Eigen single-threaded inside). Returns u (rows x rank),
+ *  v (cols x rank), the leading singular values (all min(rows, cols) on the Gram path, the
+ *  rank + oversampling estimated ones on the randomised path) and totalSquared. Components of
+ *  singular values that are zero up to rounding are zero columns. Throws Error on invalid sizes. */
+TruncatedSvd streamedTruncatedSvd(const RowBlockSource& a, int rank,
+                                  const StreamedSvdOptions& options = {});
 
 }  // namespace osgBTF

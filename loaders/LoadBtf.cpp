@@ -12,14 +12,32 @@
 
 namespace osgBTF {
 
+namespace {
+std::string lowerExtension(const std::string& path) {
+    std::string extension = std::filesystem::path(path).extension().string();
+    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return extension;
+}
+}  // namespace
+
+bool isUbo2014File(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) return false;
+    const std::string extension = lowerExtension(path);
+    if (extension == ".btf") return true;
+    if (extension == ".zip") return false;
+    std::ifstream in(path, std::ios::binary);
+    char first = 0;
+    return in.get(first) && first == '!';
+}
+
 MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options) {
     namespace fs = std::filesystem;
     std::error_code ec;
     const fs::file_status status = fs::status(path, ec);
     if (status.type() == fs::file_type::not_found) fail(path, "no such file");
     if (ec) fail(path, "cannot open: " + ec.message());
-    std::string extension = fs::path(path).extension().string();
-    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    const std::string extension = lowerExtension(path);
 
     MeasuredBtf btf;
     if (status.type() == fs::file_type::directory) {

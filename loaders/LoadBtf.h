@@ -14,4 +14,9 @@ namespace osgBTF {
  *  "file is empty", "cannot open: Permission denied". */
 MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options = {});
 
+/** Whether loadMeasuredBtf would read `path` as a UBO2014 file: a file (not a folder) named
+ *  ".btf" (any case), or not named ".zip" and starting with '!'. False for what cannot be opened;
+ *  says nothing about whether the file is valid. */
+bool isUbo2014File(const std::string& path);
+
 }  // namespace osgBTF

@@ -21,6 +21,11 @@ struct LoadOptions {
     /** Label of the progress bar (osgBTF::Progress draws only when enabled globally); empty means
      *  "loading <file name>". */
     std::string progressLabel;
+
+    /** readUbo2014 only: read everything but the factor matrices U and SxV, which are skipped
+     *  (every size still checked against the file) and left with 0 rows and their component
+     *  count as columns (S is read). For describing a file (`btf info`) in milliseconds. */
+    bool headerOnly = false;
 };
 
 }  // namespace osgBTF

@@ -99,9 +99,15 @@ float toFloat(const unsigned char* p, int scalarSize) {
     return float(d);
 }
 
-/** Reads rows x stride scalars, keeping the first `use` of each row. */
+/** Reads rows x stride scalars, keeping the first `use` of each row. With `skip` (a header-only
+ *  read) it only moves past them and gives an empty matrix of `use` columns. */
 FactorMatrix readMatrix(Reader& in, std::uint64_t rows, std::uint64_t stride, std::uint64_t use,
-                        int scalarSize, const std::string& field) {
+                        int scalarSize, const std::string& field, bool skip = false) {
+    if (skip) {
+        in.need((long double)rows * stride * scalarSize, field);
+        in.seek(in.position() + rows * stride * std::uint64_t(scalarSize));
+        return FactorMatrix(0, static_cast<Eigen::Index>(use));
+    }
     FactorMatrix m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(use));
     const std::uint64_t rowBytes = stride * std::uint64_t(scalarSize);
     const std::uint64_t rowsPerChunk =
@@ -306,7 +312,7 @@ void readDirections(Reader& in, Ubo2014Factors& f) {
     }
 }
 
-void readDfmf(Reader& in, Ubo2014Factors& f) {
+void readDfmf(Reader& in, Ubo2014Factors& f, bool headerOnly) {
     f.maxComponents = in.u32("maximum component count");
     f.colorModel = in.get<std::int32_t>("colour model");
     FactoredBtf::checkColorModel(in.path(), f.colorModel);
@@ -330,17 +336,18 @@ void readDfmf(Reader& in, Ubo2014Factors& f) {
                                 std::to_string(cols) +
                                 "; expected views*lights = " + std::to_string(abrdfs) +
                                 " and width*height = " + std::to_string(texels));
-        guardFactors(in, rows, cols, k, k, scalarSize, channel + " factors");
+        if (!headerOnly) guardFactors(in, rows, cols, k, k, scalarSize, channel + " factors");
+        in.need(((long double)rows + cols + 1) * k * scalarSize, channel + " factors");
         BtfFactor factor;
         factor.S = readVector(in, k, k, scalarSize, channel + " S");
-        factor.U = readMatrix(in, rows, k, k, scalarSize, channel + " U");
-        factor.SxV = readMatrix(in, cols, k, k, scalarSize, channel + " SxV");
+        factor.U = readMatrix(in, rows, k, k, scalarSize, channel + " U", headerOnly);
+        factor.SxV = readMatrix(in, cols, k, k, scalarSize, channel + " SxV", headerOnly);
         if (transposed) std::swap(factor.U, factor.SxV);
         f.factors.push_back(std::move(factor));
     }
 }
 
-void readFmf(Reader& in, Ubo2014Factors& f) {
+void readFmf(Reader& in, Ubo2014Factors& f, bool headerOnly) {
     f.headerVersion = f.extendedHeader ? in.get<std::uint8_t>("FMF header version") : 0;
     if (f.headerVersion >= 3)
         fail(in.path(), "FMF header version " + std::to_string(f.headerVersion) +
@@ -372,11 +379,12 @@ void readFmf(Reader& in, Ubo2014Factors& f) {
                             " and width*height = " + std::to_string(texels));
     // btflib: K_b is the stride of every row and the length of S; the first min(K_a, K_b) count.
     const std::uint32_t use = std::min(kUsed, stride);
-    guardFactors(in, rows, cols, stride, use, scalarSize, "factors");
+    if (!headerOnly) guardFactors(in, rows, cols, stride, use, scalarSize, "factors");
+    in.need(((long double)rows + cols + 1) * stride * scalarSize, "factors");
     BtfFactor factor;
     factor.S = readVector(in, stride, use, scalarSize, "S");
-    factor.U = readMatrix(in, rows, stride, use, scalarSize, "U");
-    factor.SxV = readMatrix(in, cols, stride, use, scalarSize, "SxV");
+    factor.U = readMatrix(in, rows, stride, use, scalarSize, "U", headerOnly);
+    factor.SxV = readMatrix(in, cols, stride, use, scalarSize, "SxV", headerOnly);
     f.factors.push_back(std::move(factor));
 }
 
@@ -413,7 +421,7 @@ void putAngle(std::string& out, const Direction& d) {
 
 }  // namespace
 
-Ubo2014Factors readUbo2014(const std::string& path, const LoadOptions&) {
+Ubo2014Factors readUbo2014(const std::string& path, const LoadOptions& options) {
     Reader in(path);
     if (in.size() == 0) fail(path, "file is empty");
     Ubo2014Factors f;
@@ -426,9 +434,9 @@ Ubo2014Factors readUbo2014(const std::string& path, const LoadOptions&) {
     readMeta(in, f);
     readDirections(in, f);
     if (f.model == FactorModel::Dfmf)
-        readDfmf(in, f);
+        readDfmf(in, f, options.headerOnly);
     else
-        readFmf(in, f);
+        readFmf(in, f, options.headerOnly);
     if (in.remaining() != 0)
         fail(path, std::to_string(in.remaining()) +
                        " unexpected trailing bytes after the last factor matrix");
@@ -550,6 +558,37 @@ void writeUbo2014(const Ubo2014Factors& f, const std::string& path) {
     std::error_code ec;
     fs::rename(tmp, path, ec);
     if (ec) fail(path, "cannot rename " + tmp + ": " + ec.message());
+}
+
+void writeFactorsAsUbo2014(const FactoredBtf& factors, const std::string& path, int scalarSize,
+                           const Ubo2014Factors* meta) {
+    if (scalarSize != 2 && scalarSize != 4)
+        fail(path,
+             "cannot write scalar size " + std::to_string(scalarSize) + " (2 half or 4 float)");
+    factors.validate();
+    Ubo2014Factors f;
+    if (meta) {
+        f.measurementSetup = meta->measurementSetup;
+        f.imageSensor = meta->imageSensor;
+        f.lightSource = meta->lightSource;
+        f.ppmm = meta->ppmm;
+        f.rgbScale = meta->rgbScale;
+        f.xml = meta->xml;
+    }
+    static_cast<FactoredBtf&>(f) = factors;
+    f.metaVersion = 4;
+    f.channelNames = {"R", "G", "B"};
+    f.hasRotations = false;
+    f.scalarSize = scalarSize;
+    if (f.model == FactorModel::Fmf) {
+        f.extendedHeader = true;
+        f.headerVersion = 1;  // the DRR field, no height map
+    } else {
+        int k = 0;
+        for (const BtfFactor& factor : f.factors) k = std::max(k, int(factor.U.cols()));
+        f.maxComponents = std::uint32_t(k);
+    }
+    writeUbo2014(f, path);
 }
 
 }  // namespace osgBTF

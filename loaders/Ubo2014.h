@@ -56,4 +56,13 @@ MeasuredBtf loadUbo2014(const std::string& path, const LoadOptions& options = {}
  *  atomically (path + ".tmp", then renamed). */
 void writeUbo2014(const Ubo2014Factors& factors, const std::string& path);
 
+/** Writes a factorisation made elsewhere (e.g. a fitted `fmf` material's, FmfMaterial::factors)
+ *  as a .btf file in the form the format's reference readers expect (formats.md 2.9): FMF as
+ *  "!FMF12FCE" with header version 1 (its DRR flag, no height map), DFMF as "!DFMF08FC"; meta
+ *  version 4 with channels R, G, B and the factors' cosine flag; scalars of `scalarSize` (2 half,
+ *  4 float). The measurement meta data (setup, sensor, light source, ppmm, rgb scale, XML) come
+ *  from `meta` when given (the input file's, say), else stay empty. Atomic like writeUbo2014. */
+void writeFactorsAsUbo2014(const FactoredBtf& factors, const std::string& path, int scalarSize,
+                           const Ubo2014Factors* meta = nullptr);
+
 }  // namespace osgBTF

@@ -17,20 +17,23 @@
 #include <osgUtil/TangentSpaceGenerator>
 
 #include "core/Error.h"
+#include "scene/OpenMaterial.h"
 
 namespace osgBTF {
 
 // Materials loaded from files are shared while anything holds them: two nodes naming the same
 // file use one Material, hence one StateSet and one copy of its textures per context.
-osg::ref_ptr<Material> loadSharedMaterial(const std::string& path) {
+osg::ref_ptr<Material> loadSharedMaterial(const std::string& path,
+                                          MaterialTexture::PixelKind factorStorage) {
     namespace fs = std::filesystem;
     std::error_code error;
     fs::path canonical = fs::weakly_canonical(path, error);
     if (error) canonical = path;
     const auto size = fs::file_size(canonical, error);
     const auto time = fs::last_write_time(canonical, error);
-    const std::string stamp =
-        std::to_string(size) + ":" + std::to_string(time.time_since_epoch().count());
+    const std::string stamp = std::to_string(size) + ":" +
+                              std::to_string(time.time_since_epoch().count()) + ":" +
+                              std::to_string(int(factorStorage));
 
     static std::mutex mutex;
     static std::map<std::string, std::pair<std::string, osg::observer_ptr<Material>>> loaded;
@@ -41,7 +44,8 @@ osg::ref_ptr<Material> loadSharedMaterial(const std::string& path) {
         if (it != loaded.end() && it->second.first == stamp && it->second.second.lock(material))
             return material;
     }
-    osg::ref_ptr<Material> material = loadMaterial(path);  // outside the lock: may take a while
+    // Outside the lock: may take a while.
+    osg::ref_ptr<Material> material = openMaterial(path, factorStorage);
     std::lock_guard<std::mutex> lock(mutex);
     loaded[canonical.string()] = {stamp, material.get()};
     return material;

@@ -147,10 +147,12 @@ protected:
     mutable std::map<const osg::Camera*, CameraLights> _lightsPerCamera;
 };
 
-/** Loads a fitted-material file, sharing the Material with every earlier load of the same file
- *  (same path, size and modification time) that is still alive. Throws Error like
- *  loadMaterial. */
-osg::ref_ptr<Material> loadSharedMaterial(const std::string& path);
+/** Opens a material file (openMaterial, scene/OpenMaterial.h: a fitted-material file, or a
+ *  UBO2014 .btf as the `fmf` material of its stored factors, textures in `factorStorage`),
+ *  sharing the Material with every earlier open of the same file (same path, size and
+ *  modification time, same storage) that is still alive. Throws Error like loadMaterial. */
+osg::ref_ptr<Material> loadSharedMaterial(
+    const std::string& path, MaterialTexture::PixelKind factorStorage = MaterialTexture::Half);
 
 /** Adds tangents below `node` (see MaterialNode::generateTangents); returns how many geometries
  *  got one. */

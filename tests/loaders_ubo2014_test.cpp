@@ -16,6 +16,7 @@
 #include "core/MeasuredBtf.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
+#include "tests/HandWrittenUbo2014.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
@@ -495,4 +496,181 @@ TEST(LoaderDispatch, BtfByContentAndSource) {
     const MeasuredBtf btf = loadMeasuredBtf(path);
     EXPECT_EQ(btf.source, path);
     expectDecodesToProduct(f, btf, 1e-6);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Files written byte by byte from formats.md (tests/HandWrittenUbo2014.h), not by writeUbo2014:
+// what another implementation of the format writes must read the same.
+
+namespace {
+
+/** decodeUbo2014 of the hand-written file equals the format's formula at every value. Tolerance:
+ *  float factor sums and expf against double, relative 1e-5 (the values are O(1) to O(10)). */
+void expectHandWrittenDecode(const test::HandWrittenBtf& f, const MeasuredBtf& btf) {
+    ASSERT_EQ(btf.width(), f.width);
+    ASSERT_EQ(btf.height(), f.height);
+    ASSERT_EQ(btf.viewCount(), f.views.size());
+    ASSERT_EQ(btf.lightCount(), f.lights.size());
+    double largest = 0;
+    for (int v = 0; v < int(f.views.size()); ++v)
+        for (int l = 0; l < int(f.lights.size()); ++l)
+            for (int yFile = 0; yFile < f.height; ++yFile)
+                for (int x = 0; x < f.width; ++x) {
+                    const auto rgb = f.value(v, l, x, yFile);
+                    const std::size_t texel = std::size_t(f.height - 1 - yFile) * f.width + x;
+                    for (int c = 0; c < 3; ++c) {
+                        largest = std::max(largest, std::abs(rgb[std::size_t(c)]));
+                        ASSERT_NEAR(btf.value(v, l, texel, c), rgb[std::size_t(c)],
+                                    1e-5 * std::max(1.0, std::abs(rgb[std::size_t(c)])))
+                            << "view " << v << " light " << l << " x " << x << " file row " << yFile
+                            << " channel " << c;
+                    }
+                }
+    EXPECT_GT(largest, 0.5);  // the formula was not trivially zero
+}
+
+void expectHandWrittenDirections(const test::HandWrittenBtf& f, const Ubo2014Factors& read) {
+    ASSERT_EQ(read.views.size(), f.views.size());
+    ASSERT_EQ(read.lights.size(), f.lights.size());
+    for (std::size_t i = 0; i < f.views.size(); ++i) {
+        EXPECT_NEAR(read.views[i].theta, f.views[i][0], 1e-3) << "view " << i;
+        EXPECT_NEAR(read.views[i].phi, f.views[i][1], 1e-3) << "view " << i;
+    }
+    for (std::size_t i = 0; i < f.lights.size(); ++i) {
+        EXPECT_NEAR(read.lights[i].theta, f.lights[i][0], 1e-3) << "light " << i;
+        EXPECT_NEAR(read.lights[i].phi, f.lights[i][1], 1e-3) << "light " << i;
+    }
+}
+
+}  // namespace
+
+TEST(Ubo2014HandWritten, DfmfColourModel11WithPerChannelRanks) {
+    TempDir dir;
+    const test::HandWrittenBtf f = test::handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    const Ubo2014Factors read = readUbo2014(path);
+    EXPECT_EQ(read.signature, "!DFMF08FCR");
+    EXPECT_EQ(read.model, FactorModel::Dfmf);
+    EXPECT_EQ(read.colorModel, 11);
+    EXPECT_EQ(read.measurementSetup, "hand-written test dome");
+    EXPECT_EQ(read.xml, "<btf/>");
+    EXPECT_EQ(read.rotations.size(), 2u);
+    EXPECT_FALSE(read.cosine);
+    EXPECT_EQ(read.scalarSize, 4);
+    ASSERT_EQ(read.factors.size(), 3u);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(read.components(c), f.ranks[std::size_t(c)]);
+    expectHandWrittenDirections(f, read);
+    expectHandWrittenDecode(f, decodeUbo2014(read));
+    // value() (what the native material's CPU path builds on) is the same formula.
+    for (int v : {0, 4})
+        for (int l : {1, 9}) {
+            const auto rgb = f.value(v, l, 3, 0);  // file row 0 = the top row, y = height - 1
+            const glm::vec3 got = read.value(std::size_t(v), std::size_t(l), 3, f.height - 1);
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(got[c], rgb[std::size_t(c)], 1e-5 * std::max(1.0, std::abs(rgb[c])));
+        }
+}
+
+TEST(Ubo2014HandWritten, FmfWithDynamicRangeReductionAndCosine) {
+    TempDir dir;
+    const test::HandWrittenBtf f = test::handWrittenFmfDrrCosine();
+    const std::string path = dir.file("fmf-drr-cos.btf");
+    writeTextFile(path, f.bytes);
+    const Ubo2014Factors read = readUbo2014(path);
+    EXPECT_EQ(read.signature, "!FMF12FCE");
+    EXPECT_EQ(read.model, FactorModel::Fmf);
+    EXPECT_EQ(read.headerVersion, 1);
+    EXPECT_TRUE(read.drr());
+    EXPECT_TRUE(read.cosine);
+    EXPECT_EQ(read.scalarSize, 2);
+    EXPECT_EQ(read.heightMapWidth, 0);
+    EXPECT_EQ(read.components(0), 3);
+    expectHandWrittenDirections(f, read);
+    expectHandWrittenDecode(f, decodeUbo2014(read));
+    // Through the dispatcher, half storage: ~3 significant digits.
+    LoadOptions half;
+    half.storage = Storage::Half;
+    const MeasuredBtf btf = loadMeasuredBtf(path, half);
+    const auto rgb = f.value(2, 6, 1, 4);
+    EXPECT_NEAR(btf.value(2, 6, 1, 1), rgb[1], 1e-3 * std::abs(rgb[1]));  // file row 4 = y 0
+}
+
+TEST(Ubo2014HandWritten, BadFilesAreRefusedWithTheirProblem) {
+    TempDir dir;
+    const test::HandWrittenBtf dfmf = test::handWrittenDfmf11();
+    const test::HandWrittenBtf fmf = test::handWrittenFmfDrrCosine();
+    const std::string path = dir.file("bad.btf");
+    auto messageFor = [&](const std::string& bytes) {
+        writeTextFile(path, bytes);
+        return errorOf([&] { readUbo2014(path); });
+    };
+    // Short: one byte missing at the end; the guard sees it before reading the matrices.
+    std::string message = messageFor(fmf.bytes.substr(0, fmf.bytes.size() - 1));
+    EXPECT_NE(
+        message.find(path +
+                     ": unexpected end of file while reading factors: the header "
+                     "announces " +
+                     std::to_string(fmf.bytes.size() - std::size_t(fmf.factorHeaderOffset) - 17) +
+                     " bytes but only " +
+                     std::to_string(fmf.bytes.size() - std::size_t(fmf.factorHeaderOffset) - 18) +
+                     " remain"),
+        std::string::npos)
+        << message;
+    // Long: a trailing byte.
+    message = messageFor(dfmf.bytes + '\0');
+    EXPECT_EQ(message, path + ": 1 unexpected trailing bytes after the last factor matrix");
+    // Wrong sizes: channel 0's U row count one too many.
+    std::string bytes = dfmf.bytes;
+    std::uint32_t rows;
+    std::memcpy(&rows, bytes.data() + dfmf.factorHeaderOffset + 5, 4);
+    EXPECT_EQ(rows, 70u);  // 7 views x 10 lights
+    ++rows;
+    std::memcpy(bytes.data() + dfmf.factorHeaderOffset + 5, &rows, 4);
+    message = messageFor(bytes);
+    EXPECT_EQ(message, path +
+                           ": channel 0: U has 71 rows and SxV 12; expected views*lights = 70 "
+                           "and width*height = 12");
+    // FMF rows must count the colour channels: views*lights*3.
+    bytes = fmf.bytes;
+    std::uint32_t fmfRows = 70;  // views*lights, as a DFMF channel would have
+    std::memcpy(bytes.data() + fmf.factorHeaderOffset + 9, &fmfRows, 4);
+    message = messageFor(bytes);
+    EXPECT_EQ(message, path +
+                           ": U has 70 rows and SxV 15; expected views*lights*3 = 210 and "
+                           "width*height = 15");
+    // Unknown colour model.
+    bytes = dfmf.bytes;
+    const std::int32_t model = 7;
+    std::memcpy(bytes.data() + dfmf.colorModelOffset, &model, 4);
+    message = messageFor(bytes);
+    EXPECT_EQ(message, path +
+                           ": DFMF colour model 7 is not supported (supported: 0 RGB, 1 YUV, "
+                           "3 PCA, 4 YCoCg, 11 exp-YUV)");
+}
+
+TEST(Ubo2014HandWritten, HeaderOnlyReadSkipsTheMatricesButChecksTheirSizes) {
+    TempDir dir;
+    const test::HandWrittenBtf f = test::handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    LoadOptions header;
+    header.headerOnly = true;
+    const Ubo2014Factors read = readUbo2014(path, header);
+    ASSERT_EQ(read.factors.size(), 3u);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(read.components(c), f.ranks[std::size_t(c)]);
+        EXPECT_EQ(read.factors[std::size_t(c)].U.rows(), 0);
+        EXPECT_EQ(read.factors[std::size_t(c)].S.size(), f.ranks[std::size_t(c)]);
+    }
+    EXPECT_EQ(read.colorModel, 11);
+    // A file one byte short or long is refused as by the full read.
+    writeTextFile(path, f.bytes.substr(0, f.bytes.size() - 1));
+    EXPECT_EQ(errorOf([&] {
+                  readUbo2014(path, header);
+              }).rfind(path + ": unexpected end of file while reading channel 2 factors", 0),
+              0u);
+    writeTextFile(path, f.bytes + "x");
+    EXPECT_EQ(errorOf([&] { readUbo2014(path, header); }),
+              path + ": 1 unexpected trailing bytes after the last factor matrix");
 }

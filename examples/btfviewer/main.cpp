@@ -363,8 +363,9 @@ int run(osg::ArgumentParser& arguments) {
     usage->setDescription(
         "btfviewer: views BTF materials with OpenSceneGraph. Each FILE is a scene (.osgt, .osgb, "
         "any model osgDB reads, e.g. the example scenes of btf-examples), a fitted material "
-        "(.btfmat, shown on a sphere or --model), a measured BTF (.btf, .zip: fitted on load and "
-        "cached by osgBTF's plugins, -O \"method=NAME ...\" chooses the fit) or a pseudo-loader "
+        "(.btfmat, shown on a sphere or --model), a UBO2014 .btf (rendered as stored: an fmf "
+        "material of its factors, nothing decoded), a measured BTF (.zip, or a .btf with -O "
+        "\"method=NAME ...\": fitted on load and cached by osgBTF's plugins) or a pseudo-loader "
         "name MODEL.(MATERIAL[,scale=S]).btfmaterial. Several files are laid out side by side. "
         "The keys put any material found on every object. The statistics ('s') show frame, "
         "cull, draw and GPU times; the GPU times need GL_ARB_timer_query (Mesa and the NVIDIA "

@@ -30,6 +30,7 @@ const char* const kPseudoSyntax = "MODEL.(MATERIAL[,scale=S][,KEY=VALUE...]).btf
 /** What the option string asks of these readers. */
 struct Settings {
     std::string method = "lpca";
+    bool methodGiven = false;  // a UBO2014 file without method= opens as stored (fmf)
     std::map<std::string, std::string> values;  // every KEY=VALUE word, method options among them
     float textureScale = 1.0f;
     std::string cacheDir;  // empty: caching off
@@ -60,6 +61,7 @@ Settings parseSettings(const osgDB::Options* options, const std::string& extra =
         const std::string key = word.substr(0, eq), value = word.substr(eq + 1);
         if (key == "method") {
             settings.method = value;
+            settings.methodGiven = true;
         } else if (key == "cache") {
             settings.cacheDir = value == "off" ? std::string() : value;
         } else if (key == "scale") {
@@ -185,6 +187,35 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
     return material;
 }
 
+/** A UBO2014 file without method=: its stored factorisation as an `fmf` material, nothing
+ *  decoded or fitted (scene/OpenMaterial.h). Of the fit options only fmf's `storage` applies. */
+osg::ref_ptr<Material> openStored(const std::string& path, const Settings& settings) {
+    MaterialTexture::PixelKind storage = MaterialTexture::Half;
+    std::string ignored;
+    for (const auto& [key, value] : settings.values) {
+        if (key == "storage") {
+            if (value != "half" && value != "float")
+                throw Error("option storage=" + value +
+                            ": expected half or float (the textures "
+                            "of a UBO2014 file's stored factors)");
+            storage = value == "float" ? MaterialTexture::Float : MaterialTexture::Half;
+            continue;
+        }
+        for (const std::string& name : methodNames())
+            if (findOption(findMethod(name), key)) {
+                ignored += " " + key + "=" + value;
+                break;
+            }
+    }
+    OSG_NOTICE << "osgBTF: " << path
+               << ": opening its stored factorisation as an fmf material (method=NAME fits a "
+                  "method instead)"
+               << (ignored.empty() ? std::string()
+                                   : "; fit options without method= ignored:" + ignored)
+               << std::endl;
+    return loadSharedMaterial(path, storage);
+}
+
 /** Measured BTFs go through the fit; everything else is read as a fitted-material file. */
 bool isMeasured(const std::string& path) {
     const std::string ext = osgDB::getLowerCaseFileExtension(path);
@@ -193,6 +224,7 @@ bool isMeasured(const std::string& path) {
 }
 
 osg::ref_ptr<Material> readMaterial(const std::string& path, const Settings& settings) {
+    if (!settings.methodGiven && isUbo2014File(path)) return openStored(path, settings);
     return isMeasured(path) ? fitMeasured(path, settings) : loadSharedMaterial(path);
 }
 
@@ -226,7 +258,9 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
     if (extension == "btfmat")
         supportsExtension("btfmat", "osgBTF fitted material (OpenEXR inside) -> MaterialNode");
     else if (extension == "btf")
-        supportsExtension("btf", "UBO2014 measured BTF, fitted on load -> MaterialNode");
+        supportsExtension("btf",
+                          "UBO2014 measured BTF: its stored factors as an fmf material, or fitted "
+                          "on load with method= -> MaterialNode");
     else if (extension == "zip")
         supportsExtension("zip", "UBO2003/ATRIUM measured BTF zip, fitted on load -> MaterialNode");
     else if (extension == "btfmaterial")
@@ -234,7 +268,9 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
             "btfmaterial",
             std::string("pseudo-loader: a model under an osgBTF material, ") + kPseudoSyntax);
     if (extension != "btfmat") {
-        supportsOption("method=<name>", "fit method for measured BTFs (default lpca)");
+        supportsOption("method=<name>",
+                       "fit method for measured BTFs (default: lpca; a UBO2014 .btf opens as its "
+                       "stored factors, an fmf material, unless method= is given)");
         // Each fit option once, with what every method that has it makes of it.
         std::map<std::string, std::string> fitOptions;
         for (const std::string& name : methodNamesInOrder())
@@ -287,7 +323,7 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
         // A zip that is no BTF (a model archive, say) is some other plugin's: let osgDB go on.
         if (ext == "zip" && !mayBeUbo2003(path)) return ReadResult::FILE_NOT_HANDLED;
         osg::ref_ptr<Material> material =
-            ext == "btfmat" ? loadSharedMaterial(path) : fitMeasured(path, settings);
+            ext == "btfmat" ? loadSharedMaterial(path) : readMaterial(path, settings);
         osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
         if (!node->getMaterial()) return error(node->getMaterialError());
         node->setTextureScale(settings.textureScale);

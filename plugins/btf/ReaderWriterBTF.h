@@ -7,7 +7,9 @@
  *                                     inside) -> MaterialNode. Files named otherwise
  *                                     (`btf fit -o x.exr`) read as the pseudo-file name
  *                                     x.exr.btfmat.
- *   osgdb_btf          x.btf          a UBO2014 measured BTF, fitted on load -> MaterialNode
+ *   osgdb_btf          x.btf          a UBO2014 measured BTF -> MaterialNode: its stored
+ *                                     factors as an fmf material (nothing decoded or fitted),
+ *                                     or fitted on load when method= is given
  *   osgdb_zip          x.zip          a UBO2003/ATRIUM measured BTF zip, fitted on load
  *   osgdb_btfmaterial  (pseudo-loader) puts a model under a material, all in one file name:
  *
@@ -15,14 +17,18 @@
  *
  *     e.g.  osgviewer "cow.osgt.(wool-lpca.btfmat,scale=4).btfmaterial"
  *           osgviewer "cow.osgt.(wool.btf,method=lambert).btfmaterial"
- *     MODEL is any file osgDB reads; MATERIAL a fitted-material file (any extension) or a
- *     measured BTF (.btf, .zip, or a folder of UBO2003 images) fitted on load; scale=S is the
- *     texture scale (the material repeats S times per texture-coordinate unit); other KEY=VALUE
- *     pairs are fit options, as with -O. The parentheses let names and values contain dots;
- *     names cannot contain ',' or ')'. Quote the name in a shell.
+ *     MODEL is any file osgDB reads; MATERIAL a fitted-material file (any extension), a
+ *     UBO2014 .btf (as stored, or fitted with method=) or a measured BTF (.zip, or a folder of
+ *     UBO2003 images) fitted on load; scale=S is the texture scale (the material repeats S times
+ *     per texture-coordinate unit); other KEY=VALUE pairs are fit options, as with -O. The
+ *     parentheses let names and values contain dots; names cannot contain ',' or ')'. Quote the
+ *     name in a shell.
  *
  * Options (-O "...", words separated by spaces; unknown words belong to other plugins):
- *   method=NAME      fit method for measured BTFs (default lpca; `btf fit --help` lists them)
+ *   method=NAME      fit method for measured BTFs (default lpca; `btf fit --help` lists them);
+ *                    without it a UBO2014 file opens as stored, an fmf material of its factors
+ *   storage=half|float  that material's textures (float only for files storing floats); other
+ *                    fit options without method= are ignored there (OSG_NOTICE says so)
  *   KEY=VALUE        an option of that method (e.g. clusters=32 components=8); options the
  *                    method does not have are ignored
  *   scale=S          texture scale of the MaterialNode (default 1)

@@ -37,6 +37,7 @@
 #include <osgDB/WriteFile>
 
 #include "scene/MaterialNode.h"
+#include "tests/HandWrittenUbo2014.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
@@ -620,6 +621,22 @@ TEST(StockOsgviewer, ShowsAModelThroughThePseudoLoader) {
     EXPECT_TRUE(materialColoured(run.stats)) << describe(run.stats) << "\n" << run.output;
 }
 
+TEST(StockOsgviewer, ShowsAModelUnderAUbo2014FileAsStored) {
+    // The line: osgviewer "model.osgt.(carpet.btf,scale=4).btfmaterial", with a
+    // hand-written DFMF file (tests/HandWrittenUbo2014.h) opened as an fmf material.
+    REQUIRE_XVFB();
+    TempDir dir;
+    const std::string btf = dir.file("carpet.btf");
+    osgBTF::test::writeTextFile(btf, osgBTF::test::handWrittenDfmf11().bytes);
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    const OsgviewerRun run =
+        runOsgviewer(xvfb, {"vase.osgt.(" + btf + ",scale=4).btfmaterial"}, kExamplesDir, notBlank);
+    keepScreenshot(run.screen, "osgviewer-ubo2014");
+    EXPECT_FALSE(run.exitedEarly) << run.output;
+    EXPECT_TRUE(notBlank(run.stats)) << describe(run.stats) << "\n" << run.output;
+}
+
 // ---- btfviewer ---------------------------------------------------------------------------
 
 const std::string kBtfviewer = OSGBTF_BTFVIEWER;
@@ -686,6 +703,23 @@ TEST(Btfviewer, CapturesAnExampleScene) {
     const ScreenStats stats = analyse(image);
     EXPECT_TRUE(notBlank(stats)) << describe(stats);
     EXPECT_TRUE(materialColoured(stats)) << describe(stats);
+}
+
+TEST(Btfviewer, ShowsAUbo2014FileAsStored) {
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    TempDir out;
+    const std::string btf = out.file("carpet.btf");
+    osgBTF::test::writeTextFile(btf, osgBTF::test::handWrittenDfmf11().bytes);
+    const CommandResult result =
+        runBtfviewer(xvfb.display(), shellQuote(btf) + " --window 0 0 320 240 --capture " +
+                                         shellQuote(out.file("carpet.png")));
+    ASSERT_EQ(result.exitCode, 0) << result.output;
+    EXPECT_NE(result.output.find("1: carpet.btf (fmf)"), std::string::npos) << result.output;
+    const RgbImage image = readCapture(out.file("carpet.png"));
+    keepScreenshot(image, "btfviewer-ubo2014");
+    EXPECT_TRUE(notBlank(analyse(image))) << describe(analyse(image));
 }
 
 /** Pixels whose colours differ by more than a small amount (sum over RGB > 12). */

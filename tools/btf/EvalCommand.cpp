@@ -1,4 +1,5 @@
 // btf eval FITTED --view T,P --light T,P -o img: one (view, light) image through the GPU path.
+// FITTED may be a UBO2014 .btf: its stored factors render as an fmf material (nothing decoded).
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -8,6 +9,7 @@
 #include "harness/MaterialImage.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
+#include "scene/OpenMaterial.h"
 #include "tools/btf/Commands.h"
 
 namespace osgBTF::tool {
@@ -34,11 +36,15 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
         "oriented like the input images; also evaluates it on the CPU and reports the largest "
         "GPU-CPU difference");
     struct Options {
-        std::string input, output, view = "0,0", light = "0,0";
+        std::string input, output, view = "0,0", light = "0,0", storage = "half";
         bool cpu = false;
     };
     auto options = std::make_shared<Options>();
-    command->add_option("FITTED", options->input, "Fitted material file from btf fit")->required();
+    command
+        ->add_option("FITTED", options->input,
+                     "Fitted material file from btf fit, or a UBO2014 .btf (its stored factors, "
+                     "rendered as an fmf material without decoding)")
+        ->required();
     command->add_option("-o,--output", options->output, "Output image (.exr, .png, .hdr, ...)")
         ->required();
     command->add_option("--view", options->view, "View direction THETA,PHI (degrees)")
@@ -46,10 +52,18 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
     command->add_option("--light", options->light, "Light direction THETA,PHI (degrees)")
         ->capture_default_str();
     command->add_flag("--cpu", options->cpu, "Write the CPU reference instead of the GPU image");
+    command
+        ->add_option("--storage", options->storage,
+                     "UBO2014 input: texture storage of its factors, half or float (float only "
+                     "for files that store float scalars)")
+        ->check(CLI::IsMember({"half", "float"}))
+        ->capture_default_str();
     return [options] {
         const glm::vec3 view = parseDirection(options->view, "--view").toVector();
         const glm::vec3 light = parseDirection(options->light, "--light").toVector();
-        osg::ref_ptr<Material> material = loadMaterial(options->input);
+        osg::ref_ptr<Material> material =
+            openMaterial(options->input, options->storage == "float" ? MaterialTexture::Float
+                                                                     : MaterialTexture::Half);
         const FloatImage cpu = evaluateMaterialImage(*material, view, light);
         HeadlessRenderer renderer;
         const FloatImage gpu = renderMaterialImage(renderer, *material, view, light);

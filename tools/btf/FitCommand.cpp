@@ -1,5 +1,7 @@
 // btf fit INPUT --method NAME -o OUT: compress a measured BTF with one method, report the error.
+#include <cctype>
 #include <chrono>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -8,7 +10,9 @@
 #include "core/ErrorMetrics.h"
 #include "core/Progress.h"
 #include "loaders/LoadBtf.h"
+#include "loaders/Ubo2014.h"
 #include "materials/Material.h"
+#include "materials/fmf/Fmf.h"
 #include "tools/btf/Commands.h"
 
 namespace osgBTF::tool {
@@ -39,7 +43,11 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
     };
     auto options = std::make_shared<Options>();
     command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
-    command->add_option("-o,--output", options->output, "Fitted material file (.exr)")->required();
+    command
+        ->add_option("-o,--output", options->output,
+                     "Fitted material file (.btfmat or .exr); with -m fmf also a UBO2014 FMF "
+                     "file (.btf) that other readers of the format read")
+        ->required();
     command->add_option("-m,--method", options->method, methodsHelp())->required();
     command->add_option("--lobes", options->lobes,
                         "Shortcut for --set lobes=N (" + methodsWithOption("lobes") + ")");
@@ -62,6 +70,20 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         if (options->components) fit.set("components", std::to_string(options->components));
         if (options->clusters) fit.set("clusters", std::to_string(options->clusters));
         validateOptions(method, fit);  // before the (long) load; the fit validates them again
+        std::string extension = std::filesystem::path(options->output).extension().string();
+        for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+        const bool btfOutput = extension == ".btf";
+        if (btfOutput && method.name != "fmf")
+            fail(options->output,
+                 "only method fmf writes a UBO2014 .btf file (its factors are "
+                 "the format's); save " +
+                     method.name + " as .btfmat or .exr");
+        // The input's measurement meta data go into a .btf output where the input has them.
+        std::unique_ptr<Ubo2014Factors> meta;
+        if (btfOutput && isUbo2014File(options->input)) {
+            meta = std::make_unique<Ubo2014Factors>(readUbo2014(options->input));
+            meta->factors.clear();
+        }
 
         const auto start = std::chrono::steady_clock::now();
         const MeasuredBtf btf = loadMeasuredBtf(options->input, common.loadOptions());
@@ -71,7 +93,14 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - loaded).count();
         material->fitInfo["seconds"] = std::to_string(fitSeconds);
         material->fitInfo["source"] = options->input;
-        saveMaterial(*material, options->output);
+        if (btfOutput) {
+            const auto* fmf = dynamic_cast<const FmfMaterial*>(material.get());
+            if (!fmf) fail(options->output, "method fmf did not give an FmfMaterial");
+            writeFactorsAsUbo2014(fmf->factors(), options->output,
+                                  fmf->storage() == MaterialTexture::Float ? 4 : 2, meta.get());
+        } else {
+            saveMaterial(*material, options->output);
+        }
 
         const ErrorSummary error = computeError(
             btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); });

@@ -1,0 +1,580 @@
+#include "materials/fmf/Fmf.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include <Imath/half.h>
+#include <osg/Uniform>
+
+#include "core/Error.h"
+#include "core/LowRank.h"
+#include "core/Progress.h"
+#include "materials/MaterialState.h"
+
+namespace osgBTF {
+
+namespace {
+
+// GL limits every OpenGL 4 implementation offers (and llvmpipe): texture size and array layers.
+constexpr int kMaxTextureSize = 16384;
+constexpr int kMaxArrayLayers = 2048;
+constexpr float kHalfMax = 65504.0f;
+
+int groupsOf(int components) {
+    return (components + 3) / 4;
+}
+
+double bytesPerValue(MaterialTexture::PixelKind kind) {
+    return kind == MaterialTexture::Half ? 2 : 4;
+}
+
+const char* storageName(MaterialTexture::PixelKind kind) {
+    return kind == MaterialTexture::Half ? "half" : "float";
+}
+
+/** Shortest text that reads back as the same float. */
+std::string floatText(float v) {
+    std::ostringstream out;
+    out << std::setprecision(std::numeric_limits<float>::max_digits10) << v;
+    return out.str();
+}
+
+std::string floatList(const float* v, int n) {
+    std::string text;
+    for (int i = 0; i < n; ++i) text += (i ? "," : "") + floatText(v[i]);
+    return text;
+}
+
+/** Rounds every value to half in place; throws when one does not fit. */
+void roundToHalf(FactorMatrix& m, const std::string& source, const char* name) {
+    float* data = m.data();
+    for (Eigen::Index i = 0; i < m.size(); ++i) {
+        if (std::abs(data[i]) > kHalfMax)
+            fail(source, std::string("fmf: ") + name + " value " + floatText(data[i]) +
+                             " exceeds the half range (65504); use storage=float");
+        data[i] = float(Imath::half(data[i]));
+    }
+}
+
+}  // namespace
+
+FmfMaterial::FmfMaterial(const FmfMaterial& other, const osg::CopyOp& copyop)
+    : Material(other, copyop),
+      _factors(other._factors),
+      _storage(other._storage),
+      _viewTable(other._viewTable),
+      _lightTable(other._lightTable) {}
+
+void FmfMaterial::assignFrom(const Material& other) {
+    const FmfMaterial& o = assignCommon<FmfMaterial>(other);
+    _factors = o._factors;
+    _storage = o._storage;
+    _viewTable = o._viewTable;
+    _lightTable = o._lightTable;
+}
+
+int FmfMaterial::groups(int channel) const {
+    return groupsOf(_factors.components(channel));
+}
+
+int FmfMaterial::layerOffset(int channel) const {
+    if (_factors.model == FactorModel::Fmf) return 0;
+    int offset = 0;
+    for (int c = 0; c < channel; ++c) offset += groups(c);
+    return offset;
+}
+
+void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage) {
+    factors.validate();
+    const std::string& source = factors.source;
+    if (storage == MaterialTexture::UNorm8)
+        fail(source, "fmf: storage must be half or float, got unorm8");
+    const bool fmf = factors.model == FactorModel::Fmf;
+    int maxGroups = 0, layers = 0;
+    for (int c = 0; c < 3; ++c) {
+        const int g = groupsOf(factors.components(c));
+        maxGroups = std::max(maxGroups, g);
+        if (!fmf || c == 0) layers += g;
+    }
+    const std::size_t uRows = factors.lights.size() * 3;
+    if (maxGroups > kMaxTextureSize || uRows > std::size_t(kMaxTextureSize) ||
+        factors.views.size() > std::size_t(kMaxArrayLayers) || factors.width > kMaxTextureSize ||
+        factors.height > kMaxTextureSize || layers > kMaxArrayLayers || layers == 0)
+        fail(source,
+             "fmf: " + std::to_string(factors.width) + "x" + std::to_string(factors.height) +
+                 " texels, " + std::to_string(factors.views.size()) + " views x " +
+                 std::to_string(factors.lights.size()) + " lights and " + std::to_string(layers) +
+                 " Eigen-Texture layers exceed the GPU's texture limits (" +
+                 std::to_string(kMaxTextureSize) + " texels, " + std::to_string(kMaxArrayLayers) +
+                 " array layers)");
+    if (storage == MaterialTexture::Half)
+        for (BtfFactor& f : factors.factors) {
+            roundToHalf(f.U, source, "U");
+            roundToHalf(f.SxV, source, "SxV");
+        }
+    setGeometry(factors.width, factors.height, factors.views, factors.lights);
+    _factors = std::move(factors);
+    _storage = storage;
+    _viewTable = DirectionInterpolator(_views).bake(kDirectionTableResolution);
+    _lightTable = _lights == _views
+                      ? _viewTable
+                      : DirectionInterpolator(_lights).bake(kDirectionTableResolution);
+}
+
+osg::ref_ptr<FmfMaterial> FmfMaterial::fromFactors(FactoredBtf factors,
+                                                   MaterialTexture::PixelKind storage) {
+    osg::ref_ptr<FmfMaterial> m = new FmfMaterial;
+    m->setFactors(std::move(factors), storage);
+    return m;
+}
+
+// ---- evaluation --------------------------------------------------------------------------------
+
+int FmfMaterial::directionCombinations(const glm::vec3& view, const glm::vec3& light,
+                                       std::array<std::size_t, 9>& images,
+                                       std::array<float, 9>& weights) const {
+    // The shader's lookups: 3 view x 3 light neighbours from the baked tables.
+    const InterpolationWeights wv = DirectionInterpolator::lookupBaked(_viewTable, view);
+    const InterpolationWeights wl = DirectionInterpolator::lookupBaked(_lightTable, light);
+    int count = 0;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const float w = wv.weight[std::size_t(i)] * wl.weight[std::size_t(j)];
+            if (!(w > 0.0f)) continue;
+            images[std::size_t(count)] = std::size_t(wv.index[std::size_t(i)]) * _lights.size() +
+                                         std::size_t(wl.index[std::size_t(j)]);
+            weights[std::size_t(count)] = w;
+            ++count;
+        }
+    return count;
+}
+
+void FmfMaterial::factorSums(std::size_t row, const std::size_t* images, const float* weights,
+                             int count, float sums[3]) const {
+    // As shaders/fmf.frag: per group of 4 components, the U rows blended over the combinations,
+    // then one dot product with the texel's SxV (the same order of operations as the GPU).
+    const bool fmf = _factors.model == FactorModel::Fmf;
+    for (int c = 0; c < 3; ++c) {
+        const BtfFactor& f = _factors.factors[fmf ? 0 : std::size_t(c)];
+        const int k = int(f.U.cols());
+        const float* sxv = f.SxV.data() + row * std::size_t(k);
+        float sum = 0.0f;
+        for (int g = 0; g < k; g += 4) {
+            float blended[4] = {0, 0, 0, 0};
+            const int n = std::min(4, k - g);
+            for (int i = 0; i < count; ++i) {
+                const std::size_t uRow = fmf ? images[i] * 3 + std::size_t(c) : images[i];
+                const float* u = f.U.data() + uRow * std::size_t(k) + std::size_t(g);
+                for (int j = 0; j < n; ++j) blended[j] += weights[i] * u[j];
+            }
+            for (int j = 0; j < n; ++j) sum += blended[j] * sxv[g + j];
+        }
+        sums[c] = sum;
+    }
+}
+
+glm::vec3 FmfMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
+    // Seed 003 interpolates U, the factor rows, and the sums are linear in them: blending the 9
+    // rows and decoding (colour model / exp) once is cheaper than decoding 9 values, and exact at
+    // measured directions, where one combination has weight 1. The cosine division uses the
+    // query light's own z, so it is exact there too.
+    std::array<std::size_t, 9> images;
+    std::array<float, 9> weights;
+    const int count = directionCombinations(view, light, images, weights);
+    float sums[3];
+    factorSums(_factors.factorRow(x, y), images.data(), weights.data(), count, sums);
+    float rgb[3];
+    _factors.decodeColor(sums, rgb);
+    const float scale = _factors.cosineScale(light.z);
+    return glm::vec3(rgb[0], rgb[1], rgb[2]) * scale;
+}
+
+void FmfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
+    const int x = int(texel % std::size_t(_width)), y = int(texel / std::size_t(_width));
+    const std::size_t row = _factors.factorRow(x, y), images = _factors.imageCount();
+    const bool fmf = _factors.model == FactorModel::Fmf;
+    Eigen::VectorXf products[3];
+    for (std::size_t f = 0; f < _factors.factors.size(); ++f) {
+        const BtfFactor& factor = _factors.factors[f];
+        products[f].noalias() = factor.U * factor.SxV.row(Eigen::Index(row)).transpose();
+    }
+    for (std::size_t i = 0; i < images; ++i) {
+        float sums[3];
+        for (int c = 0; c < 3; ++c)
+            sums[c] = fmf ? products[0](Eigen::Index(i * 3 + std::size_t(c)))
+                          : products[c](Eigen::Index(i));
+        _factors.decodeColor(sums, abrdf);
+        const float scale = _factors.cosineScale(_lights.vector(i % _lights.size()).z);
+        for (int c = 0; c < 3; ++c) abrdf[c] *= scale;
+        abrdf += 3;
+    }
+}
+
+// ---- textures, memory, files ---------------------------------------------------------------
+
+MaterialTexture FmfMaterial::uTexture() const {
+    const int maxGroups = std::max({groups(0), groups(1), groups(2)});
+    const std::size_t nL = _lights.size();
+    MaterialTexture t{"u", maxGroups, int(nL * 3), int(_views.size()), 4, _storage, {}};
+    t.data.assign(t.valueCount(), 0.0f);
+    const bool fmf = _factors.model == FactorModel::Fmf;
+    for (std::size_t image = 0; image < _factors.imageCount(); ++image) {
+        const std::size_t view = image / nL, light = image % nL;
+        for (int c = 0; c < 3; ++c) {
+            const BtfFactor& f = _factors.factors[fmf ? 0 : std::size_t(c)];
+            const std::size_t uRow = fmf ? image * 3 + std::size_t(c) : image;
+            const std::size_t y = light * 3 + std::size_t(c);
+            float* dst = t.data.data() + (view * nL * 3 + y) * std::size_t(maxGroups) * 4;
+            for (Eigen::Index k = 0; k < f.U.cols(); ++k) dst[k] = f.U(Eigen::Index(uRow), k);
+        }
+    }
+    return t;
+}
+
+MaterialTexture FmfMaterial::sxvTexture() const {
+    const bool fmf = _factors.model == FactorModel::Fmf;
+    const int layers = fmf ? groups(0) : groups(0) + groups(1) + groups(2);
+    MaterialTexture t{"sxv", _width, _height, layers, 4, _storage, {}};
+    t.data.assign(t.valueCount(), 0.0f);
+    const std::size_t texels = texelCount();
+    for (std::size_t f = 0; f < _factors.factors.size(); ++f) {
+        const FactorMatrix& sxv = _factors.factors[f].SxV;
+        const std::size_t first = std::size_t(layerOffset(int(f)));
+        for (int y = 0; y < _height; ++y)
+            for (int x = 0; x < _width; ++x) {
+                const Eigen::Index row = Eigen::Index(_factors.factorRow(x, y));
+                const std::size_t texel = std::size_t(y) * std::size_t(_width) + std::size_t(x);
+                for (Eigen::Index k = 0; k < sxv.cols(); ++k)
+                    t.data[((first + std::size_t(k / 4)) * texels + texel) * 4 +
+                           std::size_t(k % 4)] = sxv(row, k);
+            }
+    }
+    return t;
+}
+
+FmfMaterial::MemoryBreakdown FmfMaterial::memoryBreakdown() const {
+    const double texels = double(texelCount()), bytes = bytesPerValue(_storage);
+    const bool fmf = _factors.model == FactorModel::Fmf;
+    const int maxGroups = std::max({groups(0), groups(1), groups(2)});
+    const int layers = fmf ? groups(0) : groups(0) + groups(1) + groups(2);
+    // As uploaded: groups of 4 components (a rank that is not a multiple of 4 pads with zeros).
+    const double sxvValues = double(layers) * 4 * texels;
+    const double uValues = double(_factors.imageCount()) * 3 * maxGroups * 4;
+    MemoryBreakdown m;
+    m.perTexelValues = sxvValues / texels;
+    m.perTexelBytes = m.perTexelValues * bytes;
+    m.sharedValues = uValues / texels;
+    m.sharedBytes = m.sharedValues * bytes;
+    m.uBytes = std::uint64_t(uValues * bytes);
+    m.sxvBytes = std::uint64_t(sxvValues * bytes);
+    return m;
+}
+
+MemoryFootprint FmfMaterial::memory() const {
+    const MemoryBreakdown m = memoryBreakdown();
+    return {m.perTexelValues + m.sharedValues, m.perTexelBytes + m.sharedBytes,
+            m.uBytes + m.sxvBytes};
+}
+
+FittedMaterial FmfMaterial::toFittedMaterial() const {
+    FittedMaterial file = writeCommon();
+    const bool fmf = _factors.model == FactorModel::Fmf;
+    file.parameters["model"] = fmf ? "fmf" : "dfmf";
+    const int ks[3] = {_factors.components(0), _factors.components(1), _factors.components(2)};
+    file.parameters["components"] =
+        fmf ? std::to_string(ks[0])
+            : std::to_string(ks[0]) + "," + std::to_string(ks[1]) + "," + std::to_string(ks[2]);
+    file.parameters["cosine"] = _factors.cosine ? "1" : "0";
+    file.parameters["colorModel"] = std::to_string(_factors.colorModel);
+    file.parameters["colorMean"] = floatList(_factors.colorMean.data(), 3);
+    file.parameters["colorMatrix"] = floatList(_factors.colorMatrix.data(), 9);
+    file.parameters["dynamicRangeReduction"] = std::to_string(_factors.dynamicRangeReduction);
+    file.parameters["eps"] = floatText(_factors.eps);
+    file.textures.push_back(uTexture());
+    file.textures.push_back(sxvTexture());
+    // The singular values are not needed to render; kept so that a file describes its factors.
+    const int maxK = std::max({ks[0], ks[1], ks[2]});
+    MaterialTexture s{"singularValues",       maxK, int(_factors.factors.size()), 1, 1,
+                      MaterialTexture::Float, {}};
+    s.data.assign(s.valueCount(), 0.0f);
+    for (std::size_t f = 0; f < _factors.factors.size(); ++f) {
+        const Eigen::VectorXf& values = _factors.factors[f].S;
+        for (Eigen::Index k = 0; k < values.size() && k < maxK; ++k)
+            s.data[f * std::size_t(maxK) + std::size_t(k)] = values(k);
+    }
+    file.textures.push_back(s);
+    return file;
+}
+
+osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(const FittedMaterial& file) {
+    osg::ref_ptr<FmfMaterial> m = new FmfMaterial;
+    m->readCommon(file);
+    FactoredBtf factors;
+    factors.source = file.source;
+    factors.views = file.views;
+    factors.lights = file.lights;
+    factors.width = m->_width;
+    factors.height = m->_height;
+    const std::string& model = file.parameter("model");
+    if (model != "fmf" && model != "dfmf")
+        fail(file.source, "parameter 'model' must be fmf or dfmf, got " + model);
+    factors.model = model == "fmf" ? FactorModel::Fmf : FactorModel::Dfmf;
+    const bool fmf = factors.model == FactorModel::Fmf;
+    auto numbers = [&](const std::string& key, std::size_t n) {
+        std::vector<float> values;
+        std::stringstream in(file.parameter(key));
+        std::string item;
+        while (std::getline(in, item, ',')) {
+            try {
+                std::size_t used = 0;
+                values.push_back(std::stof(item, &used));
+                if (used != item.size()) throw std::invalid_argument(item);
+            } catch (const std::logic_error&) {
+                values.clear();
+                break;
+            }
+        }
+        if (values.size() != n)
+            fail(file.source, "parameter '" + key + "' must be " +
+                                  (n == 1 ? std::string("a number")
+                                          : std::to_string(n) + " comma-separated numbers") +
+                                  ", got '" + file.parameter(key) + "'");
+        return values;
+    };
+    const std::vector<float> ks = numbers("components", fmf ? 1 : 3);
+    const std::vector<float> mean = numbers("colorMean", 3), matrix = numbers("colorMatrix", 9);
+    const float cosine = numbers("cosine", 1)[0], colorModel = numbers("colorModel", 1)[0];
+    const float drr = numbers("dynamicRangeReduction", 1)[0];
+    factors.eps = numbers("eps", 1)[0];
+    factors.cosine = cosine != 0.0f;
+    factors.colorModel = int(colorModel);
+    factors.dynamicRangeReduction = std::uint32_t(drr);
+    std::copy(mean.begin(), mean.end(), factors.colorMean.begin());
+    std::copy(matrix.begin(), matrix.end(), factors.colorMatrix.begin());
+    for (float k : ks)
+        if (!(k >= 1.0f) || k != std::floor(k) || k > float(kMaxArrayLayers * 4))
+            fail(file.source, "parameter 'components' must hold positive integers, got '" +
+                                  file.parameter("components") + "'");
+
+    const MaterialTexture& u = file.texture("u");
+    const MaterialTexture& sxv = file.texture("sxv");
+    const std::size_t nV = file.views.size(), nL = file.lights.size();
+    const std::size_t texels = std::size_t(factors.width) * std::size_t(factors.height);
+    int maxGroups = 0, layers = 0;
+    for (float k : ks) {
+        maxGroups = std::max(maxGroups, groupsOf(int(k)));
+        layers += groupsOf(int(k));
+    }
+    const auto check = [&](const MaterialTexture& got, int w, int h, int d) {
+        if (got.width != w || got.height != h || got.depth != d || got.channels != 4 ||
+            got.kind == MaterialTexture::UNorm8 || got.kind != u.kind)
+            fail(file.source, "texture '" + got.name + "' must be " + std::to_string(w) + "x" +
+                                  std::to_string(h) + "x" + std::to_string(d) +
+                                  " RGBA half or float (as 'u') for components " +
+                                  file.parameter("components"));
+    };
+    check(u, maxGroups, int(nL * 3), int(nV));
+    check(sxv, factors.width, factors.height, layers);
+
+    factors.factors.resize(fmf ? 1 : 3);
+    const FactorMatrix::Index images = FactorMatrix::Index(nV * nL);
+    int layer = 0;
+    for (std::size_t f = 0; f < factors.factors.size(); ++f) {
+        BtfFactor& factor = factors.factors[f];
+        const int k = int(ks[f]);
+        factor.U.resize(fmf ? images * 3 : images, k);
+        factor.SxV.resize(Eigen::Index(texels), k);
+        factor.S = Eigen::VectorXf::Zero(k);
+        for (Eigen::Index row = 0; row < factor.U.rows(); ++row) {
+            const std::size_t image = fmf ? std::size_t(row) / 3 : std::size_t(row);
+            const std::size_t c = fmf ? std::size_t(row) % 3 : f;
+            const std::size_t y = (image % nL) * 3 + c, view = image / nL;
+            const float* src = u.data.data() + (view * nL * 3 + y) * std::size_t(maxGroups) * 4;
+            for (int j = 0; j < k; ++j) factor.U(row, j) = src[j];
+        }
+        for (int y = 0; y < factors.height; ++y)
+            for (int x = 0; x < factors.width; ++x) {
+                const Eigen::Index row = Eigen::Index(factors.factorRow(x, y));
+                const std::size_t texel = std::size_t(y) * std::size_t(factors.width) + x;
+                for (int j = 0; j < k; ++j)
+                    factor.SxV(row, j) =
+                        sxv.data[((std::size_t(layer + j / 4)) * texels + texel) * 4 +
+                                 std::size_t(j % 4)];
+            }
+        layer += groupsOf(k);
+    }
+    if (const MaterialTexture* s = file.findTexture("singularValues"))
+        if (s->channels == 1 && s->height == int(factors.factors.size()))
+            for (std::size_t f = 0; f < factors.factors.size(); ++f)
+                for (Eigen::Index j = 0; j < factors.factors[f].S.size() && j < s->width; ++j)
+                    factors.factors[f].S(j) = s->data[f * std::size_t(s->width) + std::size_t(j)];
+    try {
+        // Half data are already halves: rounding again changes nothing.
+        m->setFactors(std::move(factors), u.kind);
+    } catch (const Error& e) {
+        fail(file.source, e.what());
+    }
+    return m;
+}
+
+osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
+    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
+    addCommonState(*stateSet, methodName(), _width, _height);
+    addTexture(*stateSet, createFloatTexture(uTexture()).get(), "fmfU", 0);
+    addTexture(*stateSet, createFloatTexture(sxvTexture()).get(), "fmfSxV", 1);
+    addDirectionTable(*stateSet, _viewTable, "fmfView", 2, 3);
+    addDirectionTable(*stateSet, _lightTable, "fmfLight", 4, 5);
+    const bool fmf = _factors.model == FactorModel::Fmf;
+    stateSet->addUniform(new osg::Uniform("fmfShared", fmf ? 1 : 0));
+    stateSet->addUniform(new osg::Uniform("fmfGroups", groups(0), groups(1), groups(2)));
+    stateSet->addUniform(
+        new osg::Uniform("fmfLayerOffset", layerOffset(0), layerOffset(1), layerOffset(2)));
+    // Fmf decodes with exp or not at all; model 0 (none) stands for that in the colour branch.
+    stateSet->addUniform(new osg::Uniform("fmfColorModel", fmf ? 0 : _factors.colorModel));
+    const auto& mtx = _factors.colorMatrix;
+    osg::ref_ptr<osg::Uniform> rows = new osg::Uniform(osg::Uniform::FLOAT_VEC3, "fmfColorRows", 3);
+    for (unsigned i = 0; i < 3; ++i)
+        rows->setElement(i, osg::Vec3(mtx[i * 3], mtx[i * 3 + 1], mtx[i * 3 + 2]));
+    stateSet->addUniform(rows.get());
+    const auto& mean = _factors.colorMean;
+    stateSet->addUniform(new osg::Uniform("fmfColorMean", osg::Vec3(mean[0], mean[1], mean[2])));
+    stateSet->addUniform(new osg::Uniform("fmfDrr", _factors.drr() ? 1 : 0));
+    stateSet->addUniform(new osg::Uniform("fmfEps", _factors.eps));
+    stateSet->addUniform(new osg::Uniform("fmfCosine", _factors.cosine ? 1 : 0));
+    return stateSet;
+}
+
+// ---- fit -------------------------------------------------------------------------------------
+
+osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+    const auto start = std::chrono::steady_clock::now();
+    const OptionValues o = validateOptions("fmf", options);
+    if (btf.empty()) throw Error("fmf: the BTF is empty");
+    const int components = o.integer("components");
+    const MaterialTexture::PixelKind storage =
+        o.choice("storage") == "float" ? MaterialTexture::Float : MaterialTexture::Half;
+    const std::size_t texels = btf.texelCount(), images = btf.viewCount() * btf.lightCount();
+    const std::size_t rows = images * 3, maxComponents = std::min(rows, texels);
+    if (std::size_t(components) > maxComponents)
+        throw Error("fmf: option components must be at most " + std::to_string(maxComponents) +
+                    " for this BTF (its texels, or 3 x views x lights if fewer), got " +
+                    std::to_string(components));
+
+    // Rows (image, channel) in blocks of whole images, read straight from the BTF's storage:
+    // the only copies are one block per thread, de-interleaved into A^T's columns.
+    const std::size_t blockImages =
+        std::clamp<std::size_t>((std::size_t(16) << 20) / (texels * 3 + 1), 1, 256);
+    RowBlockSource source;
+    source.rows = rows;
+    source.cols = texels;
+    source.blockRows = blockImages * 3;
+    source.fill = [&btf, texels](std::size_t first, std::size_t count, float* out) {
+        const std::size_t firstImage = first / 3;
+        for (std::size_t j = 0; j < count / 3; ++j) {
+            const std::size_t offset = (firstImage + j) * texels * 3;
+            float* r = out + (j * 3) * texels;
+            float* g = r + texels;
+            float* b = g + texels;
+            if (const float* f = btf.floatData()) {
+                f += offset;
+                for (std::size_t t = 0; t < texels; ++t, f += 3)
+                    r[t] = f[0], g[t] = f[1], b[t] = f[2];
+            } else {
+                const Imath::half* h = btf.halfData() + offset;
+                for (std::size_t t = 0; t < texels; ++t, h += 3)
+                    r[t] = float(h[0]), g[t] = float(h[1]), b[t] = float(h[2]);
+            }
+        }
+    };
+    StreamedSvdOptions svdOptions;
+    Progress progress(
+        "fmf: factorising " + std::to_string(rows) + " x " + std::to_string(texels) + " values",
+        rows * std::size_t(svdOptions.passes(texels)));
+    svdOptions.progress = [&progress](std::size_t n) { progress.advance(n); };
+    const TruncatedSvd svd = streamedTruncatedSvd(source, components, svdOptions);
+    progress.finish();
+
+    FactoredBtf factors;
+    factors.model = FactorModel::Fmf;
+    factors.source = btf.source.empty() ? std::string("fmf") : btf.source;
+    factors.views = btf.views();
+    factors.lights = btf.lights();
+    factors.width = btf.width();
+    factors.height = btf.height();
+    factors.factors.resize(1);
+    BtfFactor& f = factors.factors[0];
+    f.S.resize(components);
+    for (int k = 0; k < components; ++k) f.S(k) = float(svd.singularValues[std::size_t(k)]);
+    f.U = Eigen::Map<const Eigen::MatrixXf>(svd.u.data(), Eigen::Index(rows), components);
+    f.SxV.resize(Eigen::Index(texels), components);
+    const Eigen::Map<const Eigen::MatrixXf> v(svd.v.data(), Eigen::Index(texels), components);
+    for (int y = 0; y < btf.height(); ++y)
+        for (int x = 0; x < btf.width(); ++x) {
+            const Eigen::Index t = Eigen::Index(y) * btf.width() + x;
+            f.SxV.row(Eigen::Index(factors.factorRow(x, y))) =
+                v.row(t).cwiseProduct(f.S.transpose());
+        }
+
+    osg::ref_ptr<FmfMaterial> m = new FmfMaterial;
+    m->setFactors(std::move(factors), storage);
+    const double residual = svd.residualSquared();
+    m->fitInfo["seconds"] = std::to_string(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    m->fitInfo["components"] = std::to_string(components);
+    m->fitInfo["storage"] = storageName(storage);
+    m->fitInfo["algorithm"] = texels <= svdOptions.gramColumns ? "gram" : "randomised";
+    // Share of the data's squared norm the rank-C factors capture (before rounding to half).
+    m->fitInfo["energy"] =
+        std::to_string(svd.totalSquared > 0 ? 1.0 - residual / svd.totalSquared : 1.0);
+    return m;
+}
+
+namespace {
+const bool registered = registerMethod([] {
+    MethodInfo m;
+    m.name = "fmf";
+    m.description =
+        "full-matrix factorisation (Schwartz 2011, seed 003; UBO2014 FMF/DFMF files): rank-C "
+        "SVD of the (view, light, colour) x texel matrix, 3x3 view/light blending of U; 64 "
+        "bytes per texel + U at 32 components, half";
+    m.options = {OptionSpec::integer("components", 32, 1, OptionSpec::kNoLimit,
+                                     "rank C: Eigen-Textures / Eigen-ABRDFs (at most the "
+                                     "texels, or 3 x views x lights if fewer; seed 003 uses "
+                                     "100)"),
+                 OptionSpec::choice("storage", "half", {"half", "float"},
+                                    "precision of U and SxV on the GPU and in the file")};
+    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return FmfMaterial::fit(btf, o);
+    };
+    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
+        return FmfMaterial::fromFile(f);
+    };
+    m.createInstance = []() -> osg::Object* { return new FmfMaterial; };
+    m.shaderCost = [](const Material& material) {
+        // shaders/fmf.frag. View + light lookups 2 x 11; the 9 combinations: weight product,
+        // test, row address, count (4 x 9); decode at worst (model 11): 5 model tests, exp, 3
+        // adds, 2 products, YUV 8; cosine: 3 tests, divide, multiply. Shared SxV (fmf): per group
+        // of 4 components 1 SxV fetch and per channel 9 x (U fetch, address add, multiply, add)
+        // + dot + add; per channel (dfmf): per group the same for one channel + the layer add.
+        const auto& fmf = static_cast<const FmfMaterial&>(material);
+        const bool shared = fmf.factors().model == FactorModel::Fmf;
+        const int g = shared ? fmf.groups(0) : fmf.groups(0) + fmf.groups(1) + fmf.groups(2);
+        const int alu = 2 * ShaderCost::kLookupAlu + 36 + 19 + 5 + (shared ? 87 * g : 30 * g);
+        const int tex = 2 * ShaderCost::kLookupTex + (shared ? 28 * g : 10 * g);
+        return ShaderCost::ofEvaluate(
+            alu, tex,
+            shared ? "ALU 87g+82, TEX 28g+4 (g = components / 4)"
+                   : "ALU 30g+82, TEX 10g+4 (g = sum of the channels' components / 4)");
+    };
+    // Seed 003 is the latest of the papers: last in the paper order.
+    m.order = 70;
+    m.quickFitOptions = "components=2";
+    return m;
+}());
+}  // namespace
+
+}  // namespace osgBTF

@@ -1,0 +1,101 @@
+// osgBTF method "fmf": the full-matrix factorisation B = U * SxV^T (seed 003 section 3; the
+// UBO2014 ".btf" files store exactly this, see core/FactoredBtf.h and formats.md section 2).
+//
+//   BTF(x, v, l) ~ decode( sum_{v' in N(v), l' in N(l)} w_v' w_l' U[(v', l'), c] . SxV[x] ) / cos
+//
+// U holds the Eigen-ABRDFs (one row per measured (view, light[, channel])), SxV the
+// Eigen-Textures with the singular values folded in (one row per texel). N(v), N(l) are the (up
+// to) 3 measured directions of the Delaunay interpolation and w their barycentric weights, so 9
+// (view, light) combinations of U rows are blended (seed 003 blends U, not decoded values), dotted
+// with the texel's SxV row, THEN the colour model (DFMF) or exp (FMF with dynamic-range reduction)
+// is applied once, THEN the division by the query light's cos(theta) when the data include it.
+// The material holds a FactoredBtf and renders every variant it supports (DFMF with per-channel
+// ranks and colour models 0/1/3/4/11, FMF with or without DRR, the cosine flag) as stored.
+//
+// GPU layout (both RGBA, half or float as the storage option says; components in groups of 4):
+//   U:   2D array texture, layer = measured view, texel (group g, light * 3 + channel): components
+//        4g..4g+3 of that row (DFMF: channel c's own factor; zero beyond its rank).
+//   SxV: 2D array texture of width x height texels (y from the bottom), one layer per group of 4
+//        components; DFMF channels follow each other (channel c starts at layer layerOffset(c)).
+#pragma once
+
+#include <array>
+
+#include "core/DirectionInterpolation.h"
+#include "core/FactoredBtf.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+class FmfMaterial : public Material {
+public:
+    FmfMaterial() = default;
+    FmfMaterial(const FmfMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    /** Copies `other` (same method) into this material; see Material::assignFrom. */
+    void assignFrom(const Material& other) override;
+    META_Object(osgBTF, FmfMaterial)
+
+        /** Renders `factors` as they are (no refit, no decode of the measured data). Half storage
+         *  rounds U and SxV to half here, so that the CPU evaluator uses exactly what the GPU gets.
+         *  Throws Error "<source>: ..." for factors that fail FactoredBtf::validate(), a layout
+         *  beyond the GPU's texture limits, or (half) a factor value beyond half's range.
+     *  sourceFile stays empty: a caller that read the factors from a file sets it. */
+        static osg::ref_ptr<FmfMaterial> fromFactors(
+            FactoredBtf factors, MaterialTexture::PixelKind storage = MaterialTexture::Half);
+
+    /** Options: components (default 32), storage (half | float, default half). Truncated SVD
+     *  of the (view, light, channel) x texel matrix, blockwise against the BTF's own storage.
+     *  Throws Error for an empty BTF, invalid options, or components above min(rows, texels). */
+    static osg::ref_ptr<FmfMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+    static osg::ref_ptr<FmfMaterial> fromFile(const FittedMaterial& file);
+
+    /** The factors as rendered (half storage: the rounded values). */
+    const FactoredBtf& factors() const { return _factors; }
+    MaterialTexture::PixelKind storage() const { return _storage; }
+
+    std::string methodName() const override { return "fmf"; }
+    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+    void evaluateMeasured(std::size_t texel, float* abrdf) const override;
+    MemoryFootprint memory() const override;
+    FittedMaterial toFittedMaterial() const override;
+    osg::ref_ptr<osg::StateSet> createStateSet() const override;
+
+    /** Seed 001 Table 2 counts per-texel storage: SxV fully, U (shared by all texels) divided by
+     *  the texel count; uBytes is U's whole size on the GPU. */
+    struct MemoryBreakdown {
+        double perTexelValues = 0, perTexelBytes = 0;  ///< SxV
+        double sharedValues = 0, sharedBytes = 0;      ///< U / texel count
+        std::uint64_t uBytes = 0, sxvBytes = 0;
+    };
+    MemoryBreakdown memoryBreakdown() const;
+
+    /** Groups of 4 components of channel c's factor (Fmf: the one factor's for every c). */
+    int groups(int channel) const;
+    /** First SxV layer of channel c (Fmf: 0 for every c). */
+    int layerOffset(int channel) const;
+    /** The textures as the GPU and the file get them (built on demand: the material keeps only
+     *  the factors). */
+    MaterialTexture uTexture() const;
+    MaterialTexture sxvTexture() const;
+
+protected:
+    ~FmfMaterial() override = default;
+
+private:
+    /** Sets the factors after checks and rounding; bakes the direction tables. */
+    void setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage);
+    /** The up to 9 (image, weight) combinations for a query view and light. The one place that
+     *  knows how directions are interpolated (today: the baked tables the shader reads too). */
+    int directionCombinations(const glm::vec3& view, const glm::vec3& light,
+                              std::array<std::size_t, 9>& images,
+                              std::array<float, 9>& weights) const;
+    /** The three factor sums of texel row `row` for U rows blended over the combinations. */
+    void factorSums(std::size_t row, const std::size_t* images, const float* weights, int count,
+                    float sums[3]) const;
+
+    FactoredBtf _factors;
+    MaterialTexture::PixelKind _storage = MaterialTexture::Half;
+    DirectionInterpolator::Baked _viewTable, _lightTable;
+};
+
+}  // namespace osgBTF

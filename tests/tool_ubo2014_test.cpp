@@ -1,0 +1,182 @@
+// The `btf` tool on UBO2014 files, which it uses as stored (issue 11 section 2): `btf info` from
+// the header and factors, `--stats` streamed through the factors; on hand-written files
+// (tests/HandWrittenUbo2014.h), so the expected figures come from the format's formulas.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "core/FloatImage.h"
+#include "loaders/Ubo2014.h"
+#include "tests/HandWrittenUbo2014.h"
+#include "tests/TestUtil.h"
+
+using namespace osgBTF::test;
+
+namespace {
+
+CommandResult btf(const std::string& arguments) {
+    return runCommand(std::string(OSGBTF_BTF_TOOL) + " --no-progress " + arguments);
+}
+/** For commands that open an OpenGL context (Mesa's EGL leaks a little per context). */
+CommandResult btfWithGl(const std::string& arguments) {
+    return runCommand("ASAN_OPTIONS=detect_leaks=0 " + std::string(OSGBTF_BTF_TOOL) +
+                      " --no-progress " + arguments);
+}
+
+nlohmann::json infoJson(const std::string& arguments) {
+    const CommandResult r = btf("info --json " + arguments);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    try {
+        return nlohmann::json::parse(r.output);
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << e.what() << "\n" << r.output;
+        return {};
+    }
+}
+
+/** Minimum, maximum and mean per channel over every value of the hand-written file. */
+struct Expected {
+    double minimum[3], maximum[3], mean[3];
+};
+Expected expectedStats(const HandWrittenBtf& f) {
+    Expected e;
+    double sum[3] = {0, 0, 0};
+    for (int c = 0; c < 3; ++c) {
+        e.minimum[c] = std::numeric_limits<double>::infinity();
+        e.maximum[c] = -e.minimum[c];
+    }
+    std::size_t n = 0;
+    for (int v = 0; v < int(f.views.size()); ++v)
+        for (int l = 0; l < int(f.lights.size()); ++l)
+            for (int y = 0; y < f.height; ++y)
+                for (int x = 0; x < f.width; ++x, ++n) {
+                    const auto rgb = f.value(v, l, x, y);
+                    for (int c = 0; c < 3; ++c) {
+                        e.minimum[c] = std::min(e.minimum[c], rgb[std::size_t(c)]);
+                        e.maximum[c] = std::max(e.maximum[c], rgb[std::size_t(c)]);
+                        sum[c] += rgb[std::size_t(c)];
+                    }
+                }
+    for (int c = 0; c < 3; ++c) e.mean[c] = sum[c] / double(n);
+    return e;
+}
+
+}  // namespace
+
+TEST(BtfToolUbo2014, InfoDescribesTheFactorsWithoutDecoding) {
+    TempDir dir;
+    const HandWrittenBtf f = handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    const nlohmann::json info = infoJson(shellQuote(path));
+    EXPECT_EQ(info["format"], "UBO2014 DFMF");
+    EXPECT_EQ(info["signature"], "!DFMF08FCR");
+    EXPECT_EQ(info["width"], 4);
+    EXPECT_EQ(info["height"], 3);
+    EXPECT_EQ(info["views"]["count"], 7);
+    EXPECT_EQ(info["lights"]["count"], 10);
+    EXPECT_NEAR(info["lights"]["theta_max"].get<double>(), 75.0, 1e-3);
+    EXPECT_EQ(info["images"], 70);
+    EXPECT_EQ(info["ranks"], nlohmann::json({2, 3, 1}));
+    EXPECT_EQ(info["color_model"]["id"], 11);
+    EXPECT_EQ(info["scalar"], "float");
+    EXPECT_EQ(info["cosine"], false);
+    EXPECT_EQ(info["file_bytes"], f.bytes.size());
+    // Factors as floats: per channel (70 + 12 texels + 1 S) x K values, K = 2 + 3 + 1.
+    EXPECT_EQ(info["factor_bytes"], (70 + 12 + 1) * 6 * 4);
+    EXPECT_EQ(info["decoded_float_bytes"], 70 * 12 * 3 * 4);
+    EXPECT_EQ(info["meta"]["measurement_setup"], "hand-written test dome");
+    EXPECT_FALSE(info.contains("range"));  // nothing decoded without --stats
+
+    const CommandResult text = btf("info " + shellQuote(path));
+    ASSERT_EQ(text.exitCode, 0) << text.output;
+    EXPECT_NE(text.output.find("factors:  DFMF, ranks 2, 3, 1 (channels of colour model 11"),
+              std::string::npos)
+        << text.output;
+}
+
+TEST(BtfToolUbo2014, InfoOfAnFmfFile) {
+    TempDir dir;
+    const HandWrittenBtf f = handWrittenFmfDrrCosine();
+    const std::string path = dir.file("fmf.bin");  // found by its first byte, not its name
+    writeTextFile(path, f.bytes);
+    const nlohmann::json info = infoJson(shellQuote(path));
+    EXPECT_EQ(info["format"], "UBO2014 FMF");
+    EXPECT_EQ(info["ranks"], nlohmann::json({3, 3, 3}));
+    EXPECT_EQ(info["dynamic_range_reduction"], true);
+    EXPECT_EQ(info["cosine"], true);
+    EXPECT_EQ(info["header_version"], 1);
+    EXPECT_EQ(info["scalar"], "half");
+    EXPECT_FALSE(info.contains("color_model"));
+}
+
+TEST(BtfToolUbo2014, StatsStreamEveryDecodedValue) {
+    TempDir dir;
+    for (const HandWrittenBtf& f : {handWrittenDfmf11(), handWrittenFmfDrrCosine()}) {
+        SCOPED_TRACE(f.signature);
+        const std::string path = dir.file("f.btf");
+        writeTextFile(path, f.bytes);
+        const nlohmann::json info = infoJson("--stats " + shellQuote(path));
+        const Expected e = expectedStats(f);
+        EXPECT_EQ(info["nan_count"], 0);
+        EXPECT_EQ(info["inf_count"], 0);
+        for (int c = 0; c < 3; ++c) {
+            const auto& r = info["range"][c == 0 ? "R" : c == 1 ? "G" : "B"];
+            // Float factor sums and expf against the double formula: relative 1e-5.
+            auto tolerance = [](double x) { return 1e-5 * std::max(1.0, std::abs(x)); };
+            EXPECT_NEAR(r["min"].get<double>(), e.minimum[c], tolerance(e.minimum[c]));
+            EXPECT_NEAR(r["max"].get<double>(), e.maximum[c], tolerance(e.maximum[c]));
+            EXPECT_NEAR(r["mean"].get<double>(), e.mean[c], tolerance(e.mean[c]));
+        }
+    }
+}
+
+TEST(BtfToolUbo2014, InfoNeedsNoMemoryForTheDecodedData) {
+    TempDir dir;
+    const HandWrittenBtf f = handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    // 3 KiB: more than the factors (1992 bytes), less than the decoded values (10080 bytes).
+    CommandResult r = btf("--memory-limit 3K info --stats " + shellQuote(path));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    r = btf("--memory-limit 3K contact-sheet " + shellQuote(path) + " -o " +
+            shellQuote(dir.file("sheet.png")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("more than the memory limit of 3.0 KiB"), std::string::npos)
+        << r.output;
+}
+
+TEST(BtfToolUbo2014, EvalRendersTheStoredFactors) {
+    TempDir dir;
+    const HandWrittenBtf f = handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    const osgBTF::Ubo2014Factors factors = osgBTF::readUbo2014(path);
+    // View 2 (40, 120) and light 5 (60, 150) of the file: a measured pair.
+    const std::size_t view = 2, light = 5;
+    for (const char* mode : {"", " --cpu"}) {
+        SCOPED_TRACE(mode);
+        const std::string image = dir.file("eval.exr");
+        const CommandResult r =
+            btfWithGl("eval " + shellQuote(path) + " --view 40,120 --light 60,150 -o " +
+                      shellQuote(image) + mode);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find("(fmf, 4x3, "), std::string::npos) << r.output;
+        const osgBTF::FloatImage got = osgBTF::readFloatImage(image);
+        ASSERT_EQ(got.width, 4);
+        ASSERT_EQ(got.height, 3);
+        // Image rows top-down; FactoredBtf::value counts y from the bottom. Same float math on
+        // both sides except the GPU's: 1e-3 relative.
+        for (int row = 0; row < 3; ++row)
+            for (int x = 0; x < 4; ++x) {
+                const glm::vec3 want = factors.value(view, light, x, 2 - row);
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(got.at(x, row, c), want[c],
+                                1e-3 * std::max(1.0f, std::abs(want[c])))
+                        << "x " << x << " row " << row << " channel " << c;
+            }
+    }
+}
