@@ -121,6 +121,14 @@ std::string reportMarkdown(const CompareResult& r) {
            << " bytes) | " << general(m.compressionRatio, 4) << " |\n";
     }
 
+    for (const MethodResult& m : r.methods)
+        if (!m.failed && m.memory.sharedBytes > 0)
+            md << "\n"
+               << m.method << ": " << formatBytes(m.memory.sharedBytes) << " ("
+               << m.memory.sharedBytes
+               << " bytes) of the total are tables shared by all texels, counted above divided "
+                  "by the texel count.\n";
+
     md << "\n## Table 3: pass cost\n\n"
        << "ALU / TEX: static count of the fragment shader (harness/ShaderCost.h), fixed + per "
           "light, and the total at "

@@ -30,6 +30,9 @@ struct MemoryFootprint {
     double valuesPerTexel = 0;
     double bytesPerTexel = 0;
     std::uint64_t totalBytes = 0;
+    /** Of totalBytes, the tables shared by all texels (e.g. fmf's U), when a method reports them
+     *  (btf compare prints them under Table 2); 0: none or not reported. */
+    std::uint64_t sharedBytes = 0;
 };
 
 /** Method settings from the command line or a plugin option string: "lobes=2 clusters=32". */

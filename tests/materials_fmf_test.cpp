@@ -378,6 +378,7 @@ TEST(Fmf, MemoryCountsSxvPerTexelAndUShared) {
     const MemoryFootprint mf = m->memory();
     EXPECT_DOUBLE_EQ(mf.bytesPerTexel, 64.0 + b.sharedBytes);
     EXPECT_EQ(mf.totalBytes, b.uBytes + b.sxvBytes);
+    EXPECT_EQ(mf.sharedBytes, b.uBytes);  // btf compare's line under Table 2
     // DFMF with per-channel ranks 5, 8, 1: SxV layers of 4 padded: (2 + 2 + 1) x 4 values;
     // U rows padded to the widest channel (2 groups).
     osg::ref_ptr<FmfMaterial> d =

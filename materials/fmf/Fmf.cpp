@@ -277,7 +277,7 @@ FmfMaterial::MemoryBreakdown FmfMaterial::memoryBreakdown() const {
 MemoryFootprint FmfMaterial::memory() const {
     const MemoryBreakdown m = memoryBreakdown();
     return {m.perTexelValues + m.sharedValues, m.perTexelBytes + m.sharedBytes,
-            m.uBytes + m.sxvBytes};
+            m.uBytes + m.sxvBytes, m.uBytes};
 }
 
 FittedMaterial FmfMaterial::toFittedMaterial() const {

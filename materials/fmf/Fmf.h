@@ -39,7 +39,7 @@ public:
          *  rounds U and SxV to half here, so that the CPU evaluator uses exactly what the GPU gets.
          *  Throws Error "<source>: ..." for factors that fail FactoredBtf::validate(), a layout
          *  beyond the GPU's texture limits, or (half) a factor value beyond half's range.
-     *  sourceFile stays empty: a caller that read the factors from a file sets it. */
+         *  sourceFile stays empty: a caller that read the factors from a file sets it. */
         static osg::ref_ptr<FmfMaterial> fromFactors(
             FactoredBtf factors, MaterialTexture::PixelKind storage = MaterialTexture::Half);
 
