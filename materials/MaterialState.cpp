@@ -107,6 +107,12 @@ osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t) {
         texture->setName(t.name);
         return texture;
     }
+    return createFloatTextureArray(t);
+}
+
+osg::ref_ptr<osg::Texture2DArray> createFloatTextureArray(const MaterialTexture& t) {
+    if (t.data.size() != t.valueCount())
+        throw Error("texture '" + t.name + "': data size does not match its dimensions");
     osg::ref_ptr<osg::Texture2DArray> array = newTexture2DArray();
     array->setTextureSize(t.width, t.height, t.depth);
     for (int z = 0; z < t.depth; ++z) array->setImage(z, sliceImage(t, z, 1));

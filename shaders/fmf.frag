@@ -10,10 +10,8 @@
 uniform sampler2DArray fmfU;
 // Layer = group of 4 components (dfmf: channel c's groups start at fmfLayerOffset[c]).
 uniform sampler2DArray fmfSxV;
-uniform sampler2D fmfViewIndices;
-uniform sampler2D fmfViewWeights;
-uniform sampler2D fmfLightIndices;
-uniform sampler2D fmfLightWeights;
+uniform sampler2D fmfViewTable;
+uniform sampler2D fmfLightTable;
 uniform int fmfShared;  // 1: fmf, one SxV for the three channels; 0: dfmf, one per channel
 uniform ivec3 fmfGroups;
 uniform ivec3 fmfLayerOffset;
@@ -45,8 +43,8 @@ vec3 fmfDecode(vec3 s) {
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
     ivec3 vi, li;
     vec3 vw, lw;
-    btfLookupDirections(fmfViewIndices, fmfViewWeights, view, vi, vw);
-    btfLookupDirections(fmfLightIndices, fmfLightWeights, light, li, lw);
+    btfLookupDirections(fmfViewTable, view, vi, vw);
+    btfLookupDirections(fmfLightTable, light, li, lw);
     // The combinations with weight > 0: U row (light * 3) and layer (view).
     float cw[9];
     ivec2 cr[9];

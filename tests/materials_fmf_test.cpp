@@ -243,7 +243,7 @@ TEST(Fmf, RendersEveryFactorVariantAsStoredAtMeasuredDirections) {
 
 TEST(Fmf, BlendsFactorSumsBeforeDecodingAtUnmeasuredDirections) {
     // Model 11 (exp-YUV) with the cosine: the expected value is the decode of the blended sums of
-    // the 9 combinations (weights from the same baked tables), divided by the query light's z.
+    // the 9 combinations (the exact Delaunay weights), divided by the query light's z.
     FactoredBtf f = randomFactors(FactorModel::Dfmf, {4, 2, 3}, 3, 2, 11);
     f.colorModel = 11;
     f.cosine = true;
@@ -252,11 +252,11 @@ TEST(Fmf, BlendsFactorSumsBeforeDecodingAtUnmeasuredDirections) {
     FactoredBtf raw = m->factors();
     raw.colorModel = 0;
     raw.cosine = false;
-    const auto viewTable = DirectionInterpolator(f.views).bake(kDirectionTableResolution);
+    const DirectionInterpolator interpolator(f.views);
     for (const auto& [vd, ld] : kUnmeasured) {
         const glm::vec3 view = vd.toVector(), light = ld.toVector();
-        const InterpolationWeights wv = DirectionInterpolator::lookupBaked(viewTable, view);
-        const InterpolationWeights wl = DirectionInterpolator::lookupBaked(viewTable, light);
+        const InterpolationWeights wv = interpolator.weights(view);
+        const InterpolationWeights wl = interpolator.weights(light);
         EXPECT_GT(std::count_if(wv.weight.begin(), wv.weight.end(), [](float w) { return w > 0; }),
                   1);
         for (int y = 0; y < 2; ++y)

@@ -66,15 +66,15 @@ FmfMaterial::FmfMaterial(const FmfMaterial& other, const osg::CopyOp& copyop)
     : Material(other, copyop),
       _factors(other._factors),
       _storage(other._storage),
-      _viewTable(other._viewTable),
-      _lightTable(other._lightTable) {}
+      _viewLookup(other._viewLookup),
+      _lightLookup(other._lightLookup) {}
 
 void FmfMaterial::assignFrom(const Material& other) {
     const FmfMaterial& o = assignCommon<FmfMaterial>(other);
     _factors = o._factors;
     _storage = o._storage;
-    _viewTable = o._viewTable;
-    _lightTable = o._lightTable;
+    _viewLookup = o._viewLookup;
+    _lightLookup = o._lightLookup;
 }
 
 int FmfMaterial::groups(int channel) const {
@@ -119,10 +119,8 @@ void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind sto
     setGeometry(factors.width, factors.height, factors.views, factors.lights);
     _factors = std::move(factors);
     _storage = storage;
-    _viewTable = DirectionInterpolator(_views).bake(kDirectionTableResolution);
-    _lightTable = _lights == _views
-                      ? _viewTable
-                      : DirectionInterpolator(_lights).bake(kDirectionTableResolution);
+    _viewLookup = DirectionLookup(_views);
+    _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
 }
 
 osg::ref_ptr<FmfMaterial> FmfMaterial::fromFactors(FactoredBtf factors,
@@ -137,9 +135,9 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFactors(FactoredBtf factors,
 int FmfMaterial::directionCombinations(const glm::vec3& view, const glm::vec3& light,
                                        std::array<std::size_t, 9>& images,
                                        std::array<float, 9>& weights) const {
-    // The shader's lookups: 3 view x 3 light neighbours from the baked tables.
-    const InterpolationWeights wv = DirectionInterpolator::lookupBaked(_viewTable, view);
-    const InterpolationWeights wl = DirectionInterpolator::lookupBaked(_lightTable, light);
+    // The shader's lookups: 3 view x 3 light neighbours, exact Delaunay weights.
+    const InterpolationWeights wv = _viewLookup.weights(view);
+    const InterpolationWeights wl = _lightLookup.weights(light);
     int count = 0;
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
@@ -424,10 +422,11 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(const FittedMaterial& file) {
 osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, methodName(), _width, _height);
-    addTexture(*stateSet, createFloatTexture(uTexture()).get(), "fmfU", 0);
-    addTexture(*stateSet, createFloatTexture(sxvTexture()).get(), "fmfSxV", 1);
-    addDirectionTable(*stateSet, _viewTable, "fmfView", 2, 3);
-    addDirectionTable(*stateSet, _lightTable, "fmfLight", 4, 5);
+    // Arrays even with one layer (rank <= 4, one view): fmf.frag samples sampler2DArrays.
+    addTexture(*stateSet, createFloatTextureArray(uTexture()).get(), "fmfU", 0);
+    addTexture(*stateSet, createFloatTextureArray(sxvTexture()).get(), "fmfSxV", 1);
+    _viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
+    _lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
     const bool fmf = _factors.model == FactorModel::Fmf;
     stateSet->addUniform(new osg::Uniform("fmfShared", fmf ? 1 : 0));
     stateSet->addUniform(new osg::Uniform("fmfGroups", groups(0), groups(1), groups(2)));
@@ -563,12 +562,16 @@ const bool registered = registerMethod([] {
         const auto& fmf = static_cast<const FmfMaterial&>(material);
         const bool shared = fmf.factors().model == FactorModel::Fmf;
         const int g = shared ? fmf.groups(0) : fmf.groups(0) + fmf.groups(1) + fmf.groups(2);
-        const int alu = 2 * ShaderCost::kLookupAlu + 36 + 19 + 5 + (shared ? 87 * g : 30 * g);
-        const int tex = 2 * ShaderCost::kLookupTex + (shared ? 28 * g : 10 * g);
+        const DirectionLookup::Cost v = fmf.viewLookup().cost(), l = fmf.lightLookup().cost();
+        const int alu = v.alu + l.alu + 36 + 19 + 5 + (shared ? 87 * g : 30 * g);
+        const int tex = v.tex + l.tex + (shared ? 28 * g : 10 * g);
+        const std::string lookups = "; L = " + std::to_string(v.alu + l.alu) +
+                                    ", T = " + std::to_string(v.tex + l.tex) +
+                                    ": view and light lookups)";
         return ShaderCost::ofEvaluate(
             alu, tex,
-            shared ? "ALU 87g+82, TEX 28g+4 (g = components / 4)"
-                   : "ALU 30g+82, TEX 10g+4 (g = sum of the channels' components / 4)");
+            shared ? "ALU 87g+60+L, TEX 28g+T (g = components / 4" + lookups
+                   : "ALU 30g+60+L, TEX 10g+T (g = sum of the channels' components / 4" + lookups);
     };
     // Seed 003 is the latest of the papers: last in the paper order.
     m.order = 70;

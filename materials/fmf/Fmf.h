@@ -21,8 +21,8 @@
 
 #include <array>
 
-#include "core/DirectionInterpolation.h"
 #include "core/FactoredBtf.h"
+#include "materials/DirectionLookup.h"
 #include "materials/Material.h"
 
 namespace osgBTF {
@@ -69,6 +69,9 @@ public:
     };
     MemoryBreakdown memoryBreakdown() const;
 
+    const DirectionLookup& viewLookup() const { return _viewLookup; }
+    const DirectionLookup& lightLookup() const { return _lightLookup; }
+
     /** Groups of 4 components of channel c's factor (Fmf: the one factor's for every c). */
     int groups(int channel) const;
     /** First SxV layer of channel c (Fmf: 0 for every c). */
@@ -82,10 +85,10 @@ protected:
     ~FmfMaterial() override = default;
 
 private:
-    /** Sets the factors after checks and rounding; bakes the direction tables. */
+    /** Sets the factors after checks and rounding; prepares the direction lookups. */
     void setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage);
     /** The up to 9 (image, weight) combinations for a query view and light. The one place that
-     *  knows how directions are interpolated (today: the baked tables the shader reads too). */
+     *  knows how directions are interpolated (DirectionLookup: exact, as the shader). */
     int directionCombinations(const glm::vec3& view, const glm::vec3& light,
                               std::array<std::size_t, 9>& images,
                               std::array<float, 9>& weights) const;
@@ -95,7 +98,7 @@ private:
 
     FactoredBtf _factors;
     MaterialTexture::PixelKind _storage = MaterialTexture::Half;
-    DirectionInterpolator::Baked _viewTable, _lightTable;
+    DirectionLookup _viewLookup, _lightLookup;
 };
 
 }  // namespace osgBTF
