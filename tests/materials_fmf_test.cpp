@@ -17,9 +17,11 @@
 #include "materials/MaterialState.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/lambert/Lambert.h"
+#include "tests/RandomFactors.h"
 #include "tests/TestUtil.h"
 
 using namespace osgBTF;
+using osgBTF::test::randomFactors;
 
 namespace {
 
@@ -64,33 +66,6 @@ double modelError(const MeasuredBtf& btf, const FmfMaterial& m) {
         for (std::size_t i = 0; i < n; ++i) sum += std::pow(double(model[i]) - data[i], 2);
     }
     return std::sqrt(sum);
-}
-
-/** Random factors of the given layout on the Bonn directions: U in [-0.5, 0.5] (model 11's Y
- *  channel shifted so exp stays moderate), SxV in [0, 1]. */
-FactoredBtf randomFactors(FactorModel model, std::array<int, 3> ranks, int width, int height,
-                          unsigned seed) {
-    FactoredBtf f;
-    f.model = model;
-    f.source = "random.btf";
-    f.views = f.lights = DirectionSet::bonn81();
-    f.width = width;
-    f.height = height;
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-    const int count = model == FactorModel::Fmf ? 1 : 3;
-    f.factors.resize(std::size_t(count));
-    const Eigen::Index images = Eigen::Index(f.imageCount());
-    for (int i = 0; i < count; ++i) {
-        BtfFactor& factor = f.factors[std::size_t(i)];
-        const int k = ranks[std::size_t(i)];
-        factor.S = Eigen::VectorXf::Ones(k);
-        factor.U.resize(model == FactorModel::Fmf ? images * 3 : images, k);
-        factor.SxV.resize(Eigen::Index(f.texelCount()), k);
-        for (Eigen::Index j = 0; j < factor.U.size(); ++j) factor.U.data()[j] = uniform(rng) - 0.5f;
-        for (Eigen::Index j = 0; j < factor.SxV.size(); ++j) factor.SxV.data()[j] = uniform(rng);
-    }
-    return f;
 }
 
 const std::vector<std::pair<Direction, Direction>> kUnmeasured = {{{31.7f, 77}, {52, 200}},

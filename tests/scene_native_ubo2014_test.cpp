@@ -23,6 +23,7 @@
 #include "scene/OpenMaterial.h"
 #include "tests/HandWrittenUbo2014.h"
 #include "tests/NotifyCapture.h"
+#include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
@@ -31,29 +32,11 @@ using osgBTF::test::errorOf;
 using osgBTF::test::HandWrittenBtf;
 using osgBTF::test::TempDir;
 using ReadResult = osgDB::ReaderWriter::ReadResult;
+using osgBTF::test::asMaterialNode;
+using osgBTF::test::readNode;
+using osgBTF::test::usePluginsFromBuild;
 
 namespace {
-
-void usePluginsFromBuild() {
-    static const bool done = [] {
-        const std::string dir = OSGBTF_BUILD_DIR "/lib";
-        setenv("OSG_LIBRARY_PATH", dir.c_str(), 0);
-        osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
-        if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);
-        return true;
-    }();
-    (void)done;
-}
-
-ReadResult readNode(const std::string& file, const std::string& optionString = {}) {
-    usePluginsFromBuild();
-    osg::ref_ptr<osgDB::Options> options = new osgDB::Options(optionString);
-    return osgDB::Registry::instance()->readNode(file, options.get());
-}
-
-MaterialNode* asMaterialNode(const ReadResult& result) {
-    return dynamic_cast<MaterialNode*>(const_cast<ReadResult&>(result).getNode());
-}
 
 std::string writeFile(const TempDir& dir, const HandWrittenBtf& f, const std::string& name) {
     const std::string path = dir.file(name);

@@ -18,31 +18,18 @@
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
 #include "tests/NotifyCapture.h"
+#include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::TempDir;
 using ReadResult = osgDB::ReaderWriter::ReadResult;
+using osgBTF::test::asMaterialNode;
+using osgBTF::test::readNode;
+using osgBTF::test::usePluginsFromBuild;
 
 namespace {
-
-void usePluginsFromBuild() {
-    static const bool done = [] {
-        const std::string dir = OSGBTF_BUILD_DIR "/lib";
-        setenv("OSG_LIBRARY_PATH", dir.c_str(), 0);
-        osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
-        if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);
-        return true;
-    }();
-    (void)done;
-}
-
-ReadResult readNode(const std::string& file, const std::string& optionString = {}) {
-    usePluginsFromBuild();
-    osg::ref_ptr<osgDB::Options> options = new osgDB::Options(optionString);
-    return osgDB::Registry::instance()->readNode(file, options.get());
-}
 
 using test::ScopedNotifyCapture;
 
@@ -70,10 +57,6 @@ std::vector<std::string> filesIn(const std::string& folder) {
         names.push_back(entry.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
-}
-
-MaterialNode* asMaterialNode(const ReadResult& result) {
-    return dynamic_cast<MaterialNode*>(const_cast<ReadResult&>(result).getNode());
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 
 #include "harness/sample/SampleBtf.h"
 #include "materials/fmf/Fmf.h"
+#include "tests/RandomFactors.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
 using namespace osgBTF;
@@ -19,27 +20,9 @@ namespace {
 
 constexpr int kWidth = 8, kHeight = 6;  // not square: catches swapped axes
 
+/** The shared generator at this test's size, with a colour mean and matrix for model 3. */
 FactoredBtf randomFactors(FactorModel model, std::array<int, 3> ranks, unsigned seed) {
-    FactoredBtf f;
-    f.model = model;
-    f.source = "random.btf";
-    f.views = f.lights = DirectionSet::bonn81();
-    f.width = kWidth;
-    f.height = kHeight;
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-    const int count = model == FactorModel::Fmf ? 1 : 3;
-    f.factors.resize(std::size_t(count));
-    const Eigen::Index images = Eigen::Index(f.imageCount());
-    for (int i = 0; i < count; ++i) {
-        BtfFactor& factor = f.factors[std::size_t(i)];
-        const int k = ranks[std::size_t(i)];
-        factor.S = Eigen::VectorXf::Ones(k);
-        factor.U.resize(model == FactorModel::Fmf ? images * 3 : images, k);
-        factor.SxV.resize(Eigen::Index(f.texelCount()), k);
-        for (Eigen::Index j = 0; j < factor.U.size(); ++j) factor.U.data()[j] = uniform(rng) - 0.5f;
-        for (Eigen::Index j = 0; j < factor.SxV.size(); ++j) factor.SxV.data()[j] = uniform(rng);
-    }
+    FactoredBtf f = test::randomFactors(model, ranks, kWidth, kHeight, seed);
     f.colorMean = {0.1f, 0.2f, 0.3f};
     f.colorMatrix = {0.5f, 0.2f, 0.1f, -0.3f, 0.6f, 0.2f, 0.1f, -0.2f, 0.7f};
     return f;

@@ -1,0 +1,39 @@
+// Reading through the osgDB plugins of this build (not an installed copy) in the unit tests.
+#pragma once
+
+#include <algorithm>
+#include <cstdlib>
+#include <string>
+
+#include <osgDB/ReadFile>
+#include <osgDB/Registry>
+
+#include "scene/MaterialNode.h"
+
+namespace osgBTF::test {
+
+/** Puts the build's plugin folder first on OSG's library path (once per process). */
+inline void usePluginsFromBuild() {
+    static const bool done = [] {
+        const std::string dir = OSGBTF_BUILD_DIR "/lib";
+        setenv("OSG_LIBRARY_PATH", dir.c_str(), 0);
+        osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
+        if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);
+        return true;
+    }();
+    (void)done;
+}
+
+inline osgDB::ReaderWriter::ReadResult readNode(const std::string& file,
+                                                const std::string& optionString = {}) {
+    usePluginsFromBuild();
+    osg::ref_ptr<osgDB::Options> options = new osgDB::Options(optionString);
+    return osgDB::Registry::instance()->readNode(file, options.get());
+}
+
+inline MaterialNode* asMaterialNode(const osgDB::ReaderWriter::ReadResult& result) {
+    using ReadResult = osgDB::ReaderWriter::ReadResult;
+    return dynamic_cast<MaterialNode*>(const_cast<ReadResult&>(result).getNode());
+}
+
+}  // namespace osgBTF::test
