@@ -62,6 +62,18 @@ std::vector<SphereSetting> defaultSphereSettings() {
              osg::Vec3(-0.7f, 0.6f, 0.4f)}};
 }
 
+CameraSetup sphereCamera(const SphereSetting& setting, int size) {
+    const double e = osg::DegreesToRadians(double(setting.cameraElevation));
+    const double distance = 3.2;
+    CameraSetup camera;
+    camera.view =
+        osg::Matrixd::lookAt(osg::Vec3d(0, distance * std::sin(e), distance * std::cos(e)),
+                             osg::Vec3d(0, 0, 0), osg::Vec3d(0, std::cos(e), -std::sin(e)));
+    camera.projection = osg::Matrixd::perspective(40.0, 1.0, 0.5, 10.0);
+    camera.width = camera.height = size;
+    return camera;
+}
+
 FloatImage renderSphere(HeadlessRenderer& renderer, const Material& material,
                         const SphereSetting& setting, int size, float textureScale) {
     osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
@@ -71,15 +83,7 @@ FloatImage renderSphere(HeadlessRenderer& renderer, const Material& material,
     geode->addDrawable(createTangentSphere().get());
     geode->setStateSet(stateSet.get());
 
-    const double e = osg::DegreesToRadians(double(setting.cameraElevation));
-    const double distance = 3.2;
-    CameraSetup camera;
-    camera.view =
-        osg::Matrixd::lookAt(osg::Vec3d(0, distance * std::sin(e), distance * std::cos(e)),
-                             osg::Vec3d(0, 0, 0), osg::Vec3d(0, std::cos(e), -std::sin(e)));
-    camera.projection = osg::Matrixd::perspective(40.0, 1.0, 0.5, 10.0);
-    camera.width = camera.height = size;
-    osg::ref_ptr<osg::Image> image = renderer.render(geode.get(), camera);
+    osg::ref_ptr<osg::Image> image = renderer.render(geode.get(), sphereCamera(setting, size));
     renderer.setScene(nullptr);
     FloatImage out(size, size, 3);
     out.channelNames = {"R", "G", "B"};

@@ -31,6 +31,8 @@ std::vector<SphereSetting> defaultSphereSettings();
 
 /** The material on the sphere seen from a perspective camera, one directional light; RGB, rows
  *  top-down, linear values. `textureScale` repeats the texture across the sphere. */
+/** The perspective camera renderSphere looks at the unit sphere with (size x size pixels). */
+CameraSetup sphereCamera(const SphereSetting& setting, int size);
 FloatImage renderSphere(HeadlessRenderer& renderer, const Material& material,
                         const SphereSetting& setting, int size, float textureScale);
 

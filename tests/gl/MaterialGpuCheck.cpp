@@ -224,15 +224,7 @@ ProbedRender renderProbed(const Material& material, osg::Drawable* drawable,
 
 ProbedRender renderProbedSphere(const Material& material, const SphereSetting& setting, int size,
                                 float textureScale) {
-    // renderSphere's camera (harness/Pictures.cpp).
-    const double e = osg::DegreesToRadians(double(setting.cameraElevation));
-    const double distance = 3.2;
-    CameraSetup camera;
-    camera.view =
-        osg::Matrixd::lookAt(osg::Vec3d(0, distance * std::sin(e), distance * std::cos(e)),
-                             osg::Vec3d(0, 0, 0), osg::Vec3d(0, std::cos(e), -std::sin(e)));
-    camera.projection = osg::Matrixd::perspective(40.0, 1.0, 0.5, 10.0);
-    camera.width = camera.height = size;
+    const CameraSetup camera = sphereCamera(setting, size);  // renderSphere's
     osg::ref_ptr<osg::Geometry> sphere = createTangentSphere();
     return renderProbed(material, sphere.get(), camera, [&](osg::StateSet& s) {
         setDirectionalLights(s, {setting.lightDirection});
