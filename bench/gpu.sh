@@ -172,6 +172,22 @@ if [ -x "$bin/bench_fit_analytic" ]; then
     fi
 fi
 
+# 5. fmf at the seed's rank (C = 100; step 1 times the default C = 32): issue 11's pass time.
+if [ -f "$sample" ]; then
+    resolution=${RESOLUTIONS%% *}
+    name="compare-fmf100-${resolution}-1l"
+    if step "$name" "$bin/btf" --no-progress compare "$sample" --out "$work/$name" \
+        --methods fmf --set fmf:components=100 --resolution "$resolution" --lights 1 \
+        --frames "$FRAMES" --warmup-frames "$WARMUP" --targets "$TARGETS"; then
+        {
+            echo "## btf compare: fmf with 100 components, ${resolution}x${resolution}, 1 light"
+            echo
+            sed -n '/^## Table 3/,/^## Fitting/p' "$work/$name/report.md" | sed '$d' | sed '1d'
+            echo
+        } >> "$tables"
+    fi
+fi
+
 for f in "$work"/compare-*/report.md; do
     [ -f "$f" ] && cp "$f" "$out/$(basename "$(dirname "$f")").md"
 done
