@@ -3,31 +3,41 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include <tbb/blocked_range.h>
-#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
 #include "core/Error.h"
 
 namespace osgBTF {
 
-ErrorSummary computeError(const MeasuredBtf& measured, const AbrdfEvaluator& model) {
+ErrorSummary computeError(const BtfSource& measured, const AbrdfEvaluator& model,
+                          const std::vector<std::size_t>* subset) {
     ErrorSummary summary;
-    const std::size_t texels = measured.texelCount();
-    const std::size_t values = measured.viewCount() * measured.lightCount() * 3;
+    std::vector<std::size_t> all;
+    if (!subset) {
+        all.resize(measured.texelCount());
+        std::iota(all.begin(), all.end(), std::size_t(0));
+        subset = &all;
+    }
+    const std::size_t texels = subset->size();
+    const std::size_t values = measured.imageCount() * 3;
     const std::size_t pairs = values / 3;
-    summary.perTexel.assign(texels, 0.0f);
-    struct Partial {
-        double squared = 0;
-        std::size_t nonFinite = 0;
-    };
-    tbb::combinable<Partial> partials;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, texels, 64), [&](const auto& range) {
-        std::vector<float> truth(values), approx(values);
-        Partial& partial = partials.local();
-        for (std::size_t t = range.begin(); t != range.end(); ++t) {
-            measured.abrdf(t, truth.data());
+    summary.texelsCompared = texels;
+    summary.perTexel.assign(measured.texelCount(),
+                            subset == &all ? 0.0f : std::numeric_limits<float>::quiet_NaN());
+    // Per texel, summed in texel order afterwards: the totals do not depend on how the work was
+    // split between threads (reports and tests compare them exactly).
+    std::vector<double> squaredOf(texels, 0.0);
+    std::vector<std::size_t> nonFiniteOf(texels, 0);
+    const std::size_t block = std::max<std::size_t>(measured.abrdfBlockTexels(), 16);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, texels, block), [&](const auto& range) {
+        std::vector<float> truths(range.size() * values), approx(values);
+        measured.readAbrdfs(subset->data() + range.begin(), range.size(), truths.data());
+        for (std::size_t j = range.begin(); j != range.end(); ++j) {
+            const std::size_t t = (*subset)[j];
+            const float* truth = truths.data() + (j - range.begin()) * values;
             model(t, approx.data());
             double lengthSum = 0;
             for (std::size_t p = 0; p < pairs; ++p) {
@@ -35,27 +45,28 @@ ErrorSummary computeError(const MeasuredBtf& measured, const AbrdfEvaluator& mod
                 for (int c = 0; c < 3; ++c) {
                     double d = double(truth[p * 3 + c]) - double(approx[p * 3 + c]);
                     if (!std::isfinite(d)) {
-                        ++partial.nonFinite;
+                        ++nonFiniteOf[j];
                         // A NaN must not vanish from the averages: count it as a full-scale miss.
                         d = 1.0;
                     }
                     sq += d * d;
                 }
-                partial.squared += sq;
+                squaredOf[j] += sq;
                 lengthSum += std::sqrt(sq);
             }
             summary.perTexel[t] = float(lengthSum / double(pairs));
         }
     });
     double squared = 0;
-    partials.combine_each([&](const Partial& p) {
-        squared += p.squared;
-        summary.nonFiniteValues += p.nonFinite;
-    });
+    for (std::size_t j = 0; j < texels; ++j) {
+        squared += squaredOf[j];
+        summary.nonFiniteValues += nonFiniteOf[j];
+    }
     double sum = 0;
     summary.minimum = std::numeric_limits<double>::infinity();
     summary.maximum = 0;
-    for (float e : summary.perTexel) {
+    for (std::size_t t : *subset) {
+        const double e = summary.perTexel[t];
         sum += e;
         summary.minimum = std::min(summary.minimum, double(e));
         summary.maximum = std::max(summary.maximum, double(e));

@@ -18,16 +18,21 @@ struct ErrorSummary {
     double average = 0, minimum = 0, maximum = 0;  ///< of the per-texel error
     double rmse = 0;
     double psnr = 0;                  ///< dB, +infinity for identical data
-    std::vector<float> perTexel;      ///< width*height, rows bottom-up (for error maps)
+    std::vector<float> perTexel;      ///< width*height, rows bottom-up (for error maps); NaN
+                                      ///< for texels left out of a subsample
     std::size_t nonFiniteValues = 0;  ///< NaN/Inf produced by the model; counted as errors
+    std::size_t texelsCompared = 0;   ///< all texels, or the subsample's size
 };
 
 /** Fills a texel's ABRDF ([view][light][rgb], the layout of MeasuredBtf::abrdf). */
 using AbrdfEvaluator = std::function<void(std::size_t texel, float* abrdfOut)>;
 
 /** Compares a model, evaluated texel by texel (in parallel), with the measured data. The model
- *  must be evaluated at the measured directions of `measured`. */
-ErrorSummary computeError(const MeasuredBtf& measured, const AbrdfEvaluator& model);
+ *  must be evaluated at the measured directions of `measured`. With `texels` (ascending, e.g.
+ *  randomTexels()), only those texels are compared, at all their (view, light) pairs: the
+ *  statistics are then those of the subsample. */
+ErrorSummary computeError(const BtfSource& measured, const AbrdfEvaluator& model,
+                          const std::vector<std::size_t>* texels = nullptr);
 /** Compares two BTFs of the same size and direction sets; throws Error otherwise. */
 ErrorSummary computeError(const MeasuredBtf& measured, const MeasuredBtf& model);
 

@@ -141,9 +141,13 @@ void FactoredBtf::decodeImages(std::size_t first, std::size_t count, float* out)
 }
 
 void FactoredBtf::decodeAbrdfs(const std::vector<std::size_t>& texels, float* out) const {
+    decodeAbrdfs(texels.data(), texels.size(), out);
+}
+
+void FactoredBtf::decodeAbrdfs(const std::size_t* texels, std::size_t count, float* out) const {
     const std::size_t images = imageCount(), nL = lights.size();
     const bool fmf = model == FactorModel::Fmf;
-    const Eigen::Index n = Eigen::Index(texels.size());
+    const Eigen::Index n = Eigen::Index(count);
     std::vector<float> scales(nL);
     for (std::size_t l = 0; l < nL; ++l) scales[l] = cosineScale(lights.vector(l).z);
     Eigen::MatrixXf products[3];
@@ -151,7 +155,7 @@ void FactoredBtf::decodeAbrdfs(const std::vector<std::size_t>& texels, float* ou
         const BtfFactor& factor = factors[f];
         FactorMatrix rows(n, factor.SxV.cols());
         for (Eigen::Index t = 0; t < n; ++t) {
-            const std::size_t texel = texels[std::size_t(t)];
+            const std::size_t texel = texels[t];
             const int x = int(texel % std::size_t(width)), y = int(texel / std::size_t(width));
             rows.row(t) = factor.SxV.row(Eigen::Index(factorRow(x, y)));
         }
@@ -221,6 +225,40 @@ std::uint64_t FactoredBtf::factorBytes() const {
 
 std::uint64_t FactoredBtf::decodedBytes() const {
     return std::uint64_t(texelCount()) * imageCount() * 3 * sizeof(float);
+}
+
+FactoredBtfSource::FactoredBtfSource(const FactoredBtf& factors)
+    : BtfSource(factors.width, factors.height, factors.views, factors.lights), _factors(factors) {
+    source = factors.source;
+    factors.validate();
+}
+
+FactoredBtfSource::FactoredBtfSource(std::shared_ptr<const FactoredBtf> factors)
+    : FactoredBtfSource(*factors) {
+    _owned = std::move(factors);
+}
+
+void FactoredBtfSource::readImages(std::size_t first, std::size_t count, float* out) const {
+    _factors.decodeImages(first, count, out);
+}
+
+void FactoredBtfSource::readAbrdfs(const std::size_t* texels, std::size_t count,
+                                   float* out) const {
+    _factors.decodeAbrdfs(texels, count, out);
+}
+
+// Blocks sized so that one decoded block (the GEMM's product) stays near 16 MiB: large enough
+// for the GEMM to run at full speed, small enough for one block per worker thread.
+std::size_t FactoredBtfSource::abrdfBlockTexels() const {
+    const std::size_t perTexel = imageCount() * 3 * sizeof(float);
+    return std::clamp<std::size_t>((std::size_t(16) << 20) / std::max<std::size_t>(perTexel, 1),
+                                   8, 1024);
+}
+
+std::size_t FactoredBtfSource::imageBlock() const {
+    const std::size_t perImage = texelCount() * 3 * sizeof(float);
+    return std::clamp<std::size_t>((std::size_t(16) << 20) / std::max<std::size_t>(perImage, 1),
+                                   1, 256);
 }
 
 }  // namespace osgBTF

@@ -17,12 +17,14 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 #include <glm/vec3.hpp>
 
+#include "core/BtfSource.h"
 #include "core/Directions.h"
 #include "core/MeasuredBtf.h"
 
@@ -97,6 +99,7 @@ struct FactoredBtf {
     /** Decodes the ABRDFs of the given texels (MeasuredBtf texel indices, y from the bottom) into
      *  `out`: texels.size() * views * lights * 3 floats, each as MeasuredBtf::abrdf. */
     void decodeAbrdfs(const std::vector<std::size_t>& texels, float* out) const;
+    void decodeAbrdfs(const std::size_t* texels, std::size_t count, float* out) const;
     /** Everything, decoded into a MeasuredBtf after checking memoryLimit(); in parallel blocks with
      *  progress under `progressLabel`. */
     MeasuredBtf decode(Storage storage = Storage::Float,
@@ -105,6 +108,28 @@ struct FactoredBtf {
     /** Bytes of the factors as floats (U, SxV and S), and of the decoded data as floats. */
     std::uint64_t factorBytes() const;
     std::uint64_t decodedBytes() const;
+};
+
+/** A FactoredBtf as input of a fit: every read decodes its block with one GEMM per factor, so the
+ *  decoded whole never exists. Throws Error (FactoredBtf::validate) for inconsistent factors. */
+class FactoredBtfSource : public BtfSource {
+public:
+    /** Refers to `factors`, which must outlive this source. */
+    explicit FactoredBtfSource(const FactoredBtf& factors);
+    /** Owns the factors (e.g. those of a file it was opened from). */
+    explicit FactoredBtfSource(std::shared_ptr<const FactoredBtf> factors);
+
+    void readImages(std::size_t first, std::size_t count, float* out) const override;
+    void readAbrdfs(const std::size_t* texels, std::size_t count, float* out) const override;
+    std::size_t abrdfBlockTexels() const override;
+    std::size_t imageBlock() const override;
+    bool inMemory() const override { return false; }
+
+    const FactoredBtf& factors() const { return _factors; }
+
+private:
+    std::shared_ptr<const FactoredBtf> _owned;
+    const FactoredBtf& _factors;
 };
 
 }  // namespace osgBTF

@@ -96,10 +96,7 @@ std::uint64_t MeasuredBtf::bytesNeeded(int width, int height, std::size_t views,
 
 MeasuredBtf::MeasuredBtf(int width, int height, DirectionSet views, DirectionSet lights,
                          Storage storage)
-    : _width(width),
-      _height(height),
-      _views(std::move(views)),
-      _lights(std::move(lights)),
+    : BtfSource(width, height, std::move(views), std::move(lights)),
       _storage(storage) {
     if (width <= 0 || height <= 0 || _views.size() == 0 || _lights.size() == 0) {
         std::ostringstream what;
@@ -159,6 +156,34 @@ void MeasuredBtf::abrdf(std::size_t texel, float* out) const {
     for (std::size_t pair = 0; pair < pairs; ++pair, i += stride) {
         for (int c = 0; c < 3; ++c)
             *out++ = _storage == Storage::Float ? _float[i + c] : float(_half[i + c]);
+    }
+}
+
+void MeasuredBtf::readImages(std::size_t first, std::size_t count, float* out) const {
+    const std::size_t values = texelCount() * 3;
+    for (std::size_t j = 0; j < count; ++j) {
+        const std::size_t base = (first + j) * values;
+        float* dst = out + j * values;
+        if (_storage == Storage::Float)
+            std::memcpy(dst, _float.data() + base, values * sizeof(float));
+        else
+            for (std::size_t i = 0; i < values; ++i) dst[i] = float(_half[base + i]);
+    }
+}
+
+void MeasuredBtf::readAbrdfs(const std::size_t* texels, std::size_t count, float* out) const {
+    // Image-outer: the storage is image-major, so each image's rows are touched once per block.
+    const std::size_t pairs = imageCount(), stride = texelCount() * 3, abrdfValues = pairs * 3;
+    for (std::size_t pair = 0; pair < pairs; ++pair) {
+        const std::size_t base = pair * stride;
+        for (std::size_t j = 0; j < count; ++j) {
+            const std::size_t i = base + texels[j] * 3;
+            float* dst = out + j * abrdfValues + pair * 3;
+            if (_storage == Storage::Float)
+                dst[0] = _float[i], dst[1] = _float[i + 1], dst[2] = _float[i + 2];
+            else
+                dst[0] = float(_half[i]), dst[1] = float(_half[i + 1]), dst[2] = float(_half[i + 2]);
+        }
     }
 }
 

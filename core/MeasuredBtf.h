@@ -8,6 +8,7 @@
 
 #include <Imath/half.h>
 
+#include "core/BtfSource.h"
 #include "core/Directions.h"
 
 namespace osgBTF {
@@ -29,7 +30,7 @@ std::uint64_t parseBytes(const std::string& text);
 /** Texel x = column (along +X), y = row counted from the bottom (+Y up, OSG's origin).
  *  Memory layout: image-major, [view][light][y][x][rgb]; one (view, light) image is contiguous so
  *  loaders fill it in one piece and per-view methods read it directly. */
-class MeasuredBtf {
+class MeasuredBtf : public BtfSource {
 public:
     MeasuredBtf() = default;
     /** Allocates zero-filled storage after checking memoryLimit(). */
@@ -39,16 +40,14 @@ public:
     static std::uint64_t bytesNeeded(int width, int height, std::size_t views, std::size_t lights,
                                      Storage storage);
 
-    int width() const { return _width; }
-    int height() const { return _height; }
-    std::size_t texelCount() const { return std::size_t(_width) * _height; }
-    const DirectionSet& views() const { return _views; }
-    const DirectionSet& lights() const { return _lights; }
-    std::size_t viewCount() const { return _views.size(); }
-    std::size_t lightCount() const { return _lights.size(); }
     Storage storage() const { return _storage; }
     std::uint64_t memoryBytes() const;
-    bool empty() const { return _width == 0; }
+
+    void readImages(std::size_t first, std::size_t count, float* out) const override;
+    void readAbrdfs(const std::size_t* texels, std::size_t count, float* out) const override;
+    std::size_t abrdfBlockTexels() const override { return 16; }
+    std::size_t imageBlock() const override { return 1; }
+    bool inMemory() const override { return true; }
 
     /** Index of one RGB triple in the flat storage. */
     std::size_t index(std::size_t view, std::size_t light, std::size_t texel) const {
@@ -81,12 +80,7 @@ public:
     Imath::half* halfData() { return _half.empty() ? nullptr : _half.data(); }
     const Imath::half* halfData() const { return _half.empty() ? nullptr : _half.data(); }
 
-    /** Human-readable origin, e.g. the file it was loaded from. */
-    std::string source;
-
 private:
-    int _width = 0, _height = 0;
-    DirectionSet _views, _lights;
     Storage _storage = Storage::Float;
     /** Leaves elements uninitialised on resize: the constructor zero-fills in parallel instead
      *  (first touch of gigabytes on one thread took half of a 6561-image load). */

@@ -80,7 +80,7 @@ std::vector<std::string> orderedMethods(const CompareOptions& options) {
 }
 
 /** Measured (view, light) pairs shown in the grids and used for the GPU spot check. */
-std::vector<std::pair<std::size_t, std::size_t>> spotPairs(const MeasuredBtf& btf) {
+std::vector<std::pair<std::size_t, std::size_t>> spotPairs(const BtfSource& btf) {
     const float wanted[][4] = {{0, 0, 45, 0}, {45, 90, 60, 180}, {60, 0, 30, 270}};
     std::vector<std::pair<std::size_t, std::size_t>> pairs;
     for (const auto& w : wanted) {
@@ -91,7 +91,7 @@ std::vector<std::pair<std::size_t, std::size_t>> spotPairs(const MeasuredBtf& bt
     return pairs;
 }
 
-std::string pairName(const MeasuredBtf& btf, const std::pair<std::size_t, std::size_t>& p) {
+std::string pairName(const BtfSource& btf, const std::pair<std::size_t, std::size_t>& p) {
     const Direction& v = btf.views()[p.first];
     const Direction& l = btf.lights()[p.second];
     return "view " + formatNumber(v.theta, 3) + "," + formatNumber(v.phi, 3) + " light " +
@@ -142,9 +142,12 @@ void fitStage(const CompareOptions& options, const fs::path& work, CompareResult
     }
 }
 
-void errorStage(const MeasuredBtf& btf, const fs::path& work, CompareResult& result,
+void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& result,
                 std::vector<osg::ref_ptr<Material>>& materials) {
     Progress progress("error and memory tables (CPU)", result.methods.size());
+    // The same texels for every method, so that their errors compare.
+    std::vector<std::size_t> subsample;
+    if (result.errorTexels < btf.texelCount()) subsample = randomTexels(btf, result.errorTexels);
     materials.assign(result.methods.size(), nullptr);
     for (std::size_t i = 0; i < result.methods.size(); ++i) {
         MethodResult& m = result.methods[i];
@@ -153,9 +156,12 @@ void errorStage(const MeasuredBtf& btf, const fs::path& work, CompareResult& res
                 osg::ref_ptr<Material> material = loadMaterial((work / m.fittedFile).string());
                 if (material->width() != btf.width() || material->height() != btf.height())
                     throw Error(m.fittedFile + ": fitted to a different size");
-                m.error = computeError(btf, [&](std::size_t texel, float* out) {
-                    material->evaluateMeasured(texel, out);
-                });
+                m.error = computeError(
+                    btf,
+                    [&](std::size_t texel, float* out) {
+                        material->evaluateMeasured(texel, out);
+                    },
+                    subsample.empty() ? nullptr : &subsample);
                 m.memory = material->memory();
                 if (m.memory.bytesPerTexel > 0)
                     m.compressionRatio = result.rawBytesPerTexel / m.memory.bytesPerTexel;
@@ -172,7 +178,7 @@ void errorStage(const MeasuredBtf& btf, const fs::path& work, CompareResult& res
     }
 }
 
-void gpuStage(const CompareOptions& options, const MeasuredBtf& btf, const fs::path& work,
+void gpuStage(const CompareOptions& options, const BtfSource& btf, const fs::path& work,
               CompareResult& result, const std::vector<osg::ref_ptr<Material>>& materials) {
     std::unique_ptr<HeadlessRenderer> renderer;
     try {
@@ -265,7 +271,7 @@ void gpuStage(const CompareOptions& options, const MeasuredBtf& btf, const fs::p
     }
 }
 
-void pictureStage(const MeasuredBtf& btf, const fs::path& work, CompareResult& result,
+void pictureStage(const BtfSource& btf, const fs::path& work, CompareResult& result,
                   const std::vector<osg::ref_ptr<Material>>& materials) {
     Progress progress("pictures", 3);
     std::vector<std::string> labels;
@@ -406,7 +412,9 @@ CompareResult runCompare(const CompareOptions& options) {
     const std::vector<std::string> methods = orderedMethods(options);
     if (options.outputDir.empty()) throw Error("no output folder given");
     // Loading first: a bad INPUT stops here, before any folder is created.
-    const MeasuredBtf btf = loadMeasuredBtf(options.input, options.load);
+    // A UBO2014 file stays factored (decoded block by block where read), so full-size files fit.
+    const std::unique_ptr<BtfSource> input = openBtfSource(options.input, options.load);
+    const BtfSource& btf = *input;
 
     CompareResult result;
     result.input = options.input;
@@ -420,6 +428,12 @@ CompareResult runCompare(const CompareOptions& options) {
     result.maxBytesPerTexel = options.maxBytesPerTexel;
     result.maxMsPerPass = options.maxMsPerPass;
     result.spotCheckPairs = spotPairs(btf);
+    // An exact error over all texels of a full-size file decodes all its ~11 G values once per
+    // method: by default factored input is compared on a stated random subsample.
+    const long long errorTexels =
+        options.errorTexels >= 0 ? options.errorTexels : btf.inMemory() ? 0 : 4096;
+    result.errorTexels = errorTexels == 0 ? btf.texelCount()
+                                          : std::min(btf.texelCount(), std::size_t(errorTexels));
     result.labelsDrawn = true;  // until a label fails to draw
     for (const std::string& name : methods) {
         MethodResult m;

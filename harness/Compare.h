@@ -42,6 +42,9 @@ struct CompareOptions {
     float sphereTextureScale = 4;
     double maxBytesPerTexel = 0;  ///< 0: no budget
     double maxMsPerPass = 0;      ///< 0: no budget
+    /** Texels the error tables compare (a random subsample, all pairs each); 0 = all; -1 = all
+     *  for data in memory, 4096 for a UBO2014 file (decoded per block, never whole). */
+    long long errorTexels = -1;
 };
 
 struct MethodResult {
@@ -76,6 +79,8 @@ struct CompareResult {
     std::size_t views = 0, lights = 0;
     double rawBytesPerTexel = 0;  ///< views x lights x 3 bytes (8-bit RGB, as the Bonn data)
     std::uint64_t rawTotalBytes = 0;
+    /** Texels the errors are computed on: width x height, or a random subsample's size. */
+    std::size_t errorTexels = 0;
     std::vector<MethodResult> methods;  ///< the baseline first
     // GPU part
     bool gpuRan = false;

@@ -193,9 +193,10 @@ FloatImage colourMappedErrors(const std::vector<float>& perTexel, int width, int
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
             const float v = perTexel[std::size_t(y) * width + x];
-            const glm::vec3 c = std::isfinite(v)
-                                    ? colourMap(maxValue > 0 ? float(v / maxValue) : 0.0f)
-                                    : glm::vec3(1, 0, 1);  // NaN/Inf: magenta
+            const glm::vec3 c = std::isfinite(v) ? colourMap(maxValue > 0 ? float(v / maxValue)
+                                                                           : 0.0f)
+                                : std::isnan(v) ? glm::vec3(0.5f)  // not compared
+                                                : glm::vec3(1, 0, 1);
             for (int k = 0; k < 3; ++k) out.at(x, height - 1 - y, k) = c[k];
         }
     return out;
@@ -212,8 +213,9 @@ FloatImage colourBar(int width, int height) {
     return out;
 }
 
-FloatImage measuredImage(const MeasuredBtf& btf, std::size_t view, std::size_t light) {
-    const std::vector<float> rgb = btf.image(view, light);
+FloatImage measuredImage(const BtfSource& btf, std::size_t view, std::size_t light) {
+    std::vector<float> rgb(btf.texelCount() * 3);
+    btf.readImages(view * btf.lightCount() + light, 1, rgb.data());
     const int w = btf.width(), h = btf.height();
     FloatImage out(w, h, 3);
     out.channelNames = {"R", "G", "B"};

@@ -58,7 +58,8 @@ bool drawText(FloatImage& image, int x, int y, const std::string& text, int size
 glm::vec3 colourMap(float t);
 
 /** A per-texel error map (values rows bottom-up, as ErrorSummary::perTexel) colour-mapped over
- *  [0, maxValue], top-down RGB. */
+ *  [0, maxValue], top-down RGB; NaN (a texel outside the compared subsample) is grey, an
+ *  infinite error magenta. */
 FloatImage colourMappedErrors(const std::vector<float>& perTexel, int width, int height,
                               double maxValue);
 
@@ -66,7 +67,7 @@ FloatImage colourMappedErrors(const std::vector<float>& perTexel, int width, int
 FloatImage colourBar(int width, int height);
 
 /** A measured (view, light) image of the BTF, top-down RGB (like evaluateMaterialImage). */
-FloatImage measuredImage(const MeasuredBtf& btf, std::size_t view, std::size_t light);
+FloatImage measuredImage(const BtfSource& btf, std::size_t view, std::size_t light);
 
 /** Index of the direction of `set` closest to (theta, phi) degrees. */
 std::size_t nearestDirection(const DirectionSet& set, float theta, float phi);

@@ -76,8 +76,13 @@ std::string reportMarkdown(const CompareResult& r) {
        << "Input `" << r.input << "`: " << r.width << "x" << r.height << " texels, " << r.views
        << " views x " << r.lights << " lights. Raw data: " << general(r.rawBytesPerTexel, 8)
        << " bytes per texel (8-bit RGB per measured value), " << formatBytes(r.rawTotalBytes)
-       << " in all.\n\n"
-       << "GPU: " << r.gpuNote << ".\n\n"
+       << " in all.\n\n";
+    if (r.errorTexels < std::size_t(r.width) * std::size_t(r.height))
+        md << "**Errors are computed on a random subsample of " << r.errorTexels << " of "
+           << std::size_t(r.width) * std::size_t(r.height)
+           << " texels** (every view and light pair of each; the same texels for every method; "
+              "grey in the error maps: not compared).\n\n";
+    md << "GPU: " << r.gpuNote << ".\n\n"
        << "**" << r.recommendation << ".**\n\n"
        << "Definitions of every column: harness/README.md in the osgBTF sources.\n\n";
 
@@ -298,6 +303,7 @@ std::string resultsJson(const CompareResult& r) {
                   {"height", r.height},
                   {"views", r.views},
                   {"lights", r.lights},
+                  {"error_texels", r.errorTexels},
                   {"raw_bytes_per_texel", r.rawBytesPerTexel},
                   {"raw_total_bytes", r.rawTotalBytes}};
     j["gpu"] = {{"ran", r.gpuRan},

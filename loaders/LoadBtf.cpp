@@ -67,4 +67,14 @@ MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options)
     return btf;
 }
 
+std::unique_ptr<BtfSource> openBtfSource(const std::string& path, const LoadOptions& options) {
+    if (isUbo2014File(path)) {
+        auto factors = std::make_shared<Ubo2014Factors>(readUbo2014(path, options));
+        factors->source = path;
+        return std::make_unique<FactoredBtfSource>(
+            std::shared_ptr<const FactoredBtf>(std::move(factors)));
+    }
+    return std::make_unique<MeasuredBtf>(loadMeasuredBtf(path, options));
+}
+
 }  // namespace osgBTF

@@ -1,6 +1,7 @@
 // osgBTF: what every compression method provides, and the registry that lists them.
 //
-// A method (materials/<name>/) fits a Material from a MeasuredBtf. The Material evaluates itself
+// A method (materials/<name>/) fits a Material from measured data (a BtfSource: a MeasuredBtf in memory or
+// a FactoredBtf decoded block by block). The Material evaluates itself
 // on the CPU with the same math as its shader (the reference for tests and error metrics), saves
 // itself as a FittedMaterial file, accounts for its memory, and builds the OSG state that renders
 // it: float textures and uniforms in a StateSet, with one osg::Program shared per method.
@@ -141,7 +142,7 @@ struct MethodInfo {
     std::vector<OptionSpec> options;
     /** Fits the method. Implementations start with validateOptions(), so every caller gets the
      *  one error format; they read typed values from its result. */
-    std::function<osg::ref_ptr<Material>(const MeasuredBtf&, const FitOptions&)> fit;
+    std::function<osg::ref_ptr<Material>(const BtfSource&, const FitOptions&)> fit;
     std::function<osg::ref_ptr<Material>(const FittedMaterial&)> load;
     /** A new empty material of the method's class (e.g. `[]() -> osg::Object* { return new
      *  LafMaterial; }`): registerMethod adds an osgDB object wrapper for that class, named by its

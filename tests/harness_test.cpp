@@ -279,13 +279,15 @@ TEST(Harness, ErrorMapColoursAndPlotAreWellFormed) {
               }),
               "colourMappedErrors: 3 values for a 2x2 map");
     // Rows bottom-up in, top-down out; 0 maps to the dark end, the maximum to the bright end.
-    const FloatImage map = colourMappedErrors({0.0f, 1.0f, 0.5f, NAN}, 2, 2, 1.0);
+    const FloatImage map = colourMappedErrors({0.0f, 1.0f, INFINITY, NAN}, 2, 2, 1.0);
     ASSERT_EQ(map.width, 2);
     EXPECT_LT(map.at(0, 1, 1), 0.1f);  // texel (0, 0) = 0: dark
     EXPECT_GT(map.at(1, 1, 0), 0.9f);  // texel (1, 0) = 1: yellow
     EXPECT_GT(map.at(1, 1, 1), 0.8f);
-    EXPECT_EQ(map.at(1, 0, 0), 1.0f);  // NaN: magenta
-    EXPECT_EQ(map.at(1, 0, 1), 0.0f);
+    EXPECT_EQ(map.at(0, 0, 0), 1.0f);  // texel (0, 1) = Inf: magenta
+    EXPECT_EQ(map.at(0, 0, 1), 0.0f);
+    EXPECT_EQ(map.at(1, 0, 0), 0.5f);  // texel (1, 1) = NaN, not compared: grey
+    EXPECT_EQ(map.at(1, 0, 1), 0.5f);
     const std::string svg = errorMemorySvg({{"a<b", 6, 0.1}, {"pca", 3888, 0.02}}, "t");
     EXPECT_EQ(svg.rfind("<svg ", 0), 0u);
     EXPECT_NE(svg.find("a&lt;b"), std::string::npos);

@@ -34,14 +34,15 @@ public:
         : Material(other, copyop), value(other.value) {}
     META_Object(osgBTFTest, DummyMaterial)
 
-        static osg::ref_ptr<DummyMaterial> fit(const MeasuredBtf& btf, const FitOptions& options) {
+        static osg::ref_ptr<DummyMaterial> fit(const BtfSource& btf, const FitOptions& options) {
         const OptionValues o = validateOptions("dummy", options);
         osg::ref_ptr<DummyMaterial> m = new DummyMaterial;
         m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());
         m->value.assign(btf.texelCount() * 3, 0.0f);
         const float gain = float(o.number("gain"));
+        std::vector<float> abrdf(btf.imageCount() * 3);
         for (std::size_t t = 0; t < btf.texelCount(); ++t) {
-            const std::vector<float> abrdf = btf.abrdf(t);
+            btf.readAbrdfs(&t, 1, abrdf.data());
             // The first measured value, as a plain colour: a poor model, but a deterministic one.
             for (int c = 0; c < 3; ++c) m->value[t * 3 + c] = abrdf[std::size_t(c)] * gain;
         }
@@ -98,7 +99,7 @@ const bool registered = registerMethod([] {
     m.name = "dummy";
     m.description = "test-only lit texture defined in the test binary";
     m.options = {OptionSpec::number("gain", 1, 0, 4, "factor on the first measured value")};
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return DummyMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

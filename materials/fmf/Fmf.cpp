@@ -449,7 +449,7 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
 
 // ---- fit -------------------------------------------------------------------------------------
 
-osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     const OptionValues o = validateOptions("fmf", options);
     if (btf.empty()) throw Error("fmf: the BTF is empty");
@@ -465,28 +465,23 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const MeasuredBtf& btf, const FitOpti
 
     // Rows (image, channel) in blocks of whole images, read straight from the BTF's storage:
     // the only copies are one block per thread, de-interleaved into A^T's columns.
-    const std::size_t blockImages =
-        std::clamp<std::size_t>((std::size_t(16) << 20) / (texels * 3 + 1), 1, 256);
+    const std::size_t blockImages = std::max<std::size_t>(
+        btf.imageBlock(),
+        std::clamp<std::size_t>((std::size_t(16) << 20) / (texels * 3 + 1), 1, 256));
     RowBlockSource source;
     source.rows = rows;
     source.cols = texels;
     source.blockRows = blockImages * 3;
     source.fill = [&btf, texels](std::size_t first, std::size_t count, float* out) {
-        const std::size_t firstImage = first / 3;
-        for (std::size_t j = 0; j < count / 3; ++j) {
-            const std::size_t offset = (firstImage + j) * texels * 3;
+        const std::size_t firstImage = first / 3, images = count / 3;
+        std::vector<float> interleaved(images * texels * 3);
+        btf.readImages(firstImage, images, interleaved.data());
+        for (std::size_t j = 0; j < images; ++j) {
+            const float* f = interleaved.data() + j * texels * 3;
             float* r = out + (j * 3) * texels;
             float* g = r + texels;
             float* b = g + texels;
-            if (const float* f = btf.floatData()) {
-                f += offset;
-                for (std::size_t t = 0; t < texels; ++t, f += 3)
-                    r[t] = f[0], g[t] = f[1], b[t] = f[2];
-            } else {
-                const Imath::half* h = btf.halfData() + offset;
-                for (std::size_t t = 0; t < texels; ++t, h += 3)
-                    r[t] = float(h[0]), g[t] = float(h[1]), b[t] = float(h[2]);
-            }
+            for (std::size_t t = 0; t < texels; ++t, f += 3) r[t] = f[0], g[t] = f[1], b[t] = f[2];
         }
     };
     StreamedSvdOptions svdOptions;
@@ -546,7 +541,7 @@ const bool registered = registerMethod([] {
                                      "100)"),
                  OptionSpec::choice("storage", "half", {"half", "float"},
                                     "precision of U and SxV on the GPU and in the file")};
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return FmfMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

@@ -46,7 +46,7 @@ public:
     /** Options: components (default 32), storage (half | float, default half). Truncated SVD
      *  of the (view, light, channel) x texel matrix, blockwise against the BTF's own storage.
      *  Throws Error for an empty BTF, invalid options, or components above min(rows, texels). */
-    static osg::ref_ptr<FmfMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+    static osg::ref_ptr<FmfMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<FmfMaterial> fromFile(const FittedMaterial& file);
 
     /** The factors as rendered (half storage: the rounded values). */

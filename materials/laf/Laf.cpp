@@ -27,7 +27,7 @@ osg::ref_ptr<LafMaterial> LafMaterial::create(int width, int height, int lobeCou
 
 // ---- fitter: LobeMaterial's, with T fixed at 1 -----------------------------------------------
 
-osg::ref_ptr<LafMaterial> LafMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+osg::ref_ptr<LafMaterial> LafMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const OptionValues o = validateOptions("laf", options);
     if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
         throw Error("laf: cannot fit an empty BTF");
@@ -87,7 +87,7 @@ const bool registered = registerMethod([] {
         OptionSpec::flag("cosine", true,
                          "1: the bracket times l_z, the BRDF model times the foreshortening the "
                          "data contain; 0: seed 001 eq. 2 literally, no l_z")};
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return LafMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

@@ -35,7 +35,7 @@ public:
         /** Options: lobes (1..8, default 2), iterations (LM iterations per texel, 1..500, default
          *  50), cosine (0 or 1, default 1). Throws Error "laf: ..." for invalid or unknown options
          * and an empty BTF. */
-        static osg::ref_ptr<LafMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+        static osg::ref_ptr<LafMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<LafMaterial> fromFile(const FittedMaterial& file);
     /** An unfitted model of the given shape (zero colours, zero lobes): memory accounting and
      *  tests build models without fitting. */

@@ -123,7 +123,7 @@ void LobeMaterial::addLobeState(osg::StateSet& stateSet, const std::string& pref
 // what the file and the GPU hold. With T fixed at 1 every product with T is exact, which makes
 // the LAF path the SLAF computation without the T steps.
 
-void LobeMaterial::fitLobes(const MeasuredBtf& btf, int iterations, int rounds,
+void LobeMaterial::fitLobes(const BtfSource& btf, int iterations, int rounds,
                             std::vector<float>* scaleOut) {
     const bool viewTable = scaleOut != nullptr;
     const int k = _lobes;
@@ -188,9 +188,12 @@ void LobeMaterial::fitLobes(const MeasuredBtf& btf, int iterations, int rounds,
                 sum[j] = lobes::luminanceModel(lobesOnly.data(), k, pairs.products[j]);
         };
 
+        // The whole row in one read: for factored input that is one decoding GEMM per row.
+        std::vector<float> row(std::size_t(btf.width()) * pairCount * 3);
+        btf.readAbrdfRange(std::size_t(y) * btf.width(), std::size_t(btf.width()), row.data());
         for (int x = 0; x < btf.width(); ++x) {
             const std::size_t t = std::size_t(y) * btf.width() + x;
-            btf.abrdf(t, abrdf.data());
+            std::copy_n(row.data() + std::size_t(x) * pairCount * 3, pairCount * 3, abrdf.data());
             for (std::size_t j = 0; j < pairCount; ++j) {
                 for (int c = 0; c < 3; ++c) rgb[j * 3 + c] = abrdf[j * 3 + c];
                 luminance[j] = (rgb[j * 3] + rgb[j * 3 + 1] + rgb[j * 3 + 2]) / 3.0;

@@ -60,7 +60,7 @@ protected:
      *  `scale` null: T fixed at 1 (LAF). Otherwise T is fitted, alternating `rounds` times with
      *  the lobes, and stored there as [view][y][x][rgb] (SLAF). Sets the fit info seconds,
      *  iterations, fallbacks and lobes. */
-    void fitLobes(const MeasuredBtf& btf, int iterations, int rounds, std::vector<float>* scale);
+    void fitLobes(const BtfSource& btf, int iterations, int rounds, std::vector<float>* scale);
 
     int _lobes = 0;
     bool _cosine = true;

@@ -15,7 +15,7 @@ void LambertMaterial::assignFrom(const Material& other) {
     albedo = o.albedo;
 }
 
-osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const MeasuredBtf& btf,
+osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const BtfSource& btf,
                                                    const FitOptions& options) {
     validateOptions("lambert", options);  // it has none: anything given is an error
     osg::ref_ptr<LambertMaterial> m = new LambertMaterial;
@@ -25,18 +25,25 @@ osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const MeasuredBtf& btf,
     for (std::size_t v = 0; v < btf.viewCount(); ++v)
         for (std::size_t l = 0; l < btf.lightCount(); ++l)
             sumSquares += double(btf.lights().vector(l).z) * btf.lights().vector(l).z;
-    tbb::parallel_for(std::size_t(0), btf.texelCount(), [&](std::size_t t) {
-        std::vector<float> abrdf = btf.abrdf(t);
-        double sum[3] = {0, 0, 0};
-        std::size_t i = 0;
-        for (std::size_t v = 0; v < btf.viewCount(); ++v)
-            for (std::size_t l = 0; l < btf.lightCount(); ++l, i += 3) {
-                const double lz = btf.lights().vector(l).z;
-                for (int c = 0; c < 3; ++c) sum[c] += abrdf[i + c] * lz;
-            }
-        // The model is what is stored: round to half now so CPU, file and GPU agree exactly.
-        for (int c = 0; c < 3; ++c)
-            m->albedo[t * 3 + c] = float(Imath::half(float(sum[c] / sumSquares)));
+    const std::size_t block = btf.abrdfBlockTexels(), texels = btf.texelCount(),
+                      values = btf.imageCount() * 3;
+    tbb::parallel_for(std::size_t(0), (texels + block - 1) / block, [&](std::size_t b) {
+        const std::size_t first = b * block, count = std::min(block, texels - first);
+        std::vector<float> abrdfs(count * values);
+        btf.readAbrdfRange(first, count, abrdfs.data());
+        for (std::size_t t = first; t < first + count; ++t) {
+            const float* abrdf = abrdfs.data() + (t - first) * values;
+            double sum[3] = {0, 0, 0};
+            std::size_t i = 0;
+            for (std::size_t v = 0; v < btf.viewCount(); ++v)
+                for (std::size_t l = 0; l < btf.lightCount(); ++l, i += 3) {
+                    const double lz = btf.lights().vector(l).z;
+                    for (int c = 0; c < 3; ++c) sum[c] += abrdf[i + c] * lz;
+                }
+            // The model is what is stored: round to half now so CPU, file and GPU agree exactly.
+            for (int c = 0; c < 3; ++c)
+                m->albedo[t * 3 + c] = float(Imath::half(float(sum[c] / sumSquares)));
+        }
     });
     return m;
 }
@@ -82,7 +89,7 @@ const bool registered = registerMethod([] {
     MethodInfo m;
     m.name = "lambert";
     m.description = "plain lit texture: rho(x) * cos(theta_l), the baseline";
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return LambertMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

@@ -22,7 +22,7 @@ public:
     void assignFrom(const Material& other) override;
     META_Object(osgBTF, LambertMaterial)
 
-        static osg::ref_ptr<LambertMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+        static osg::ref_ptr<LambertMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<LambertMaterial> fromFile(const FittedMaterial& file);
 
     std::string methodName() const override { return "lambert"; }

@@ -50,7 +50,7 @@ void LpcaRevisedMaterial::assignFrom(const Material& other) {
 
 // ---- fit: LPCA, then resampling ----------------------------------------------------------------
 
-osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fit(const MeasuredBtf& btf,
+osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fit(const BtfSource& btf,
                                                            const FitOptions& options) {
     const OptionValues o = validateOptions("lpca-revised", options);
     const int resolution = o.integer("resolution");
@@ -338,7 +338,7 @@ const bool registered = registerMethod([] {
     m.options.push_back(OptionSpec::choice("storage", "half", {"half", "unorm8"},
                                            "grid precision (unorm8: the scales are folded into "
                                            "the weights)"));
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return LpcaRevisedMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

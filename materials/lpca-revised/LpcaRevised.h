@@ -44,7 +44,7 @@ public:
         /** Fits LPCA (options clusters, components, iterations, training, seed as "lpca") and
          *  resamples it; extra options: resolution (grid samples per parameter, default 16) and
          *  storage (half or unorm8). Throws Error "lpca-revised: ..." for invalid options. */
-        static osg::ref_ptr<LpcaRevisedMaterial> fit(const MeasuredBtf& btf,
+        static osg::ref_ptr<LpcaRevisedMaterial> fit(const BtfSource& btf,
                                                      const FitOptions& options);
     /** Resamples a fitted LPCA model. */
     static osg::ref_ptr<LpcaRevisedMaterial> fromLpca(const LpcaMaterial& lpca, int resolution,

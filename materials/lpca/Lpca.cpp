@@ -270,7 +270,7 @@ const bool registered = registerMethod([] {
         "local PCA (Mueller 2003): per texel a cluster index and c weights of its cluster's "
         "Eigen-BRDFs, 3x3 view/light interpolation";
     m.options = LpcaSettings::optionTable();
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return LpcaMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

@@ -51,9 +51,9 @@ public:
 
         /** Fits the model (LpcaFit.cpp). Options: see LpcaSettings. Fills fitInfo with "seconds",
          *  "iterations", "training_texels", "training_rms". Throws Error for invalid options. */
-        static osg::ref_ptr<LpcaMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+        static osg::ref_ptr<LpcaMaterial> fit(const BtfSource& btf, const FitOptions& options);
     /** The same with settings already read (lpca-revised's fit). */
-    static osg::ref_ptr<LpcaMaterial> fit(const MeasuredBtf& btf, const LpcaSettings& settings);
+    static osg::ref_ptr<LpcaMaterial> fit(const BtfSource& btf, const LpcaSettings& settings);
     static osg::ref_ptr<LpcaMaterial> fromFile(const FittedMaterial& file);
 
     /** A model of the given shape with zero weights and Eigen-BRDFs, e.g. for memory accounting

@@ -22,6 +22,7 @@
 
 #include <Imath/half.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 #include <Eigen/Dense>
 
 #include "core/Error.h"
@@ -41,24 +42,18 @@ constexpr std::size_t kMaxRefitMembers = 256;
 /** Texels per block of the final projection pass (bounds the gathered ABRDF block's memory). */
 constexpr std::size_t kChunkTexels = 2048;
 
-/** Rows = the ABRDFs of `texels` (ascending for locality: the BTF is image-major). */
-void gatherRows(const MeasuredBtf& btf, const std::size_t* texels, std::size_t count,
+/** Rows = the ABRDFs of `texels` (ascending reads fastest), in parallel blocks of the size the
+ *  source reads efficiently (for factored input one decoding GEMM per block). */
+void gatherRows(const BtfSource& btf, const std::size_t* texels, std::size_t count,
                 RowMatrix& rows) {
-    const std::size_t pairs = btf.viewCount() * btf.lightCount();
-    const std::size_t stride = btf.texelCount() * 3;
-    rows.resize(Eigen::Index(count), Eigen::Index(pairs * 3));
-    const float* f = btf.floatData();
-    const Imath::half* h = btf.halfData();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const auto& r) {
-        for (std::size_t pair = 0; pair < pairs; ++pair) {
-            const std::size_t base = pair * stride;
-            for (std::size_t j = r.begin(); j < r.end(); ++j) {
-                const std::size_t i = base + texels[j] * 3;
-                float* out = rows.data() + j * pairs * 3 + pair * 3;
-                for (int c = 0; c < 3; ++c) out[c] = f ? f[i + c] : float(h[i + c]);
-            }
-        }
-    });
+    const std::size_t values = btf.imageCount() * 3;
+    rows.resize(Eigen::Index(count), Eigen::Index(values));
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, count, btf.abrdfBlockTexels()),
+        [&](const auto& r) {
+            btf.readAbrdfs(texels + r.begin(), r.size(), rows.data() + r.begin() * values);
+        },
+        tbb::simple_partitioner());
 }
 
 /** out = rows * basis, in parallel over blocks of rows (Eigen's GEMM is single-threaded here). */
@@ -175,18 +170,18 @@ LpcaSettings LpcaSettings::fromOptions(const FitOptions& options) {
 }
 
 struct LpcaFitter {
-    static osg::ref_ptr<LpcaMaterial> run(const MeasuredBtf& btf, const LpcaSettings& s);
+    static osg::ref_ptr<LpcaMaterial> run(const BtfSource& btf, const LpcaSettings& s);
 };
 
-osg::ref_ptr<LpcaMaterial> LpcaMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+osg::ref_ptr<LpcaMaterial> LpcaMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     return LpcaFitter::run(btf, LpcaSettings::fromOptions(options));
 }
 
-osg::ref_ptr<LpcaMaterial> LpcaMaterial::fit(const MeasuredBtf& btf, const LpcaSettings& settings) {
+osg::ref_ptr<LpcaMaterial> LpcaMaterial::fit(const BtfSource& btf, const LpcaSettings& settings) {
     return LpcaFitter::run(btf, settings);
 }
 
-osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const MeasuredBtf& btf, const LpcaSettings& s) {
+osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const BtfSource& btf, const LpcaSettings& s) {
     const auto start = std::chrono::steady_clock::now();
     if (btf.empty()) throw Error("lpca: the BTF is empty");
     const std::size_t texels = btf.texelCount();

@@ -141,7 +141,7 @@ void PcaMaterial::prepareLookups() {
     _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
 }
 
-osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     const OptionValues o = validateOptions("pca", options);
     if (btf.empty()) throw Error("pca: the BTF is empty");
@@ -168,15 +168,7 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const MeasuredBtf& btf, const FitOpti
     // single-threaded kernels inside keep both cores busy without oversubscription.
     tbb::parallel_for(std::size_t(0), btf.viewCount(), [&](std::size_t v) {
         std::vector<float> images(rows * lights);  // column l = image (v, l), texel-major RGB
-        for (std::size_t l = 0; l < lights; ++l) {
-            float* column = images.data() + l * rows;
-            const std::size_t first = btf.index(v, l, 0);
-            if (const float* f = btf.floatData())
-                std::copy(f + first, f + first + rows, column);
-            else
-                std::transform(btf.halfData() + first, btf.halfData() + first + rows, column,
-                               [](Imath::half h) { return float(h); });
-        }
+        btf.readImages(v * lights, lights, images.data());
         const TruncatedSvd svd = truncatedSvd(images.data(), rows, lights, components);
         double sumSquares = 0;
         for (double s : svd.singularValues) sumSquares += s * s;
@@ -358,7 +350,7 @@ const bool registered = registerMethod([] {
         OptionSpec::choice("storage", "unorm8", {"unorm8", "half", "float"},
                            "Eigen-Texture precision: unorm8 is 1 byte per value, as seed 001 "
                            "Table 2 counts")};
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return PcaMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

@@ -44,7 +44,7 @@ public:
          * Throws Error for an empty BTF, unknown options, components outside 1..min(lights, 3 *
          * texels), an unknown storage, or a texel size whose tiled Eigen-Textures exceed 16384
          * texels. */
-        static osg::ref_ptr<PcaMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+        static osg::ref_ptr<PcaMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<PcaMaterial> fromFile(const FittedMaterial& file);
 
     /** Sets size, directions, component count and storage and sizes the two textures' dimensions

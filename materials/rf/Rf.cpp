@@ -213,7 +213,7 @@ using Vector = Eigen::VectorXd;
 /** Fits the lobes of one texel in all measured views and then its colours. One per TBB task. */
 class TexelFitter {
 public:
-    TexelFitter(const MeasuredBtf& btf, const RfMaterial::Settings& settings)
+    TexelFitter(const BtfSource& btf, const RfMaterial::Settings& settings)
         : _settings(settings),
           _views(btf.viewCount()),
           _lights(btf.lightCount()),
@@ -510,7 +510,7 @@ private:
 
 }  // namespace
 
-osg::ref_ptr<RfMaterial> RfMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+osg::ref_ptr<RfMaterial> RfMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const Settings settings = settingsFrom(options);
     if (btf.empty()) throw Error("rf: the measured BTF is empty");
     osg::ref_ptr<RfMaterial> m =
@@ -528,12 +528,7 @@ osg::ref_ptr<RfMaterial> RfMaterial::fit(const MeasuredBtf& btf, const FitOption
         std::vector<float> abrdfs(blockSize * views * lights * 3);
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
             const std::size_t first = b * blockSize, count = std::min(blockSize, texels - first);
-            for (std::size_t v = 0; v < views; ++v)
-                for (std::size_t l = 0; l < lights; ++l)
-                    for (std::size_t t = 0; t < count; ++t)
-                        for (int c = 0; c < 3; ++c)
-                            abrdfs[((t * views + v) * lights + l) * 3 + c] =
-                                btf.value(v, l, first + t, c);
+            btf.readAbrdfRange(first, count, abrdfs.data());
             std::vector<Vector> previous(views);
             for (std::size_t t = 0; t < count; ++t) {
                 // A new row has no left neighbour in this block.
@@ -691,7 +686,7 @@ const bool registered = registerMethod([] {
         OptionSpec::number("max-exponent", defaults.maxExponent, 1, 256,
                            "largest lobe exponent n (the Bonn lights are 15 degrees apart: "
                            "sharper lobes are unconstrained between them)")};
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return RfMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

@@ -64,7 +64,7 @@ public:
     /** Fits the model to a measured BTF (see the file comment). Throws Error for bad options or
      *  data the model cannot hold. Fills fitInfo: seconds, lobes, iterations (mean LM iterations
      *  per texel and view), fallbacks (fits that kept their initialisation). */
-    static osg::ref_ptr<RfMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+    static osg::ref_ptr<RfMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<RfMaterial> fromFile(const FittedMaterial& file);
     /** A zero model of the given shape: memory accounting, tests and synthetic data. Throws Error
      *  if the shape is invalid (fewer than 3 views, lobes out of range, too many layers). */

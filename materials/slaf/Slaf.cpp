@@ -36,7 +36,7 @@ void SlafMaterial::prepare() {
 
 // ---- fitter: LobeMaterial's, with the view table T fitted ------------------------------------
 
-osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const MeasuredBtf& btf, const FitOptions& options) {
+osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const OptionValues o = validateOptions("slaf", options);
     const int rounds = o.integer("rounds");
     if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
@@ -138,7 +138,7 @@ const bool registered = registerMethod([] {
                             "alternations between the view table T and the lobes"),
         OptionSpec::flag("cosine", true,
                          "1: the bracket times l_z; 0: seed 001 eq. 4 literally (see laf)")};
-    m.fit = [](const MeasuredBtf& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return SlafMaterial::fit(btf, o);
     };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {

@@ -36,7 +36,7 @@ public:
          *  default 50), rounds (alternations between T and the lobes, 0..10, default 2), cosine (0
          * or 1, default 1). Throws Error "slaf: ..." for invalid or unknown options and an empty
          * BTF. */
-        static osg::ref_ptr<SlafMaterial> fit(const MeasuredBtf& btf, const FitOptions& options);
+        static osg::ref_ptr<SlafMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<SlafMaterial> fromFile(const FittedMaterial& file);
     /** An unfitted model of the given shape (T = 1, zero colours and lobes). */
     static osg::ref_ptr<SlafMaterial> create(int width, int height, int lobes,

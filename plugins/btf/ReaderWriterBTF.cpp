@@ -169,8 +169,8 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
                << std::endl;
     osg::ref_ptr<Material> material;
     {
-        const MeasuredBtf btf = loadMeasuredBtf(path);
-        material = method.fit(btf, fitOptions);
+        // A UBO2014 file is fitted from its factors, decoded block by block, never whole.
+        material = method.fit(*openBtfSource(path), fitOptions);
     }
     material->fitInfo["cacheKey"] = key;
     if (!cacheFile.empty()) {

@@ -136,6 +136,12 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
                      "--lights (0: none)")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
+    command
+        ->add_option("--error-texels", c.errorTexels,
+                     "Compute the error tables on this many random texels (every view and light "
+                     "pair of each, the same texels for every method); 0 = all. Default: all for "
+                     "data in memory, 4096 for a UBO2014 file (decoded block by block)")
+        ->check(CLI::NonNegativeNumber);
     command->add_flag("--refit", options->noReuse, "Fit every method again, even when DIR has it");
     command->add_flag("--no-gpu", options->noGpu,
                       "Skip the OpenGL part (GPU spot check, pass times, sphere renders)");

@@ -40,6 +40,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         std::string input, output, method;
         std::vector<std::string> settings;
         int lobes = 0, components = 0, clusters = 0;
+        long long errorTexels = -1;
     };
     auto options = std::make_shared<Options>();
     command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
@@ -58,6 +59,12 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
                         "Shortcut for --set clusters=K (" + methodsWithOption("clusters") + ")");
     command->add_option("--set", options->settings,
                         "Method option KEY=VALUE (repeatable; see --method above)");
+    command
+        ->add_option("--error-texels", options->errorTexels,
+                     "Compute the reported error on this many random texels (all view and light "
+                     "pairs each); 0 = all. Default: all for data in memory, 4096 for a UBO2014 "
+                     "file, which is decoded block by block and never whole")
+        ->check(CLI::NonNegativeNumber);
     addLoadOptions(*command, common);
     return [&common, options] {
         const MethodInfo& method = findMethod(options->method);
@@ -86,7 +93,9 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         }
 
         const auto start = std::chrono::steady_clock::now();
-        const MeasuredBtf btf = loadMeasuredBtf(options->input, common.loadOptions());
+        // A UBO2014 file stays factored: each method reads decoded blocks (BtfSource).
+        const std::unique_ptr<BtfSource> input = openBtfSource(options->input, common.loadOptions());
+        const BtfSource& btf = *input;
         const auto loaded = std::chrono::steady_clock::now();
         osg::ref_ptr<Material> material = method.fit(btf, fit);
         const double fitSeconds =
@@ -102,8 +111,14 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             saveMaterial(*material, options->output);
         }
 
+        const long long errorTexels =
+            options->errorTexels >= 0 ? options->errorTexels : btf.inMemory() ? 0 : 4096;
+        std::vector<std::size_t> subsample;
+        if (errorTexels > 0 && std::size_t(errorTexels) < btf.texelCount())
+            subsample = randomTexels(btf, std::size_t(errorTexels));
         const ErrorSummary error = computeError(
-            btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); });
+            btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); },
+            subsample.empty() ? nullptr : &subsample);
         const MemoryFootprint memory = material->memory();
         const double loadSeconds = std::chrono::duration<double>(loaded - start).count();
         std::cout << std::fixed << std::setprecision(2) << "fitted " << method.name << " to "
@@ -112,6 +127,9 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
                   << "time: load " << loadSeconds << " s, fit " << fitSeconds << " s\n"
                   << "memory: " << memory.valuesPerTexel << " values, " << memory.bytesPerTexel
                   << " bytes per texel, " << formatBytes(memory.totalBytes) << " in all\n";
+        if (!subsample.empty())
+            std::cout << "error over a random subsample of " << subsample.size() << " of "
+                      << btf.texelCount() << " texels (all pairs; --error-texels 0 for all):\n";
         printErrorSummary(error);
         std::cout << "wrote " << options->output << "\n";
     };

@@ -1,0 +1,77 @@
+// osgBTF: where a fitter reads measured data from (issue 11 section 3).
+//
+// Two kinds of input exist: a MeasuredBtf, every value in memory, and a FactoredBtf, a UBO2014
+// file's factors B = U * SxV^T, which are ~100 MB where the values would be 22 GB. Fitters only
+// read through this interface, in the two shapes every method needs: blocks of images (the
+// per-view methods: PCA, FMF) and the ABRDFs of blocks of texels (per-texel methods: lambert,
+// LAF, SLAF, RF; LPCA's training sample and projection). A FactoredBtf decodes each block on the
+// fly with one GEMM, so a full-size file is fitted without ever being materialised.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/Directions.h"
+
+namespace osgBTF {
+
+class BtfSource {
+public:
+    virtual ~BtfSource() = default;
+
+    int width() const { return _width; }
+    int height() const { return _height; }
+    std::size_t texelCount() const { return std::size_t(_width) * std::size_t(_height); }
+    const DirectionSet& views() const { return _views; }
+    const DirectionSet& lights() const { return _lights; }
+    std::size_t viewCount() const { return _views.size(); }
+    std::size_t lightCount() const { return _lights.size(); }
+    /** (view, light) images; image i is view i / lightCount(), light i % lightCount(). */
+    std::size_t imageCount() const { return _views.size() * _lights.size(); }
+    bool empty() const { return _width == 0 || _height == 0; }
+
+    /** Images [first, first + count) into `out`: count * texels * 3 floats, each laid out as
+     *  MeasuredBtf::image (rows bottom-up, RGB). Safe to call from several threads at once. */
+    virtual void readImages(std::size_t first, std::size_t count, float* out) const = 0;
+    /** The ABRDFs of `count` texels (indices y * width + x, y from the bottom) into `out`: count *
+     *  views * lights * 3 floats, each laid out as MeasuredBtf::abrdf ([view][light][rgb]).
+     *  Ascending texels read fastest. Safe to call from several threads at once. */
+    virtual void readAbrdfs(const std::size_t* texels, std::size_t count, float* out) const = 0;
+    /** readAbrdfs of the texels [first, first + count). */
+    void readAbrdfRange(std::size_t first, std::size_t count, float* out) const;
+
+    /** Texels per readAbrdfs call from which reading is efficient: a few for data in memory
+     *  (cache lines), more for factored data (one GEMM per call). Methods that work texel by
+     *  texel read blocks of this many. */
+    virtual std::size_t abrdfBlockTexels() const = 0;
+    /** Images per readImages call from which reading is efficient. */
+    virtual std::size_t imageBlock() const = 0;
+    /** True when the values are in memory and reading is a copy; false when every read decodes
+     *  (then a method should read each value as few times as it can). */
+    virtual bool inMemory() const = 0;
+
+    /** Bytes of the values as floats (texels x images x 3 x 4): what materialising would need. */
+    std::uint64_t decodedBytes() const {
+        return std::uint64_t(texelCount()) * imageCount() * 3 * sizeof(float);
+    }
+
+    /** Human-readable origin, e.g. the file it was loaded from. */
+    std::string source;
+
+protected:
+    BtfSource() = default;
+    BtfSource(int width, int height, DirectionSet views, DirectionSet lights)
+        : _width(width), _height(height), _views(std::move(views)), _lights(std::move(lights)) {}
+
+    int _width = 0, _height = 0;
+    DirectionSet _views, _lights;
+};
+
+/** `count` distinct texels of `source` drawn at random (deterministic for `seed`), ascending; all
+ *  texels when count >= texelCount(). For statistics over a stated subsample. */
+std::vector<std::size_t> randomTexels(const BtfSource& source, std::size_t count,
+                                      unsigned seed = 1);
+
+}  // namespace osgBTF
