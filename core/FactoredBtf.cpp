@@ -242,8 +242,7 @@ void FactoredBtfSource::readImages(std::size_t first, std::size_t count, float* 
     _factors.decodeImages(first, count, out);
 }
 
-void FactoredBtfSource::readAbrdfs(const std::size_t* texels, std::size_t count,
-                                   float* out) const {
+void FactoredBtfSource::readAbrdfs(const std::size_t* texels, std::size_t count, float* out) const {
     _factors.decodeAbrdfs(texels, count, out);
 }
 
@@ -251,14 +250,14 @@ void FactoredBtfSource::readAbrdfs(const std::size_t* texels, std::size_t count,
 // for the GEMM to run at full speed, small enough for one block per worker thread.
 std::size_t FactoredBtfSource::abrdfBlockTexels() const {
     const std::size_t perTexel = imageCount() * 3 * sizeof(float);
-    return std::clamp<std::size_t>((std::size_t(16) << 20) / std::max<std::size_t>(perTexel, 1),
-                                   8, 1024);
+    return std::clamp<std::size_t>((std::size_t(16) << 20) / std::max<std::size_t>(perTexel, 1), 8,
+                                   1024);
 }
 
 std::size_t FactoredBtfSource::imageBlock() const {
     const std::size_t perImage = texelCount() * 3 * sizeof(float);
-    return std::clamp<std::size_t>((std::size_t(16) << 20) / std::max<std::size_t>(perImage, 1),
-                                   1, 256);
+    return std::clamp<std::size_t>((std::size_t(16) << 20) / std::max<std::size_t>(perImage, 1), 1,
+                                   256);
 }
 
 }  // namespace osgBTF

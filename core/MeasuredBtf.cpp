@@ -96,8 +96,7 @@ std::uint64_t MeasuredBtf::bytesNeeded(int width, int height, std::size_t views,
 
 MeasuredBtf::MeasuredBtf(int width, int height, DirectionSet views, DirectionSet lights,
                          Storage storage)
-    : BtfSource(width, height, std::move(views), std::move(lights)),
-      _storage(storage) {
+    : BtfSource(width, height, std::move(views), std::move(lights)), _storage(storage) {
     if (width <= 0 || height <= 0 || _views.size() == 0 || _lights.size() == 0) {
         std::ostringstream what;
         what << "invalid BTF dimensions " << width << "x" << height << " texels, " << _views.size()
@@ -182,7 +181,8 @@ void MeasuredBtf::readAbrdfs(const std::size_t* texels, std::size_t count, float
             if (_storage == Storage::Float)
                 dst[0] = _float[i], dst[1] = _float[i + 1], dst[2] = _float[i + 2];
             else
-                dst[0] = float(_half[i]), dst[1] = float(_half[i + 1]), dst[2] = float(_half[i + 2]);
+                dst[0] = float(_half[i]), dst[1] = float(_half[i + 1]),
+                dst[2] = float(_half[i + 2]);
         }
     }
 }

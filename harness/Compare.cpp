@@ -158,9 +158,7 @@ void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& resul
                     throw Error(m.fittedFile + ": fitted to a different size");
                 m.error = computeError(
                     btf,
-                    [&](std::size_t texel, float* out) {
-                        material->evaluateMeasured(texel, out);
-                    },
+                    [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); },
                     subsample.empty() ? nullptr : &subsample);
                 m.memory = material->memory();
                 if (m.memory.bytesPerTexel > 0)
@@ -430,10 +428,11 @@ CompareResult runCompare(const CompareOptions& options) {
     result.spotCheckPairs = spotPairs(btf);
     // An exact error over all texels of a full-size file decodes all its ~11 G values once per
     // method: by default factored input is compared on a stated random subsample.
-    const long long errorTexels =
-        options.errorTexels >= 0 ? options.errorTexels : btf.inMemory() ? 0 : 4096;
-    result.errorTexels = errorTexels == 0 ? btf.texelCount()
-                                          : std::min(btf.texelCount(), std::size_t(errorTexels));
+    const long long errorTexels = options.errorTexels >= 0 ? options.errorTexels
+                                  : btf.inMemory()         ? 0
+                                                           : 4096;
+    result.errorTexels =
+        errorTexels == 0 ? btf.texelCount() : std::min(btf.texelCount(), std::size_t(errorTexels));
     result.labelsDrawn = true;  // until a label fails to draw
     for (const std::string& name : methods) {
         MethodResult m;

@@ -193,8 +193,8 @@ FloatImage colourMappedErrors(const std::vector<float>& perTexel, int width, int
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
             const float v = perTexel[std::size_t(y) * width + x];
-            const glm::vec3 c = std::isfinite(v) ? colourMap(maxValue > 0 ? float(v / maxValue)
-                                                                           : 0.0f)
+            const glm::vec3 c = std::isfinite(v)
+                                    ? colourMap(maxValue > 0 ? float(v / maxValue) : 0.0f)
                                 : std::isnan(v) ? glm::vec3(0.5f)  // not compared
                                                 : glm::vec3(1, 0, 1);
             for (int k = 0; k < 3; ++k) out.at(x, height - 1 - y, k) = c[k];

@@ -1,10 +1,10 @@
 // osgBTF: what every compression method provides, and the registry that lists them.
 //
-// A method (materials/<name>/) fits a Material from measured data (a BtfSource: a MeasuredBtf in memory or
-// a FactoredBtf decoded block by block). The Material evaluates itself
-// on the CPU with the same math as its shader (the reference for tests and error metrics), saves
-// itself as a FittedMaterial file, accounts for its memory, and builds the OSG state that renders
-// it: float textures and uniforms in a StateSet, with one osg::Program shared per method.
+// A method (materials/<name>/) fits a Material from measured data (a BtfSource: a MeasuredBtf in
+// memory or a FactoredBtf decoded block by block). The Material evaluates itself on the CPU with
+// the same math as its shader (the reference for tests and error metrics), saves itself as a
+// FittedMaterial file, accounts for its memory, and builds the OSG state that renders it: float
+// textures and uniforms in a StateSet, with one osg::Program shared per method.
 #pragma once
 
 #include <functional>

@@ -3,6 +3,7 @@
 // (tests/HandWrittenUbo2014.h), so the expected figures come from the format's formulas.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -147,6 +148,32 @@ TEST(BtfToolUbo2014, InfoNeedsNoMemoryForTheDecodedData) {
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("more than the memory limit of 3.0 KiB"), std::string::npos)
         << r.output;
+}
+
+// Issue 11 section 3: fits read a UBO2014 file's factors block by block, so a memory limit
+// below the decoded size refuses nothing; the reported error is on a stated subsample.
+TEST(BtfToolUbo2014, FitNeedsNoMemoryForTheDecodedData) {
+    TempDir dir;
+    const HandWrittenBtf f = handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    // 3 KiB: more than the factors (1992 bytes), less than the decoded values (10080 bytes).
+    for (const std::string method : {"lambert", "pca --components 2"}) {
+        const std::string out = dir.file(method.substr(0, 3) + ".btfmat");
+        CommandResult r = btf("--memory-limit 3K fit " + shellQuote(path) + " -m " + method +
+                              " -o " + shellQuote(out) + " --error-texels 5");
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find("error over a random subsample of 5 of 12 texels"),
+                  std::string::npos)
+            << r.output;
+        EXPECT_TRUE(std::filesystem::exists(out)) << method;
+    }
+    // --error-texels 0: every texel.
+    const CommandResult r =
+        btf("--memory-limit 3K fit " + shellQuote(path) + " -m lambert -o " +
+            shellQuote(dir.file("no.btfmat")) + " --storage half --error-texels 0");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(r.output.find("subsample"), std::string::npos) << r.output;
 }
 
 TEST(BtfToolUbo2014, EvalRendersTheStoredFactors) {

@@ -94,7 +94,8 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
 
         const auto start = std::chrono::steady_clock::now();
         // A UBO2014 file stays factored: each method reads decoded blocks (BtfSource).
-        const std::unique_ptr<BtfSource> input = openBtfSource(options->input, common.loadOptions());
+        const std::unique_ptr<BtfSource> input =
+            openBtfSource(options->input, common.loadOptions());
         const BtfSource& btf = *input;
         const auto loaded = std::chrono::steady_clock::now();
         osg::ref_ptr<Material> material = method.fit(btf, fit);
@@ -111,8 +112,9 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             saveMaterial(*material, options->output);
         }
 
-        const long long errorTexels =
-            options->errorTexels >= 0 ? options->errorTexels : btf.inMemory() ? 0 : 4096;
+        const long long errorTexels = options->errorTexels >= 0 ? options->errorTexels
+                                      : btf.inMemory()          ? 0
+                                                                : 4096;
         std::vector<std::size_t> subsample;
         if (errorTexels > 0 && std::size_t(errorTexels) < btf.texelCount())
             subsample = randomTexels(btf, std::size_t(errorTexels));
