@@ -137,30 +137,48 @@ Imf::Header partHeader(const FittedMaterial& material, const MaterialTexture& t,
 
 void writeTexture(Imf::MultiPartOutputFile& file, int part, const MaterialTexture& t) {
     const std::size_t rowValues = std::size_t(t.width) * std::size_t(t.channels);
-    std::vector<float> rows(t.data.size());
-    for (int z = 0; z < t.depth; ++z)
-        for (int y = 0; y < t.height; ++y)
-            std::copy_n(
-                t.data.begin() + std::ptrdiff_t((std::size_t(z) * t.height + y) * rowValues),
-                rowValues, rows.begin() + std::ptrdiff_t(fileRow(t, z, y) * rowValues));
-    // OpenEXR converts on read but not on write: half channels need half slices.
+    // OpenEXR converts on read but not on write: half channels need half slices. The file rows
+    // go out in chunks through one small buffer: a texture of gigabytes (PCA of a full-size
+    // UBO2014 file) must not be copied whole.
     const bool half = t.kind != MaterialTexture::Float;
-    if (t.kind == MaterialTexture::UNorm8)
-        for (float& v : rows) v = std::round(v * 255.0f);  // integers are exact in half
-    std::vector<Imath::half> halves;
-    if (half) halves.assign(rows.begin(), rows.end());
     const std::size_t valueSize = half ? sizeof(Imath::half) : sizeof(float);
-    const char* base = half ? (const char*)halves.data() : (const char*)rows.data();
     const std::size_t xStride = valueSize * std::size_t(t.channels);
+    const std::size_t yStride = xStride * std::size_t(t.width);
+    const std::size_t fileRows = std::size_t(t.height) * std::size_t(t.depth);
+    const std::size_t chunkRows =
+        std::clamp<std::size_t>((std::size_t(8) << 20) / std::max<std::size_t>(yStride, 1), 1,
+                                std::max<std::size_t>(fileRows, 1));
+    std::vector<float> floats(half ? 0 : chunkRows * rowValues);
+    std::vector<Imath::half> halves(half ? chunkRows * rowValues : 0);
     const std::vector<std::string> names = channelNames(t.name, t.channels);
-    Imf::FrameBuffer frameBuffer;
-    for (std::size_t c = 0; c < names.size(); ++c)
-        frameBuffer.insert(names[c],
-                           Imf::Slice(half ? Imf::HALF : Imf::FLOAT, (char*)(base + c * valueSize),
-                                      xStride, xStride * std::size_t(t.width)));
     Imf::OutputPart output(file, part);
-    output.setFrameBuffer(frameBuffer);
-    output.writePixels(t.height * t.depth);
+    for (std::size_t first = 0; first < fileRows; first += chunkRows) {
+        const std::size_t count = std::min(chunkRows, fileRows - first);
+        for (std::size_t r = first; r < first + count; ++r) {
+            // File row r (top-down over all slices) is texture row y (bottom-up) of slice z.
+            const std::size_t z = r / std::size_t(t.height);
+            const std::size_t y = std::size_t(t.height) - 1 - r % std::size_t(t.height);
+            const float* source = t.data.data() + (z * std::size_t(t.height) + y) * rowValues;
+            const std::size_t at = (r - first) * rowValues;
+            if (!half)
+                std::copy_n(source, rowValues, floats.data() + at);
+            else if (t.kind == MaterialTexture::UNorm8)
+                for (std::size_t i = 0; i < rowValues; ++i)  // integers are exact in half
+                    halves[at + i] = Imath::half(std::round(source[i] * 255.0f));
+            else
+                for (std::size_t i = 0; i < rowValues; ++i) halves[at + i] = Imath::half(source[i]);
+        }
+        // The slices address pixel (0, y) of the whole data window: offset the chunk by `first`.
+        const char* chunk = half ? (const char*)halves.data() : (const char*)floats.data();
+        const char* base = chunk - std::ptrdiff_t(first * yStride);
+        Imf::FrameBuffer frameBuffer;
+        for (std::size_t c = 0; c < names.size(); ++c)
+            frameBuffer.insert(
+                names[c], Imf::Slice(half ? Imf::HALF : Imf::FLOAT, (char*)(base + c * valueSize),
+                                     xStride, yStride));
+        output.setFrameBuffer(frameBuffer);
+        output.writePixels(int(count));
+    }
 }
 
 MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::string& path) {

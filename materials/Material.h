@@ -81,6 +81,10 @@ public:
 
     virtual MemoryFootprint memory() const = 0;
     virtual FittedMaterial toFittedMaterial() const = 0;
+    /** toFittedMaterial for a material's last use (saving a fit): a method whose arrays can be
+     *  gigabytes (PCA of a full-size UBO2014 file) moves them out instead of copying them, and
+     *  the material is empty afterwards. The default copies. */
+    virtual FittedMaterial releaseFittedMaterial() { return toFittedMaterial(); }
 
     /** Textures and uniforms of this material plus the method's shared program. */
     virtual osg::ref_ptr<osg::StateSet> createStateSet() const = 0;

@@ -136,6 +136,26 @@ TEST(FittedMaterial, RoundTripIsExactForFloatAndHalf) {
     EXPECT_TRUE(sameBits(back.texture("volume").data, m.textures[2].data));
 }
 
+// Textures are written in chunks of rows (8 MiB each): several chunks, chunk borders inside a
+// slice and across slices must give the same file as one piece would.
+TEST(FittedMaterial, TexturesOfSeveralWriteChunksRoundTripExactly) {
+    TempDir dir;
+    FittedMaterial m = makeMaterial();
+    m.textures.clear();
+    // 16 KiB rows, 512 per chunk: chunks of 2 x 280 rows end inside the second slice.
+    m.textures.push_back(makeTexture("big-float", 1024, 280, 2, 4, MaterialTexture::Float, 7));
+    m.textures.push_back(makeTexture("big-half", 2048, 280, 2, 4, MaterialTexture::Half, 8));
+    const std::string path = dir.file("big.exr");
+    saveFittedMaterial(m, path);
+    const FittedMaterial back = loadFittedMaterial(path);
+    ASSERT_EQ(back.textures.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        SCOPED_TRACE(m.textures[i].name);
+        EXPECT_EQ(back.textures[i].depth, 2);
+        EXPECT_TRUE(sameBits(back.textures[i].data, m.textures[i].data));
+    }
+}
+
 TEST(FittedMaterial, TextureLookupNamesWhatIsMissing) {
     TempDir dir;
     const std::string path = dir.file("m.exr");

@@ -282,11 +282,17 @@ MemoryFootprint PcaMaterial::memory() const {
 }
 
 FittedMaterial PcaMaterial::toFittedMaterial() const {
+    return osg::ref_ptr<PcaMaterial>(new PcaMaterial(*this))->releaseFittedMaterial();
+}
+
+FittedMaterial PcaMaterial::releaseFittedMaterial() {
     FittedMaterial file = writeCommon();
     file.parameters["components"] = std::to_string(_components);
     file.parameters["tileColumns"] = std::to_string(_tileColumns);
-    file.textures.push_back(eigenTextures);
-    file.textures.push_back(weights);
+    file.textures.push_back(std::move(eigenTextures));
+    file.textures.push_back(std::move(weights));
+    eigenTextures = {};
+    weights = {};
     return file;
 }
 

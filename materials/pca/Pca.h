@@ -57,6 +57,7 @@ public:
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
     FittedMaterial toFittedMaterial() const override;
+    FittedMaterial releaseFittedMaterial() override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
     /** Seed 001 Table 2 counts per-texel storage; the weights table is shared by all texels. */

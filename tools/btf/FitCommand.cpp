@@ -103,15 +103,6 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - loaded).count();
         material->fitInfo["seconds"] = std::to_string(fitSeconds);
         material->fitInfo["source"] = options->input;
-        if (btfOutput) {
-            const auto* fmf = dynamic_cast<const FmfMaterial*>(material.get());
-            if (!fmf) fail(options->output, "method fmf did not give an FmfMaterial");
-            writeFactorsAsUbo2014(fmf->factors(), options->output,
-                                  fmf->storage() == MaterialTexture::Float ? 4 : 2, meta.get());
-        } else {
-            saveMaterial(*material, options->output);
-        }
-
         const long long errorTexels = options->errorTexels >= 0 ? options->errorTexels
                                       : btf.inMemory()          ? 0
                                                                 : 4096;
@@ -122,6 +113,16 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); },
             subsample.empty() ? nullptr : &subsample);
         const MemoryFootprint memory = material->memory();
+        // Saved last, releasing the material's arrays into the file's (no second copy of a PCA
+        // of gigabytes).
+        if (btfOutput) {
+            const auto* fmf = dynamic_cast<const FmfMaterial*>(material.get());
+            if (!fmf) fail(options->output, "method fmf did not give an FmfMaterial");
+            writeFactorsAsUbo2014(fmf->factors(), options->output,
+                                  fmf->storage() == MaterialTexture::Float ? 4 : 2, meta.get());
+        } else {
+            saveFittedMaterial(material->releaseFittedMaterial(), options->output);
+        }
         const double loadSeconds = std::chrono::duration<double>(loaded - start).count();
         std::cout << std::fixed << std::setprecision(2) << "fitted " << method.name << " to "
                   << options->input << " (" << btf.width() << "x" << btf.height() << " texels, "
