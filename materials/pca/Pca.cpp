@@ -158,6 +158,12 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const BtfSource& btf, const FitOption
     osg::ref_ptr<PcaMaterial> m = new PcaMaterial;
     m->setShape(btf.width(), btf.height(), btf.views(), btf.lights(), components, storage);
     m->prepareLookups();
+    // The model itself can be gigabytes (151 views x 16 components x 160000 texels x RGB for a
+    // full-size UBO2014 file): refused before allocating when it cannot fit.
+    checkMemory(
+        std::uint64_t(m->eigenTextures.valueCount() + m->weights.valueCount()) * sizeof(float),
+        "pca: " + std::to_string(components) + " Eigen-Textures for each of " +
+            std::to_string(btf.viewCount()) + " views");
     m->eigenTextures.data.assign(m->eigenTextures.valueCount(), 0.0f);
     m->weights.data.assign(m->weights.valueCount(), 0.0f);
 
