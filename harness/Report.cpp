@@ -251,7 +251,7 @@ std::string resultsCsv(const CompareResult& r) {
     }
     csv << "method,status,message,options,error_avg,error_min,error_max,rmse,psnr_db,"
            "nonfinite_values,gpu_cpu_max_diff,values_per_texel,bytes_per_texel,total_bytes,"
-           "compression_ratio,alu_fixed,tex_fixed,alu_per_light,tex_per_light,alu_total,"
+           "shared_bytes,compression_ratio,alu_fixed,tex_fixed,alu_per_light,tex_per_light,alu_total,"
            "tex_total,pass_clock,"
         << passColumns << "fit_seconds,fit_process_seconds,peak_rss_bytes,reused,fitted_file\n";
     for (const MethodResult& m : r.methods) {
@@ -259,7 +259,7 @@ std::string resultsCsv(const CompareResult& r) {
             << csvField(m.failed ? m.failure : "") << "," << csvField(optionText(m)) << ",";
         if (m.failed) {
             // Empty measures (error_avg .. fit_seconds), then what the failed child reported.
-            csv << std::string(19 + 5 * r.pass.targets.size(), ',')
+            csv << std::string(20 + 5 * r.pass.targets.size(), ',')
                 << (m.fit.ok ? "" : full(m.fit.wallSeconds)) << ","
                 << (m.fit.ok ? "" : std::to_string(m.fit.peakRssBytes)) << ",,\n";
             continue;
@@ -269,7 +269,8 @@ std::string resultsCsv(const CompareResult& r) {
             << "," << full(m.error.rmse) << "," << full(m.error.psnr) << ","
             << m.error.nonFiniteValues << "," << optional(m.gpuCpuMaxDifference) << ","
             << full(m.memory.valuesPerTexel) << "," << full(m.memory.bytesPerTexel) << ","
-            << m.memory.totalBytes << "," << full(m.compressionRatio) << ",";
+            << m.memory.totalBytes << "," << m.memory.sharedBytes << ","
+            << full(m.compressionRatio) << ",";
         if (m.cost.counted)
             csv << m.cost.fixedAlu << "," << m.cost.fixedTex << "," << m.cost.perLightAlu << ","
                 << m.cost.perLightTex << "," << m.cost.alu(r.pass.lights) << ","
@@ -355,6 +356,7 @@ std::string resultsJson(const CompareResult& r) {
             e["memory"] = {{"values_per_texel", m.memory.valuesPerTexel},
                            {"bytes_per_texel", m.memory.bytesPerTexel},
                            {"total_bytes", m.memory.totalBytes},
+                           {"shared_bytes", m.memory.sharedBytes},
                            {"compression_ratio", m.compressionRatio}};
             nlohmann::json pass{{"counted", m.cost.counted}, {"rule", m.cost.formula}};
             if (m.cost.counted) {

@@ -153,6 +153,7 @@ TEST(Harness, TinySampleWritesEveryFileAndTablesMatchTheMethodApis) {
         EXPECT_DOUBLE_EQ(entry["memory"]["bytes_per_texel"].get<double>(), memory.bytesPerTexel);
         EXPECT_DOUBLE_EQ(entry["memory"]["values_per_texel"].get<double>(), memory.valuesPerTexel);
         EXPECT_EQ(entry["memory"]["total_bytes"].get<std::uint64_t>(), memory.totalBytes);
+        EXPECT_EQ(entry["memory"]["shared_bytes"].get<std::uint64_t>(), memory.sharedBytes);
         EXPECT_DOUBLE_EQ(entry["memory"]["compression_ratio"].get<double>(),
                          81.0 * 81.0 * 3.0 / memory.bytesPerTexel);
         EXPECT_EQ(entry["fit"]["seconds"].get<double>(),
