@@ -7,7 +7,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
-#include <Eigen/SVD>
+#include <Eigen/Core>
 
 #include "core/DirectionInterpolation.h"
 #include "core/Error.h"
@@ -18,6 +18,7 @@
 #include "materials/fmf/Fmf.h"
 #include "materials/lambert/Lambert.h"
 #include "tests/RandomFactors.h"
+#include "tests/ReferenceSvd.h"
 #include "tests/TestUtil.h"
 
 using namespace osgBTF;
@@ -47,11 +48,6 @@ Eigen::MatrixXd abrdfMatrix(const MeasuredBtf& btf) {
                     a(Eigen::Index((v * btf.lightCount() + l) * 3 + std::size_t(c)),
                       Eigen::Index(t)) = btf.value(v, l, t, c);
     return a;
-}
-
-/** Singular values by a direct SVD in double (once per matrix: slow under the sanitizers). */
-Eigen::VectorXd singularValuesOf(const Eigen::MatrixXd& a) {
-    return Eigen::BDCSVD<Eigen::MatrixXd>(a).singularValues();
 }
 
 /** Optimal rank-c Frobenius error (Eckart-Young) from all singular values. */
@@ -100,7 +96,7 @@ TEST(Fmf, FitErrorIsTheOptimalRankCError) {
     // 30 texels: the exact Gram path. Float storage, so the error is the SVD's own.
     const MeasuredBtf btf = smallSample(6, 5);
     const Eigen::MatrixXd a = abrdfMatrix(btf);
-    const Eigen::VectorXd s = singularValuesOf(a);
+    const Eigen::VectorXd s = test::referenceSingularValues(a);
     for (int c : {1, 4, 12}) {
         osg::ref_ptr<FmfMaterial> m = FmfMaterial::fit(
             btf, FitOptions::parse("storage=float components=" + std::to_string(c)));
@@ -121,7 +117,7 @@ TEST(Fmf, RandomisedSvdReachesTheOptimalError) {
     const MeasuredBtf btf = smallSample(16, 16);
     const Eigen::MatrixXd a = abrdfMatrix(btf);
     const Eigen::MatrixXf af = a.cast<float>();
-    const Eigen::VectorXd sigma = singularValuesOf(a);
+    const Eigen::VectorXd sigma = test::referenceSingularValues(a);
     RowBlockSource source;
     source.rows = std::size_t(a.rows());
     source.cols = std::size_t(a.cols());
