@@ -17,16 +17,8 @@ set -eu
 build=${1:-build}
 size=${2:-400}
 methods=${3:-pca lpca}
-for tool in btf bench_make_ubo2014; do
-    if [ ! -x "$build/bin/$tool" ]; then
-        echo "missing $build/bin/$tool; build with -DOSGBTF_BUILD_BENCH=ON" >&2
-        exit 1
-    fi
-done
-file="${TMPDIR:-/tmp}/osgbtf-bench-ubo2014-$size-k100.btf"
-if [ ! -f "$file" ]; then
-    "$build/bin/bench_make_ubo2014" -o "$file" --size "$size" --components 100
-fi
+. "$(dirname "$0")/ubo2014_input.sh"
+ubo2014_input "$build" "$size" 100 btf
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 for method in $methods; do

@@ -17,16 +17,8 @@ set -eu
 build=${1:-build}
 size=${2:-400}
 components=${3:-100}
-for tool in btf btfviewer bench_make_ubo2014 bench_open_ubo2014; do
-    if [ ! -x "$build/bin/$tool" ]; then
-        echo "missing $build/bin/$tool; build with -DOSGBTF_BUILD_BENCH=ON" >&2
-        exit 1
-    fi
-done
-file="${TMPDIR:-/tmp}/osgbtf-bench-ubo2014-$size-k$components.btf"
-if [ ! -f "$file" ]; then
-    "$build/bin/bench_make_ubo2014" -o "$file" --size "$size" --components "$components"
-fi
+. "$(dirname "$0")/ubo2014_input.sh"
+ubo2014_input "$build" "$size" "$components" btf btfviewer bench_open_ubo2014
 measure() {
     # Wall time and peak RSS from GNU time; the command's own output first.
     /usr/bin/time -v "$@" 2>"$tmp" || { cat "$tmp" >&2; exit 1; }
