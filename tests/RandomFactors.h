@@ -37,4 +37,14 @@ inline FactoredBtf randomFactors(FactorModel model, std::array<int, 3> ranks, in
     return f;
 }
 
+/** The decoding steps of a test variant on top of randomFactors: colour model (with a fixed mean
+ *  and a non-orthogonal matrix, which model 3 uses), dynamic-range reduction and cosine flag. */
+inline void setDecoding(FactoredBtf& f, int colorModel, std::uint32_t drr, bool cosine) {
+    f.colorModel = colorModel;
+    f.dynamicRangeReduction = drr;
+    f.cosine = cosine;
+    f.colorMean = {0.1f, 0.2f, 0.3f};
+    f.colorMatrix = {0.5f, 0.2f, 0.1f, -0.3f, 0.6f, 0.2f, 0.1f, -0.2f, 0.7f};
+}
+
 }  // namespace osgBTF::test

@@ -72,11 +72,7 @@ TEST(BtfSource, FactoredReadsEqualTheDecodedWhole) {
                              Variant{FactorModel::Dfmf, {3, 5, 2}, 11, 0, true},
                              Variant{FactorModel::Dfmf, {2, 2, 6}, 3, 0, false}}) {
         FactoredBtf f = randomFactors(v.model, v.ranks, 7, 5, 3);
-        f.colorModel = v.colorModel;
-        f.dynamicRangeReduction = v.drr;
-        f.cosine = v.cosine;
-        f.colorMean = {0.1f, 0.2f, 0.3f};
-        f.colorMatrix = {0.5f, 0.2f, 0.1f, -0.3f, 0.6f, 0.2f, 0.1f, -0.2f, 0.7f};
+        setDecoding(f, v.colorModel, v.drr, v.cosine);
         const MeasuredBtf decoded = f.decode();
         const FactoredBtfSource source(f);
         EXPECT_FALSE(source.inMemory());

@@ -171,11 +171,7 @@ TEST(Fmf, RendersEveryFactorVariantAsStoredAtMeasuredDirections) {
         {"dfmf exp-yuv", FactorModel::Dfmf, {8, 3, 4}, 11, 0, true}};
     for (const Variant& variant : variants) {
         FactoredBtf f = randomFactors(variant.model, variant.ranks, 5, 4, 7);
-        f.colorModel = variant.colorModel;
-        f.dynamicRangeReduction = variant.drr;
-        f.cosine = variant.cosine;
-        f.colorMean = {0.1f, 0.2f, 0.3f};
-        f.colorMatrix = {0.5f, 0.2f, 0.1f, -0.3f, 0.6f, 0.2f, 0.1f, -0.2f, 0.7f};
+        test::setDecoding(f, variant.colorModel, variant.drr, variant.cosine);
         for (auto storage : {MaterialTexture::Float, MaterialTexture::Half}) {
             osg::ref_ptr<FmfMaterial> m = FmfMaterial::fromFactors(f, storage);
             const FactoredBtf& stored = m->factors();
