@@ -26,4 +26,10 @@ std::vector<std::size_t> randomTexels(const BtfSource& source, std::size_t count
     return all;
 }
 
+std::size_t errorTexelCount(const BtfSource& source, long long requested) {
+    const std::size_t texels = source.texelCount();
+    if (requested < 0) requested = source.inMemory() ? 0 : 4096;
+    return requested == 0 ? texels : std::min(texels, std::size_t(requested));
+}
+
 }  // namespace osgBTF

@@ -74,4 +74,10 @@ protected:
 std::vector<std::size_t> randomTexels(const BtfSource& source, std::size_t count,
                                       unsigned seed = 1);
 
+/** How many texels error tables cover (`btf fit` and `btf compare --error-texels`): `requested`
+ *  when positive (at most all), all for 0, and for a negative request the default: all texels of
+ *  data in memory, 4096 of factored input (an exact error over a full-size UBO2014 file decodes
+ *  all its ~11 G values once per method). */
+std::size_t errorTexelCount(const BtfSource& source, long long requested);
+
 }  // namespace osgBTF

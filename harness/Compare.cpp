@@ -426,13 +426,7 @@ CompareResult runCompare(const CompareOptions& options) {
     result.maxBytesPerTexel = options.maxBytesPerTexel;
     result.maxMsPerPass = options.maxMsPerPass;
     result.spotCheckPairs = spotPairs(btf);
-    // An exact error over all texels of a full-size file decodes all its ~11 G values once per
-    // method: by default factored input is compared on a stated random subsample.
-    const long long errorTexels = options.errorTexels >= 0 ? options.errorTexels
-                                  : btf.inMemory()         ? 0
-                                                           : 4096;
-    result.errorTexels =
-        errorTexels == 0 ? btf.texelCount() : std::min(btf.texelCount(), std::size_t(errorTexels));
+    result.errorTexels = errorTexelCount(btf, options.errorTexels);
     result.labelsDrawn = true;  // until a label fails to draw
     for (const std::string& name : methods) {
         MethodResult m;

@@ -119,6 +119,24 @@ TEST(BtfSource, RandomTexelsAreDistinctSortedAndDeterministic) {
     EXPECT_EQ(randomTexels(btf, 1000, 5).size(), 100u);
 }
 
+// The documented default: everything in memory, 4096 texels of factored input (a 400x400 file
+// has 160000); an explicit count is capped at the texel count, 0 means all.
+TEST(BtfSource, ErrorTexelCountDefaultsByWhereTheDataLive) {
+    const MeasuredBtf inMemory(100, 50, DirectionSet("one", {{0, 0}}),
+                               DirectionSet("one", {{0, 0}}));
+    EXPECT_EQ(errorTexelCount(inMemory, -1), 5000u);
+    EXPECT_EQ(errorTexelCount(inMemory, 0), 5000u);
+    EXPECT_EQ(errorTexelCount(inMemory, 17), 17u);
+    EXPECT_EQ(errorTexelCount(inMemory, 99999), 5000u);
+    const FactoredBtf largeFactors = randomFactors(FactorModel::Fmf, {2, 2, 2}, 80, 80, 1);
+    const FactoredBtfSource large(largeFactors);
+    EXPECT_EQ(errorTexelCount(large, -1), 4096u);
+    EXPECT_EQ(errorTexelCount(large, 0), 6400u);
+    const FactoredBtf smallFactors = randomFactors(FactorModel::Fmf, {2, 2, 2}, 8, 8, 1);
+    const FactoredBtfSource small(smallFactors);
+    EXPECT_EQ(errorTexelCount(small, -1), 64u);
+}
+
 // The subsample's statistics are those of the full computation restricted to its texels.
 TEST(BtfSource, SubsampledErrorIsTheFullErrorAtThoseTexels) {
     SampleOptions options;

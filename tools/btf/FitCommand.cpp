@@ -103,12 +103,9 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - loaded).count();
         material->fitInfo["seconds"] = std::to_string(fitSeconds);
         material->fitInfo["source"] = options->input;
-        const long long errorTexels = options->errorTexels >= 0 ? options->errorTexels
-                                      : btf.inMemory()          ? 0
-                                                                : 4096;
+        const std::size_t errorTexels = errorTexelCount(btf, options->errorTexels);
         std::vector<std::size_t> subsample;
-        if (errorTexels > 0 && std::size_t(errorTexels) < btf.texelCount())
-            subsample = randomTexels(btf, std::size_t(errorTexels));
+        if (errorTexels < btf.texelCount()) subsample = randomTexels(btf, errorTexels);
         const ErrorSummary error = computeError(
             btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); },
             subsample.empty() ? nullptr : &subsample);
