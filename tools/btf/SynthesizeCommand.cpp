@@ -85,8 +85,9 @@ Runner addSynthesizeCommand(CLI::App& app, CommonOptions& common) {
         ->capture_default_str();
     command
         ->add_option("--patch", s.patch,
-                     "Mean side of the patches started at random sample positions (output "
-                     "texels); 0: start from one random texel; default: half the sample's side")
+                     "Spacing of the jumps (output texels): one per cell of this side, to a texel "
+                     "whose neighbourhood matches but lies elsewhere in the sample; 0: none (the "
+                     "output then repeats the sample); default: half the sample's smaller side")
         ->check(CLI::Range(0, 1 << 20));
     addLoadOptions(*command, common);
     return [&common, options] {
