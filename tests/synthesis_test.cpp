@@ -7,6 +7,7 @@
 #include <set>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "core/CoordinateMap.h"
 #include "core/Error.h"
@@ -124,6 +125,23 @@ TEST(Synthesis, DeterministicForASeedAndInsideTheSample) {
         }
     options.seed = 8;
     EXPECT_NE(synthesizeMap(analysis, options).coordinates, a.coordinates);
+}
+
+TEST(Synthesis, SameResultOnOneThread) {
+    // Fixed 256-texel chunks in every parallel step: 1024 texels are 4 chunks, the projection
+    // (18 values to 8) and k-means (64 textons) both run.
+    const MeasuredBtf sample = weave(32);
+    SynthesisOptions options = small(40, 2);
+    options.dimensions = 8;
+    options.textons = 64;
+    const SampleAnalysis analysis = analyseSample(sample, options);
+    const CoordinateMap map = synthesizeMap(analysis, options);
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    const SampleAnalysis serial = analyseSample(sample, options);
+    EXPECT_EQ(serial.levels.back().features, analysis.levels.back().features);
+    EXPECT_EQ(serial.levels.back().texton, analysis.levels.back().texton);
+    EXPECT_EQ(serial.levels.back().similar, analysis.levels.back().similar);
+    EXPECT_EQ(synthesizeMap(serial, options).coordinates, map.coordinates);
 }
 
 TEST(Synthesis, QualityFiguresOfKnownMaps) {
