@@ -28,7 +28,8 @@ write_tree(${WORK}/good
   core/B.h "#pragma once"
   loaders/L.cpp "#include \"core/A.h\""
   materials/pca/M.cpp "#include \"core/A.h\"\n#include \"Local.h\""
-  scene/S.cpp "#include \"materials/pca/M.h\"\n#include \"loaders/L.h\""
+  synthesis/K.cpp "#include \"core/A.h\""
+  scene/S.cpp "#include \"materials/pca/M.h\"\n#include \"loaders/L.h\"\n#include \"synthesis/K.h\""
   harness/headless/H.cpp "#include \"scene/S.h\""
   plugins/btf/P.cpp "#include \"scene/S.h\"\n#include \"plugins/btf/P.h\""
   tools/btf/T.cpp "#include \"harness/H.h\""
@@ -40,12 +41,14 @@ write_tree(${WORK}/bad
   core/A.h "#pragma once\n#include \"loaders/L.h\""
   loaders/L.cpp "#include \"materials/Material.h\""
   materials/M.cpp "  #  include \"harness/headless/HeadlessRenderer.h\""
+  synthesis/K.cpp "#include \"materials/Material.h\""
   scene/S.cpp "#include \"harness/MaterialImage.h\""
   plugins/btf/P.cpp "#include \"core/A.h\"\n#include \"harness/Compare.h\"")
 expect(${WORK}/bad
   "core/A.h: includes \"loaders/L.h\", but core/ may include only core/"
   "loaders/L.cpp: includes \"materials/Material.h\", but loaders/ may include only core/, loaders/"
   "materials/M.cpp: includes \"harness/headless/HeadlessRenderer.h\", but materials/ may include only core/, materials/"
-  "scene/S.cpp: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, scene/"
-  "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, scene/, plugins/")
+  "synthesis/K.cpp: includes \"materials/Material.h\", but synthesis/ may include only core/, synthesis/"
+  "scene/S.cpp: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, scene/"
+  "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, synthesis/, scene/, plugins/")
 message(STATUS "layer checker: fake trees give the expected messages")

@@ -50,7 +50,8 @@ int main(int argc, char** argv) {
     const std::vector<tool::Runner> runners{
         tool::addInfoCommand(app, common),         tool::addSampleCommand(app, common),
         tool::addContactSheetCommand(app, common), tool::addFitCommand(app, common),
-        tool::addEvalCommand(app, common),         tool::addCompareCommand(app, common)};
+        tool::addEvalCommand(app, common),         tool::addCompareCommand(app, common),
+        tool::addSynthesizeCommand(app, common),   tool::addMakeTileableCommand(app, common)};
     try {
         app.parse(argc, argv);
         Progress::setEnabled(progress);
