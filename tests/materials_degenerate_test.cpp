@@ -366,3 +366,32 @@ TEST(Degenerate, LpcaRevisedOnDuplicateTexels) {
     // Rank 2 overall; a single cluster needs both components.
     expectRevisedNoWorseThanItsRank(duplicateBtf(), "duplicates", 2);
 }
+
+// ---- ptm ---------------------------------------------------------------------------------------
+
+namespace {
+
+/** A constant is the PTM a5 = c (the design's constant column), so the fit is exact up to the
+ *  half storage (unit roundoff 2^-11): rgb rounds a5 once; luminance rounds the luminance's a5 and
+ *  then the colour c / a5, two roundings; the other coefficients are rounding noise of the double
+ *  fit (below 1e-6). Per texel error = RGB length of that. Rank-1 and duplicate data are no PTM:
+ *  there the check is that nothing becomes NaN or Inf. */
+void expectPtmBehaves(const std::string& options) {
+    const Fitted constant = fitMethod("ptm", options, constantBtf());
+    expectFinite(constant, "ptm constant " + options);
+    const double roundings = options.find("luminance") != std::string::npos ? 2 : 1;
+    EXPECT_LT(constant.error.maximum,
+              std::sqrt(3.0) * (roundings * std::ldexp(1.0, -11) * kConstant + 1e-6))
+        << options;
+    expectFinite(fitMethod("ptm", options, rankOneBtf()), "ptm rank-1 " + options);
+    expectFinite(fitMethod("ptm", options, duplicateBtf()), "ptm duplicates " + options);
+}
+
+}  // namespace
+
+TEST(Degenerate, PtmIsExactOnConstantDataAndStaysFinite) {
+    expectPtmBehaves("");
+    expectPtmBehaves("colour=luminance");
+    expectPtmBehaves("views=all");
+    expectPtmBehaves("views=all colour=luminance");
+}

@@ -1,0 +1,53 @@
+#version 330 compatibility
+// Method "ptm" (materials/ptm/Ptm.h): polynomial texture maps, seed 002 section 3.1,
+//   P(x, l) = a0 lx^2 + a1 ly^2 + a2 lx ly + a3 lx + a4 ly + a5,
+// per channel (rgb) or on the luminance times a base colour; one PTM for every view (front) or
+// one per measured view blended over the 3 views around the view direction with the exact
+// Delaunay weights (all). Same float operations and order as PtmMaterial::field/evaluate, so
+// GPU == CPU.
+#pragma include "common/btf_main.glsl"
+#pragma include "common/directions.glsl"
+
+// RGB. rgb: layer 6 s + k = a_k of (R, G, B); luminance: layer 2 s = (a0, a1, a2), layer 2 s + 1 =
+// (a3, a4, a5); s = the view slot (0 for front, the measured view for all).
+uniform sampler2DArray ptmCoefficients;
+uniform sampler2DArray ptmColour;  // luminance: RGB base colour, layer = view slot
+uniform sampler2D ptmViewTable;    // views=all: view interpolation (common/directions.glsl)
+uniform int ptmLuminance;          // 1: luminance PTM x colour, 0: one PTM per channel
+uniform int ptmPerView;            // 1: one PTM per measured view, 0: slot 0 for every view
+
+vec3 ptmField(ivec2 texel, int slot, float lx, float ly) {
+    float mx = lx * lx, my = ly * ly, mxy = lx * ly;
+    if (ptmLuminance != 0) {
+        vec3 a = texelFetch(ptmCoefficients, ivec3(texel, 2 * slot), 0).rgb;
+        vec3 b = texelFetch(ptmCoefficients, ivec3(texel, 2 * slot + 1), 0).rgb;
+        float l = b.z;
+        l += a.x * mx;
+        l += a.y * my;
+        l += a.z * mxy;
+        l += b.x * lx;
+        l += b.y * ly;
+        return texelFetch(ptmColour, ivec3(texel, slot), 0).rgb * l;
+    }
+    int layer = 6 * slot;
+    vec3 sum = texelFetch(ptmCoefficients, ivec3(texel, layer + 5), 0).rgb;
+    sum += texelFetch(ptmCoefficients, ivec3(texel, layer), 0).rgb * mx;
+    sum += texelFetch(ptmCoefficients, ivec3(texel, layer + 1), 0).rgb * my;
+    sum += texelFetch(ptmCoefficients, ivec3(texel, layer + 2), 0).rgb * mxy;
+    sum += texelFetch(ptmCoefficients, ivec3(texel, layer + 3), 0).rgb * lx;
+    sum += texelFetch(ptmCoefficients, ivec3(texel, layer + 4), 0).rgb * ly;
+    return sum;
+}
+
+vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
+    // Measured values are never negative: a polynomial's dip below 0 is clamped.
+    if (ptmPerView == 0) return max(ptmField(texel, 0, light.x, light.y), vec3(0.0));
+    ivec3 index;
+    vec3 weight;
+    btfLookupDirections(ptmViewTable, view, index, weight);
+    vec3 sum = vec3(0.0);
+    for (int j = 0; j < 3; ++j) {
+        if (weight[j] > 0.0) sum += weight[j] * ptmField(texel, index[j], light.x, light.y);
+    }
+    return max(sum, vec3(0.0));
+}
