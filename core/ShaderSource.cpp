@@ -76,6 +76,16 @@ std::string shaderOrigin(const std::string& name) {
     return path.empty() ? "embedded:" + name : path;
 }
 
+std::string addShaderDefine(const std::string& source, const std::string& name) {
+    const std::string line = "#define " + name + " 1\n";
+    const auto start = source.find_first_not_of(" \t\r\n");
+    if (start == std::string::npos || source.compare(start, 8, "#version") != 0)
+        return line + source;
+    const auto end = source.find('\n', start);
+    if (end == std::string::npos) return source + "\n" + line;
+    return source.substr(0, end + 1) + line + source.substr(end + 1);
+}
+
 void addShaderSource(const std::string& name, const std::string& text) {
     addedShaders()[name] = text;
 }

@@ -6,24 +6,28 @@
 #include <osg/Uniform>
 
 #include "core/Error.h"
+#include "materials/CoordinateMapRendering.h"
 
 namespace osgBTF {
 
-FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,
-                               const glm::vec3& view, const glm::vec3& light) {
-    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
-    stateSet->addUniform(
-        new osg::Uniform("osgBTF_fixedView", osg::Vec4(view.x, view.y, view.z, 1)));
-    stateSet->addUniform(new osg::Uniform("osgBTF_lightCount", 1));
+namespace {
+
+/** One pixel per texel of a w x h grid: `stateSet` (the material's) over `mapState` (none or the
+ *  coordinate-map program and texture) over the render uniforms. */
+FloatImage renderImage(HeadlessRenderer& renderer, osg::StateSet* stateSet, osg::StateSet* mapState,
+                       int w, int h, const glm::vec3& view, const glm::vec3& light) {
+    osg::ref_ptr<osg::StateSet> render = new osg::StateSet;
+    render->addUniform(new osg::Uniform("osgBTF_fixedView", osg::Vec4(view.x, view.y, view.z, 1)));
+    render->addUniform(new osg::Uniform("osgBTF_lightCount", 1));
     // The camera's view matrix is the identity, so eye space is the patch's local frame.
     osg::ref_ptr<osg::Uniform> position =
         new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
     position->setElement(0, osg::Vec4(light.x, light.y, light.z, 0.0f));
-    stateSet->addUniform(position.get());
+    render->addUniform(position.get());
     osg::ref_ptr<osg::Uniform> color =
         new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", 8);
     color->setElement(0, osg::Vec3(1, 1, 1));
-    stateSet->addUniform(color.get());
+    render->addUniform(color.get());
 
     osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
     osg::ref_ptr<osg::Vec4Array> tangents =
@@ -32,10 +36,19 @@ FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& mater
     quad->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(quad.get());
-    geode->setStateSet(stateSet.get());
+    geode->setStateSet(render.get());
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    root->setStateSet(stateSet);
+    if (mapState) {
+        osg::ref_ptr<osg::Group> mapped = new osg::Group;
+        mapped->setStateSet(mapState);
+        mapped->addChild(geode.get());
+        root->addChild(mapped.get());
+    } else {
+        root->addChild(geode.get());
+    }
 
-    const int w = material.width(), h = material.height();
-    osg::ref_ptr<osg::Image> image = renderer.render(geode.get(), orthoUnitSquare(w, h));
+    osg::ref_ptr<osg::Image> image = renderer.render(root.get(), orthoUnitSquare(w, h));
     FloatImage out(w, h, 3);
     out.channelNames = {"R", "G", "B"};
     const float* rgba = reinterpret_cast<const float*>(image->data());
@@ -43,6 +56,43 @@ FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& mater
         for (int x = 0; x < w; ++x)
             for (int c = 0; c < 3; ++c)
                 out.at(x, h - 1 - y, c) = rgba[(std::size_t(y) * w + x) * 4 + c];
+    return out;
+}
+
+}  // namespace
+
+FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,
+                               const glm::vec3& view, const glm::vec3& light) {
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+    return renderImage(renderer, stateSet.get(), nullptr, material.width(), material.height(), view,
+                       light);
+}
+
+FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,
+                               const CoordinateMap& map, const glm::vec3& view,
+                               const glm::vec3& light) {
+    checkCoordinateMapMatches(material, map, "coordinate map");
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+    osg::ref_ptr<osg::Texture2D> mapTexture = createCoordinateMapTexture(map);
+    osg::ref_ptr<osg::StateSet> mapState =
+        createCoordinateMapStateSet(material, *stateSet, mapTexture.get());
+    return renderImage(renderer, stateSet.get(), mapState.get(), map.width, map.height, view,
+                       light);
+}
+
+FloatImage evaluateMaterialImage(const Material& material, const CoordinateMap& map,
+                                 const glm::vec3& view, const glm::vec3& light) {
+    checkCoordinateMapMatches(material, map, "coordinate map");
+    const int w = map.width, h = map.height;
+    FloatImage out(w, h, 3);
+    out.channelNames = {"R", "G", "B"};
+    if (light.z <= 0.0f || view.z <= 0.0f) return out;  // as the shader: below the horizon is dark
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const glm::vec3 value =
+                material.evaluate(map.sampleX(x, y), map.sampleY(x, y), view, light);
+            for (int c = 0; c < 3; ++c) out.at(x, h - 1 - y, c) = value[c];
+        }
     return out;
 }
 

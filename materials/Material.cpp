@@ -8,6 +8,7 @@
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
+#include "materials/CoordinateMapRendering.h"
 #include "materials/MaterialSerializer.h"
 #include "materials/ShaderInterface.h"
 
@@ -164,18 +165,22 @@ osg::ref_ptr<Material> loadMaterial(const std::string& path) {
     return material;
 }
 
-osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
+namespace {
+
+osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordinateMap) {
     static std::mutex mutex;
-    static std::map<std::string, osg::ref_ptr<osg::Program>> programs;
+    static std::map<std::pair<std::string, bool>, osg::ref_ptr<osg::Program>> programs;
     std::lock_guard<std::mutex> lock(mutex);
-    auto& program = programs[method];
+    auto& program = programs[{method, coordinateMap}];
     if (!program) {
         osg::ref_ptr<osg::Program> created = new osg::Program;
-        created->setName("osgBTF_" + method);
+        created->setName("osgBTF_" + method + (coordinateMap ? "_coordinateMap" : ""));
         const std::string vert = "common/btf.vert", frag = method + ".frag";
         osg::ref_ptr<osg::Shader> vs = new osg::Shader(osg::Shader::VERTEX, shaderSource(vert));
         vs->setName(shaderOrigin(vert));
-        osg::ref_ptr<osg::Shader> fs = new osg::Shader(osg::Shader::FRAGMENT, shaderSource(frag));
+        std::string fragment = shaderSource(frag);
+        if (coordinateMap) fragment = addShaderDefine(fragment, shader::kCoordinateMapDefine);
+        osg::ref_ptr<osg::Shader> fs = new osg::Shader(osg::Shader::FRAGMENT, fragment);
         fs->setName(shaderOrigin(frag));
         created->addShader(vs);
         created->addShader(fs);
@@ -183,6 +188,16 @@ osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
         program = created;
     }
     return program;
+}
+
+}  // namespace
+
+osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
+    return programVariant(method, false);
+}
+
+osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method) {
+    return programVariant(method, true);
 }
 
 }  // namespace osgBTF

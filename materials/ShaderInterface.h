@@ -24,6 +24,11 @@ constexpr const char* kSize = "osgBTF_size";                    ///< ivec2, texe
 constexpr const char* kFixedView = "osgBTF_fixedView";          ///< vec4, w = 1: fixed local view
 constexpr const char* kTextureScale = "osgBTF_textureScale";    ///< float, tiling
 
+/** The coordinate-map variant of every program (btf_main.glsl): the define coordinateMapProgram
+ * adds, and the integer sampler it then reads (R32I, (sample row << 16) | sample column). */
+constexpr const char* kCoordinateMapDefine = "OSGBTF_COORDINATE_MAP";
+constexpr const char* kCoordinateMap = "osgBTF_coordinateMap";
+
 /** Grid and texel row width of the direction lookup tables (materials/DirectionLookup.h):
  *  shaders/common/directions.glsl's `const int btfDirectionGrid` and `btfDirectionTableWidth`
  *  (a power of 2: the shader splits addresses with a mask). 32 cells across the disc keep the

@@ -17,6 +17,7 @@
 #include <osgUtil/TangentSpaceGenerator>
 
 #include "core/Error.h"
+#include "materials/CoordinateMapRendering.h"
 #include "scene/OpenMaterial.h"
 
 namespace osgBTF {
@@ -52,6 +53,36 @@ osg::ref_ptr<Material> loadSharedMaterial(const std::string& path,
 }
 
 namespace {
+
+/** Path + size + modification time: a file rewritten since is read again. */
+std::string fileStamp(const std::string& path, std::string& canonicalPath) {
+    namespace fs = std::filesystem;
+    std::error_code error;
+    fs::path canonical = fs::weakly_canonical(path, error);
+    if (error) canonical = path;
+    canonicalPath = canonical.string();
+    const auto size = fs::file_size(canonical, error);
+    const auto time = fs::last_write_time(canonical, error);
+    return std::to_string(size) + ":" + std::to_string(time.time_since_epoch().count());
+}
+
+/** One texture per map object, shared by every node drawing that map (uploaded once per
+ *  context). */
+osg::ref_ptr<osg::Texture2D> sharedMapTexture(const std::shared_ptr<const CoordinateMap>& map) {
+    static std::mutex mutex;
+    static std::map<const CoordinateMap*, std::pair<std::weak_ptr<const CoordinateMap>,
+                                                    osg::observer_ptr<osg::Texture2D>>>
+        textures;
+    std::lock_guard<std::mutex> lock(mutex);
+    for (auto it = textures.begin(); it != textures.end();)
+        it = it->second.first.expired() ? textures.erase(it) : std::next(it);
+    auto& entry = textures[map.get()];
+    osg::ref_ptr<osg::Texture2D> texture;
+    if (entry.first.lock() == map && entry.second.lock(texture)) return texture;
+    texture = createCoordinateMapTexture(*map);
+    entry = {map, texture.get()};
+    return texture;
+}
 
 constexpr unsigned kTangentAttribute = shader::kTangentAttribute;
 
@@ -190,6 +221,23 @@ private:
 
 }  // namespace
 
+std::shared_ptr<const CoordinateMap> loadSharedCoordinateMap(const std::string& path) {
+    std::string canonical;
+    const std::string stamp = fileStamp(path, canonical);
+    static std::mutex mutex;
+    static std::map<std::string, std::pair<std::string, std::weak_ptr<const CoordinateMap>>> loaded;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        const auto it = loaded.find(canonical);
+        if (it != loaded.end() && it->second.first == stamp)
+            if (std::shared_ptr<const CoordinateMap> map = it->second.second.lock()) return map;
+    }
+    auto map = std::make_shared<const CoordinateMap>(readCoordinateMap(path));
+    std::lock_guard<std::mutex> lock(mutex);
+    loaded[canonical] = {stamp, map};
+    return map;
+}
+
 unsigned generateTangents(osg::Node& node) {
     TangentVisitor visitor;
     node.accept(visitor);
@@ -211,8 +259,13 @@ MaterialNode::MaterialNode(const MaterialNode& other, const osg::CopyOp& copyop)
       _material(other._material),
       _materialFile(other._materialFile),
       _materialError(other._materialError),
-      _textureScale(other._textureScale) {
-    // The material (and its shared StateSet) is shared; per-node and per-camera state is not.
+      _textureScale(other._textureScale),
+      _map(other._map),
+      _mapFile(other._mapFile),
+      _mapError(other._mapError),
+      _mapStateSet(other._mapStateSet) {
+    // The material (and its shared StateSet) and the map state are shared; per-node and
+    // per-camera state is not.
     createNodeState();
 }
 
@@ -237,6 +290,7 @@ void MaterialNode::setMaterial(Material* material) {
     } else {
         _materialFile.clear();
     }
+    updateMapState();
     generateTangents();
 }
 
@@ -261,9 +315,62 @@ bool MaterialNode::setMaterialFile(const std::string& file, const osgDB::Options
     _material = nullptr;
     _materialFile = file;
     _materialError = problem;
+    updateMapState();
     OSG_WARN << "osgBTF::MaterialNode: " << problem
              << " (the node draws its children without the material)" << std::endl;
     return false;
+}
+
+bool MaterialNode::setCoordinateMap(std::shared_ptr<const CoordinateMap> map) {
+    _map = std::move(map);
+    _mapFile.clear();
+    _mapError.clear();
+    updateMapState();
+    return _mapError.empty();
+}
+
+bool MaterialNode::setCoordinateMapFile(const std::string& file, const osgDB::Options* options) {
+    if (file.empty()) return setCoordinateMap(nullptr);
+    const std::string path = osgDB::findDataFile(file, options);
+    std::string problem;
+    std::shared_ptr<const CoordinateMap> map;
+    if (path.empty()) {
+        problem = file + ": no such file";
+    } else {
+        try {
+            map = loadSharedCoordinateMap(path);
+        } catch (const std::exception& e) {
+            problem = e.what();
+        }
+    }
+    _map = map;
+    _mapFile = file;
+    _mapError = problem;
+    if (!map) {
+        _mapStateSet = nullptr;
+        OSG_WARN << "osgBTF::MaterialNode: " << problem
+                 << " (the node draws the material without the map)" << std::endl;
+        return false;
+    }
+    updateMapState();
+    return _mapError.empty();
+}
+
+void MaterialNode::updateMapState() {
+    _mapStateSet = nullptr;
+    if (!_map) return;  // keeps the error of a map file that could not be read
+    _mapError.clear();
+    if (!_material) return;  // checked when a material comes
+    try {
+        checkCoordinateMapMatches(*_material, *_map,
+                                  _mapFile.empty() ? std::string("coordinate map") : _mapFile);
+        _mapStateSet = createCoordinateMapStateSet(*_material, *_material->sharedStateSet(),
+                                                   sharedMapTexture(_map).get());
+    } catch (const std::exception& e) {
+        _mapError = e.what();
+        OSG_WARN << "osgBTF::MaterialNode: " << _mapError
+                 << " (the node draws the material without the map)" << std::endl;
+    }
 }
 
 void MaterialNode::setTextureScale(float scale) {
@@ -394,9 +501,11 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
             if (auto* compile = dynamic_cast<osgUtil::GLObjectsVisitor*>(&nv)) {
                 compile->apply(*material);
                 compile->apply(*_nodeStateSet);
+                if (_mapStateSet) compile->apply(*_mapStateSet);
             } else if (auto* collect = dynamic_cast<osgUtil::StateToCompile*>(&nv)) {
                 collect->apply(*material);
                 collect->apply(*_nodeStateSet);
+                if (_mapStateSet) collect->apply(*_mapStateSet);
             }
         }
         osg::Group::traverse(nv);
@@ -404,9 +513,11 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
     }
     cv->pushStateSet(_material->sharedStateSet());
     cv->pushStateSet(_nodeStateSet.get());
+    if (_mapStateSet) cv->pushStateSet(_mapStateSet.get());
     cv->pushStateSet(lightStateSet(*cv));
     osg::Group::traverse(nv);
     cv->popStateSet();
+    if (_mapStateSet) cv->popStateSet();
     cv->popStateSet();
     cv->popStateSet();
 }
@@ -436,6 +547,7 @@ void MaterialNode::resizeGLObjectBuffers(unsigned int maxSize) {
     osg::Group::resizeGLObjectBuffers(maxSize);
     if (osg::StateSet* material = materialStateSet()) material->resizeGLObjectBuffers(maxSize);
     _nodeStateSet->resizeGLObjectBuffers(maxSize);
+    if (_mapStateSet) _mapStateSet->resizeGLObjectBuffers(maxSize);
     std::lock_guard<std::mutex> lock(_lightsMutex);
     for (auto& [camera, entry] : _lightsPerCamera)
         if (entry.stateSet) entry.stateSet->resizeGLObjectBuffers(maxSize);
@@ -445,6 +557,7 @@ void MaterialNode::releaseGLObjects(osg::State* state) const {
     osg::Group::releaseGLObjects(state);
     if (const osg::StateSet* material = materialStateSet()) material->releaseGLObjects(state);
     _nodeStateSet->releaseGLObjects(state);
+    if (_mapStateSet) _mapStateSet->releaseGLObjects(state);
     std::lock_guard<std::mutex> lock(_lightsMutex);
     pruneCameraLights();
     for (const auto& [camera, entry] : _lightsPerCamera)

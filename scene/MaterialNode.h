@@ -14,12 +14,15 @@
 //  - feeds every osg::LightSource of the scene being culled (up to 8) to the shaders in eye
 //    space, for each camera and frame; with no LightSource in the scene, the view's own light
 //    (osgViewer's headlight or sky light), or a white headlight when there is no view.
+//  - optionally draws the material through a coordinate map (setCoordinateMap[File]): a large
+//    non-repeating surface from a small sample, at the cost of one dependent fetch.
 // A material that cannot be loaded is reported with OSG_WARN (file and problem); the node then
 // draws its children with their own state, so the rest of the scene is unaffected.
 #pragma once
 
 #include <cstddef>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -33,6 +36,7 @@
 #include <osg/observer_ptr>
 #include <osgDB/Options>
 
+#include "core/CoordinateMap.h"
 #include "materials/Material.h"
 #include "materials/ShaderInterface.h"
 
@@ -77,9 +81,32 @@ public:
     /** The problem of the last failed setMaterialFile, empty after a success. */
     const std::string& getMaterialError() const { return _materialError; }
 
-    /** Tiling: how often the material repeats per unit of texture coordinate (default 1). */
+    /** Tiling: how often the material repeats per unit of texture coordinate (default 1). With
+     *  a coordinate map, how often the MAP repeats. */
     void setTextureScale(float scale);
     float getTextureScale() const { return _textureScale; }
+
+    /** Renders the material through a coordinate map (core/CoordinateMap.h, e.g. `btf
+     *  synthesize`'s output; null: none): the texture coordinates (times the texture scale) then
+     *  cover the map, wrapping around, and each of its texels shows the sample texel the map
+     *  names (materials/CoordinateMapRendering.h). Works with any material and method. A map
+     *  into another sample size than the material's is refused when both are set: OSG_WARN
+     *  "osgBTF::MaterialNode: MAP: made for a WxH sample, but material 'M' is wxh (the node draws
+     * the material without the map)", getCoordinateMapError() says it, and the material is drawn
+     * without the map. Returns false then. Forgets the map file name. */
+    bool setCoordinateMap(std::shared_ptr<const CoordinateMap> map);
+    const std::shared_ptr<const CoordinateMap>& getCoordinateMap() const { return _map; }
+    /** Reads a coordinate map file, found like setMaterialFile's (maps already read by any node,
+     *  same path, size and modification time, are shared). On failure: OSG_WARN
+     *  "osgBTF::MaterialNode: FILE: problem (the node draws the material without the map)", no
+     *  map, returns false; the file name is kept either way (what .osgt/.osgb files store). */
+    bool setCoordinateMapFile(const std::string& file, const osgDB::Options* options = nullptr);
+    const std::string& getCoordinateMapFile() const { return _mapFile; }
+    /** The problem of the last failed map setting or size check, empty when the map is used or
+     *  none is set. */
+    const std::string& getCoordinateMapError() const { return _mapError; }
+    /** Whether the material is drawn through the map (both set, sizes matching). */
+    bool usesCoordinateMap() const { return _mapStateSet.valid(); }
 
     /** Adds tangents (attribute 6) to every Geometry below this node that has texture
      *  coordinates on unit 0 and no attribute 6 yet. Called automatically by addChild,
@@ -122,6 +149,8 @@ protected:
     /** The material's shared StateSet; null without a material or when it cannot be built (the
      *  failure is reported where the material is set). */
     osg::StateSet* materialStateSet() const;
+    /** Rebuilds _mapStateSet for the current material and map (checks their sizes). */
+    void updateMapState();
     /** Drops the light state of cameras that no longer exist; _lightsMutex held. */
     void pruneCameraLights() const;
 
@@ -134,6 +163,10 @@ protected:
     float _textureScale = 1.0f;
     osg::ref_ptr<osg::StateSet> _nodeStateSet;  // osgBTF_textureScale
     osg::ref_ptr<osg::Uniform> _textureScaleUniform;
+    std::shared_ptr<const CoordinateMap> _map;
+    std::string _mapFile;
+    std::string _mapError;
+    osg::ref_ptr<osg::StateSet> _mapStateSet;  // the map program and texture; null: no map used
 
     struct CameraLights {
         // Tells when the camera is gone (pruneCameraLights), so a camera allocated later at a
@@ -153,6 +186,11 @@ protected:
  *  modification time, same storage) that is still alive. Throws Error like loadMaterial. */
 osg::ref_ptr<Material> loadSharedMaterial(
     const std::string& path, MaterialTexture::PixelKind factorStorage = MaterialTexture::Half);
+
+/** Reads a coordinate map file (readCoordinateMap), sharing it with every earlier read of the
+ *  same file (same path, size and modification time) that is still alive. Throws Error "FILE:
+ *  problem". */
+std::shared_ptr<const CoordinateMap> loadSharedCoordinateMap(const std::string& path);
 
 /** Adds tangents below `node` (see MaterialNode::generateTangents); returns how many geometries
  *  got one. */

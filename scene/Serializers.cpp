@@ -6,6 +6,9 @@
 //                     file). Reading it loads the material; a missing or bad file is an OSG_WARN
 //                     naming the file, the node then draws its children without the material.
 //   TextureScale      tiling (default 1).
+//   CoordinateMapFile the coordinate map the material is drawn through (setCoordinateMapFile;
+//                     written as given, found like MaterialFile); only when the node has a map
+//                     file. A map set in memory (setCoordinateMap) is not stored.
 //   EmbeddedMaterial  only for a material that has no file (fitted in memory): its whole
 //                     FittedMaterial (method, parameters, direction sets, textures with their
 //                     float bits as hex text, so .osgt is exact too).
@@ -60,6 +63,23 @@ bool writeEmbeddedMaterial(osgDB::OutputStream& os, const osgBTF::MaterialNode& 
     return osgBTF::writeFittedMaterial(os, node.getMaterial()->toFittedMaterial());
 }
 
+bool checkCoordinateMapFile(const osgBTF::MaterialNode& node) {
+    return !node.getCoordinateMapFile().empty();
+}
+
+bool readCoordinateMapFile(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
+    std::string file;
+    is.readWrappedString(file);
+    node.setCoordinateMapFile(file, is.getOptions());
+    return true;
+}
+
+bool writeCoordinateMapFile(osgDB::OutputStream& os, const osgBTF::MaterialNode& node) {
+    os.writeWrappedString(node.getCoordinateMapFile());
+    os << std::endl;
+    return true;
+}
+
 }  // namespace
 
 REGISTER_OBJECT_WRAPPER(osgBTF_MaterialNode, new osgBTF::MaterialNode, osgBTF::MaterialNode,
@@ -67,4 +87,5 @@ REGISTER_OBJECT_WRAPPER(osgBTF_MaterialNode, new osgBTF::MaterialNode, osgBTF::M
     ADD_USER_SERIALIZER(MaterialFile);
     ADD_USER_SERIALIZER(EmbeddedMaterial);
     ADD_FLOAT_SERIALIZER(TextureScale, 1.0f);
+    ADD_USER_SERIALIZER(CoordinateMapFile);  // last: .osgt files written before it still read
 }

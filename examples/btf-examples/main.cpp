@@ -4,6 +4,7 @@
 // describes the scenes.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +20,7 @@
 #include "core/Progress.h"
 #include "examples/ExampleScenes.h"
 #include "examples/btf-examples/SceneBench.h"
+#include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 
@@ -40,6 +42,7 @@ struct Options {
     std::string outputDir;
     int size = 32;
     std::string methods = "lambert,laf,pca";
+    int blockMap = 0;  // 0: none
     bool benchFps = false;
     std::string benchResolution = "1920x1080", benchLights = "1,8", benchTarget = "rgba8";
     SceneBenchOptions bench;
@@ -128,6 +131,18 @@ void run(Options options) {
         items.push_back({file, method});
     }
 
+    // A stand-in for a synthesised map (btf synthesize) until one is at hand: blocks of a quarter
+    // of the sample, each from a random place in it.
+    if (options.blockMap > 0) {
+        const std::string file = "blocks-map.exr";
+        writeCoordinateMap(makeBlockCoordinateMap(options.blockMap, options.blockMap, options.size,
+                                                  options.size, std::max(1, options.size / 4), 1),
+                           (dir / file).string());
+        std::cout << "wrote " << (dir / file).string() << " (" << options.blockMap << "x"
+                  << options.blockMap << " coordinate map into the " << options.size << "x"
+                  << options.size << " sample)\n";
+    }
+
     // 2. The model file (plain OSG geometry, usable with the pseudo-loader), then the scenes.
     osg::ref_ptr<osg::Node> vase = createVaseModel();
     writeNodeAtomically(*vase, (dir / "vase.osgt").string());
@@ -199,6 +214,11 @@ int main(int argc, char** argv) {
     app.add_option("--methods", options.methods,
                    "Comma-separated fit methods (`btf fit --help` lists all; default options)")
         ->capture_default_str();
+    app.add_option("--block-map", options.blockMap,
+                   "Also write blocks-map.exr: an N x N coordinate map into the sample made of "
+                   "blocks of a quarter of the sample from random places (a stand-in for `btf "
+                   "synthesize`'s output; btfviewer --map)")
+        ->check(CLI::Range(1, 16384));
     app.add_flag("--bench-fps", options.benchFps,
                  "After writing the scenes, time them headless (EGL: the GPU where there is one, "
                  "else llvmpipe): for each scene, each method on every object and each light "

@@ -20,6 +20,7 @@
 #include <osg/Camera>
 #include <osg/GLExtensions>
 #include <osg/Geode>
+#include <osg/Geometry>
 #include <osg/GraphicsContext>
 #include <osg/Image>
 #include <osg/LightSource>
@@ -312,6 +313,29 @@ osg::ref_ptr<osg::Camera> createHud(osgText::Text* text) {
     return camera;
 }
 
+/** A flat square of size x size metres in the XY plane around the origin (Z up, normal +Z),
+ *  texture coordinates 0..1 across it: --surface-size's model. */
+osg::ref_ptr<osg::Geode> createSurfaceModel(float size) {
+    osg::ref_ptr<osg::Geometry> geometry = new osg::Geometry;
+    osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array;
+    osg::ref_ptr<osg::Vec2Array> texCoords = new osg::Vec2Array;
+    for (const osg::Vec2 corner :
+         {osg::Vec2(0, 0), osg::Vec2(1, 0), osg::Vec2(1, 1), osg::Vec2(0, 1)}) {
+        vertices->push_back(osg::Vec3((corner - osg::Vec2(0.5f, 0.5f)) * size, 0));
+        texCoords->push_back(corner);
+    }
+    geometry->setVertexArray(vertices.get());
+    geometry->setTexCoordArray(0, texCoords.get());
+    osg::ref_ptr<osg::Vec3Array> normals = new osg::Vec3Array(1);
+    (*normals)[0] = osg::Vec3(0, 0, 1);
+    geometry->setNormalArray(normals.get(), osg::Array::BIND_OVERALL);
+    geometry->addPrimitiveSet(new osg::DrawArrays(GL_QUADS, 0, 4));
+    geometry->setName("btfviewer surface");
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(geometry.get());
+    return geode;
+}
+
 /** Reads one input through osgDB; throws Error "FILE: problem" with osgDB's reason. */
 osg::ref_ptr<osg::Node> readInput(const std::string& file) {
     osgDB::ReaderWriter::ReadResult result =
@@ -374,7 +398,18 @@ int run(osg::ArgumentParser& arguments) {
     usage->addCommandLineOption("--model FILE",
                                 "Model under material files (default: a sphere, poles on Z)");
     usage->addCommandLineOption("--scale S",
-                                "Texture scale of materials given as files (default 4)");
+                                "Texture scale of materials given as files: repeats per texture "
+                                "coordinate unit (default 4; 1 with --surface-size)");
+    usage->addCommandLineOption(
+        "--surface-size S",
+        "Model under material files: a flat square of S x S metres (Z up, texture coordinates "
+        "0..1 across it, so --scale is the repeats over the whole surface), seen from above at "
+        "an angle");
+    usage->addCommandLineOption(
+        "--map FILE",
+        "Draw materials given as files through this coordinate map (btf synthesize -o FILE): "
+        "the map covers each texture repeat, each of its texels showing the sample texel it "
+        "names");
     usage->addCommandLineOption("--material N",
                                 "Start with material N on every object (as key N; 0 = own)");
     usage->addCommandLineOption(
@@ -402,13 +437,17 @@ int run(osg::ArgumentParser& arguments) {
         return 0;
     }
 
-    std::string modelFile, captureFile, pluginOptions;
-    float textureScale = 4;
+    std::string modelFile, captureFile, pluginOptions, mapFile;
+    float textureScale = 4, surfaceSize = 0;
     int firstMaterial = 0, frames = -1;
     double azimuth = -30, elevation = 40;
     while (arguments.read("--model", modelFile)) {
     }
-    while (arguments.read("--scale", textureScale)) {
+    bool scaleGiven = false;
+    while (arguments.read("--scale", textureScale)) scaleGiven = true;
+    bool surfaceGiven = false;
+    while (arguments.read("--surface-size", surfaceSize)) surfaceGiven = true;
+    while (arguments.read("--map", mapFile)) {
     }
     while (arguments.read("--material", firstMaterial)) {
     }
@@ -428,6 +467,11 @@ int run(osg::ArgumentParser& arguments) {
     if (!captureFile.empty() && frames < 1)
         throw osgBTF::Error("--frames: at least 1 frame is needed for --capture");
     if (!(textureScale > 0)) throw osgBTF::Error("--scale: must be positive");
+    if (surfaceGiven && !(surfaceSize > 0))
+        throw osgBTF::Error("--surface-size: must be positive (metres)");
+    if (surfaceGiven && !modelFile.empty())
+        throw osgBTF::Error("--surface-size and --model: give one of them");
+    if (surfaceGiven && !scaleGiven) textureScale = 1;
 
     // osgViewer::Viewer reads its own options (--window, --screen, ...) from the arguments.
     osgViewer::Viewer viewer(arguments);
@@ -455,14 +499,28 @@ int run(osg::ArgumentParser& arguments) {
         auto* material = dynamic_cast<MaterialNode*>(node.get());
         if (material && material->getNumChildren() == 0) {
             if (!model)
-                model = modelFile.empty()
+                model = surfaceGiven ? osg::ref_ptr<osg::Node>(createSurfaceModel(surfaceSize))
+                        : modelFile.empty()
                             ? osg::ref_ptr<osg::Node>(osgBTF::examples::createSphereModel())
                             : readInput(modelFile);
             material->setTextureScale(textureScale);
+            if (!mapFile.empty()) {
+                if (!material->setCoordinateMapFile(mapFile))
+                    throw osgBTF::Error(material->getCoordinateMapError());
+                const osgBTF::CoordinateMap& map = *material->getCoordinateMap();
+                std::cout << "btfviewer: " << file << " through the coordinate map " << mapFile
+                          << ": " << map.width << "x" << map.height
+                          << " texels per repeat from the " << map.sampleWidth << "x"
+                          << map.sampleHeight << " sample, " << textureScale
+                          << " repeat(s) per texture coordinate unit\n";
+            }
             material->addChild(model.get());
         }
         inputs.push_back(node);
     }
+    if ((!mapFile.empty() || surfaceGiven) && !model)
+        std::cerr << "btfviewer: note: --map and --surface-size apply to material files (a "
+                     "scene keeps its own models and maps)\n";
 
     osg::ref_ptr<osg::Group> root = new osg::Group;
     osg::ref_ptr<osg::Group> sceneRoot = new osg::Group;
@@ -534,7 +592,15 @@ int run(osg::ArgumentParser& arguments) {
     state->selectMaterial(firstMaterial);
 
     viewer.setSceneData(root.get());
-    viewer.setCameraManipulator(new osgGA::TrackballManipulator);
+    osg::ref_ptr<osgGA::TrackballManipulator> manipulator = new osgGA::TrackballManipulator;
+    if (surfaceGiven && inputs.size() == 1) {
+        // A floor: seen from the front (-Y) and above at about 30 degrees, not edge-on as the
+        // automatic home view (from -Y, level) would show it.
+        manipulator->setAutoComputeHomePosition(false);
+        manipulator->setHomePosition(osg::Vec3d(0, -0.85 * surfaceSize, 0.5 * surfaceSize),
+                                     osg::Vec3d(0, 0.05 * surfaceSize, 0), osg::Vec3d(0, 0, 1));
+    }
+    viewer.setCameraManipulator(manipulator.get());
     viewer.addEventHandler(new ControlHandler(state.get()));
     viewer.addEventHandler(new osgViewer::StatsHandler);
     viewer.addEventHandler(new osgViewer::HelpHandler(usage));

@@ -1,4 +1,5 @@
 #include "materials/fmf/Fmf.h"
+#include "materials/CoordinateMapRendering.h"
 
 #include <algorithm>
 #include <chrono>
@@ -574,5 +575,9 @@ const bool registered = registerMethod([] {
     return m;
 }());
 }  // namespace
+
+// The tables every texel shares; the other textures are per texel (remapMaterial).
+[[maybe_unused]] const bool sharedTexturesDeclared =
+    declareSharedTextures("fmf", {"u", "singularValues"});
 
 }  // namespace osgBTF

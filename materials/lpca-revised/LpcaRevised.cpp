@@ -1,4 +1,5 @@
 #include "materials/lpca-revised/LpcaRevised.h"
+#include "materials/CoordinateMapRendering.h"
 
 #include <algorithm>
 #include <chrono>
@@ -362,5 +363,9 @@ const bool registered = registerMethod([] {
     return m;
 }());
 }  // namespace
+
+// The tables every texel shares; the other textures are per texel (remapMaterial).
+[[maybe_unused]] const bool sharedTexturesDeclared =
+    declareSharedTextures("lpca-revised", {"grid"});
 
 }  // namespace osgBTF

@@ -1,6 +1,7 @@
 // LPCA model: CPU evaluator, memory accounting, file I/O, StateSet and registration. The fit is in
 // LpcaFit.cpp (the only translation unit that instantiates Eigen's eigensolver).
 #include "materials/lpca/Lpca.h"
+#include "materials/CoordinateMapRendering.h"
 
 #include <cmath>
 
@@ -293,5 +294,8 @@ const bool registered = registerMethod([] {
     return m;
 }());
 }  // namespace
+
+// The tables every texel shares; the other textures are per texel (remapMaterial).
+[[maybe_unused]] const bool sharedTexturesDeclared = declareSharedTextures("lpca", {"eigenBrdfs"});
 
 }  // namespace osgBTF

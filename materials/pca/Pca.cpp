@@ -1,4 +1,5 @@
 #include "materials/pca/Pca.h"
+#include "materials/CoordinateMapRendering.h"
 
 #include <algorithm>
 #include <chrono>
@@ -386,5 +387,8 @@ const bool registered = registerMethod([] {
     return m;
 }());
 }  // namespace
+
+// The tables every texel shares; the other textures are per texel (remapMaterial).
+[[maybe_unused]] const bool sharedTexturesDeclared = declareSharedTextures("pca", {"weights"});
 
 }  // namespace osgBTF

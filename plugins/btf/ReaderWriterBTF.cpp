@@ -34,6 +34,7 @@ struct Settings {
     std::map<std::string, std::string> values;  // every KEY=VALUE word, method options among them
     float textureScale = 1.0f;
     std::string cacheDir;  // empty: caching off
+    std::string mapFile;   // a coordinate map to draw the material through; empty: none
 };
 
 std::string defaultCacheDir() {
@@ -62,6 +63,9 @@ Settings parseSettings(const osgDB::Options* options, const std::string& extra =
         if (key == "method") {
             settings.method = value;
             settings.methodGiven = true;
+        } else if (key == "map") {
+            if (value.empty()) throw Error("option map=: expected a coordinate map file");
+            settings.mapFile = value;
         } else if (key == "cache") {
             settings.cacheDir = value == "off" ? std::string() : value;
         } else if (key == "scale") {
@@ -238,6 +242,23 @@ osgDB::ReaderWriter::ReadResult error(const std::string& message) {
     return osgDB::ReaderWriter::ReadResult(message);  // ERROR_IN_READING_FILE
 }
 
+/** Puts the settings' coordinate map on the node; the problem (missing or bad file, a map into
+ *  another sample size) as the error message, empty when fine. */
+std::string applyCoordinateMap(MaterialNode& node, const Settings& settings,
+                               const osgDB::Options* options) {
+    if (settings.mapFile.empty()) return {};
+    const std::string path = osgDB::findDataFile(settings.mapFile, options);
+    if (path.empty()) return settings.mapFile + ": no such file";
+    try {
+        loadSharedCoordinateMap(path);  // the file's own problems, with its path, as an Error
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    // The name as given is what a scene written back refers to (found the same way again).
+    node.setCoordinateMapFile(settings.mapFile, options);
+    return node.getCoordinateMapError();
+}
+
 /** Splits "MODEL.(MATERIAL,k=v,...)" into model, material and the k=v words. */
 bool splitPseudoName(const std::string& inner, std::string& model, std::string& material,
                      std::string& words) {
@@ -282,6 +303,10 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
         supportsOption("cache=<dir>|off", "fit cache folder (default ~/.cache/osgbtf)");
     }
     supportsOption("scale=<s>", "texture scale (tiling) of the MaterialNode (default 1)");
+    supportsOption("map=<file>",
+                   "a coordinate map (btf synthesize -o map.exr) the material is drawn through: "
+                   "the texture coordinates cover the map, each map texel shows the sample texel "
+                   "it names");
 }
 
 osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readObject(const std::string& file,
@@ -308,6 +333,9 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
             if (!model) return error(modelName + ": cannot read the model");
             osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
             node->setTextureScale(settings.textureScale);
+            if (const std::string problem = applyCoordinateMap(*node, settings, options);
+                !problem.empty())
+                return error(problem);
             node->addChild(model.get());
             return node.get();
         }
@@ -327,6 +355,9 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
         osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
         if (!node->getMaterial()) return error(node->getMaterialError());
         node->setTextureScale(settings.textureScale);
+        if (const std::string problem = applyCoordinateMap(*node, settings, options);
+            !problem.empty())
+            return error(problem);
         return node.get();
     } catch (const std::exception& e) {
         return error(e.what());

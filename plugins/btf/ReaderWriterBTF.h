@@ -31,7 +31,11 @@
  *                    fit options without method= are ignored there (OSG_NOTICE says so)
  *   KEY=VALUE        an option of that method (e.g. clusters=32 components=8); options the
  *                    method does not have are ignored
- *   scale=S          texture scale of the MaterialNode (default 1)
+ *   scale=S          texture scale of the MaterialNode (default 1; with map=, map repeats)
+ *   map=FILE         a coordinate map (core/CoordinateMap.h, `btf synthesize -o FILE`) the
+ *                    material is drawn through (MaterialNode::setCoordinateMapFile); a missing
+ *                    file, a bad one or a map into another sample size is an error naming the
+ *                    file (the pseudo-loader takes it as MODEL.(MATERIAL,map=FILE).btfmaterial)
  *   cache=DIR        folder of fitted measured BTFs (default $OSGBTF_CACHE_DIR, else
  *                    $XDG_CACHE_HOME/osgbtf, else ~/.cache/osgbtf); cache=off fits every time
  *

@@ -20,11 +20,27 @@ uniform vec4 osgBTF_fixedView = vec4(0.0);
  *  surface, z > 0). Measured values include the cosine term: nothing multiplies by n.l again. */
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light);
 
+#ifdef OSGBTF_COORDINATE_MAP
+// The program variant for a coordinate map (materials/CoordinateMapRendering.h): the texture
+// coordinates cover the map, whose entry is the sample texel shown there (one dependent fetch).
+// The map's size comes from the texture itself, so osgBTF_size stays the sample's, which the
+// methods' own texel arithmetic (tiles, stacked layers) needs. Entry = (row << 16) | column.
+uniform isampler2D osgBTF_coordinateMap;
+
+ivec2 btfTexel(vec2 uv) {
+    ivec2 mapSize = textureSize(osgBTF_coordinateMap, 0);
+    vec2 f = fract(uv);
+    ivec2 entry = clamp(ivec2(floor(f * vec2(mapSize))), ivec2(0), mapSize - ivec2(1));
+    int columnRow = texelFetch(osgBTF_coordinateMap, entry, 0).r;
+    return ivec2(columnRow & 0xFFFF, columnRow >> 16);
+}
+#else
 ivec2 btfTexel(vec2 uv) {
     // Nearest texel with wrap-around tiling; texelFetch keeps the GPU equal to the CPU reference.
     vec2 f = fract(uv);
     return clamp(ivec2(floor(f * vec2(osgBTF_size))), ivec2(0), osgBTF_size - ivec2(1));
 }
+#endif
 
 void main() {
     vec3 n = normalize(btfEyeNormal);

@@ -36,6 +36,7 @@
 #include <osgDB/ReadFile>
 #include <osgDB/WriteFile>
 
+#include "harness/sample/BlockMap.h"
 #include "scene/MaterialNode.h"
 #include "tests/HandWrittenUbo2014.h"
 #include "tests/TestUtil.h"
@@ -763,6 +764,54 @@ TEST(Btfviewer, MaterialFilesGoOnSpheresAndTheMaterialKeysSwitchThem) {
     EXPECT_LE(differingPixels(images[0], images[2]), pixels / 2000) << "runs are not repeatable";
     EXPECT_GT(differingPixels(images[0], images[1]), pixels / 200)
         << "material 1 and 2 look the same";
+}
+
+TEST(Btfviewer, CoversASurfaceThroughACoordinateMap) {
+    TempDir out;
+    // The fixture's sample is 8x8: a 64x64 block map into it, and one into another size.
+    const std::string map = out.file("map.exr"), other = out.file("other.exr");
+    osgBTF::writeCoordinateMap(osgBTF::makeBlockCoordinateMap(64, 64, 8, 8, 2, 1), map);
+    osgBTF::writeCoordinateMap(osgBTF::makeBlockCoordinateMap(64, 64, 16, 16, 2, 1), other);
+    CommandResult result =
+        runBtfviewer(":none", "sample-pca.btfmat --surface-size 16 --map " + shellQuote(other));
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(
+        result.output.find("btfviewer: " + other + ": made for a 16x16 sample, but material '"),
+        std::string::npos)
+        << result.output;
+    result = runBtfviewer(":none", "sample-pca.btfmat --surface-size 0");
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(result.output.find("btfviewer: --surface-size: must be positive (metres)"),
+              std::string::npos)
+        << result.output;
+
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    // The same texel size both ways: the map (64 texels per repeat, once over the surface) and
+    // the sample tiled 8 times (8 texels per repeat).
+    std::vector<RgbImage> images;
+    for (const std::string& how : {"--map " + shellQuote(map), std::string("--scale 8")}) {
+        const std::string file = out.file("surface" + std::to_string(images.size()) + ".png");
+        result =
+            runBtfviewer(xvfb.display(), "sample-pca.btfmat --surface-size 16 --no-hud " + how +
+                                             " --window 0 0 320 240 --capture " + shellQuote(file));
+        ASSERT_EQ(result.exitCode, 0) << result.output;
+        if (images.empty()) {
+            EXPECT_NE(result.output.find("sample-pca.btfmat through the coordinate map " + map +
+                                         ": 64x64 texels per repeat from the 8x8 sample"),
+                      std::string::npos)
+                << result.output;
+        }
+        images.push_back(readCapture(file));
+        keepScreenshot(images.back(),
+                       images.size() == 1 ? "btfviewer-surface-map" : "btfviewer-surface-tiled");
+        const ScreenStats stats = analyse(images.back());
+        EXPECT_TRUE(notBlank(stats)) << describe(stats);
+        EXPECT_TRUE(materialColoured(stats)) << describe(stats);
+    }
+    EXPECT_GT(differingPixels(images[0], images[1]), images[0].rgb.size() / 3 / 200)
+        << "the map changed nothing";
 }
 
 }  // namespace

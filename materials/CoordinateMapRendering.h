@@ -1,0 +1,73 @@
+// osgBTF: rendering any fitted material through a coordinate map (core/CoordinateMap.h, the
+// output of BTF synthesis), and the material such a render stands for.
+//
+// GPU: the method's program variant compiled with shader::kCoordinateMapDefine picks its texel
+// with one dependent fetch: the surface's texture coordinates (times the texture scale) cover
+// the MAP, wrapping around, and the map's entry there is the sample texel every fetch of the
+// method then uses (shaders/common/btf_main.glsl). The map's size is the texel grid on the
+// surface: a 1024 x 1024 map over a 64 x 64 sample puts 1024 x 1024 texels on each repeat.
+//
+// CPU: remapMaterial builds the "materialised" material: the map's size, every per-texel texture
+// remapped through the map, every shared table copied. Evaluating it at texel (x, y) computes
+// exactly what the original computes at map(x, y), and rendering it without a map draws exactly
+// what rendering the original through the map draws (tests/gl/coordinate_map_test.cpp).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <osg/Program>
+#include <osg/StateSet>
+#include <osg/Texture2D>
+
+#include "core/CoordinateMap.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+/** Declares the textures of METHOD's FittedMaterial that are shared by all texels (pca's
+ *  weights, lpca's eigen-BRDFs, fmf's U). Every other texture holds per-texel data: each of its
+ *  layers is a grid of tiles of the material's width x height, indexed by texel like the
+ *  material (pca's components side by side, laf's lobes as layers). remapFittedMaterial remaps
+ *  those and copies these; it refuses a per-texel texture that is not such a grid. Each method
+ *  declares its own from a static initialiser beside registerMethod; a method that declares
+ *  nothing has only per-texel textures. Returns true. */
+bool declareSharedTextures(const std::string& method, std::vector<std::string> textures);
+/** What declareSharedTextures declared for METHOD (empty: none). */
+std::vector<std::string> sharedTextures(const std::string& method);
+
+/** methodProgram's variant for rendering through a coordinate map: the same sources, the
+ *  fragment shader compiled with `#define OSGBTF_COORDINATE_MAP 1` (shader::kCoordinateMapDefine,
+ *  after its #version line). Built once per process and method, like methodProgram. */
+osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method);
+
+/** Throws Error "MAPNAME: made for a WxH sample, but material 'MATERIAL' is wxh"
+ *  (MATERIAL: its source file, else its method) when the map does not point into the
+ *  material's texels. */
+void checkCoordinateMapMatches(const Material& material, const CoordinateMap& map,
+                               const std::string& mapName);
+
+/** The fitted material of the same method whose per-texel textures (all but the method's
+ *  sharedTextures) are remapped: texel (x, y) of every tile of every layer holds the
+ *  original's texel map(x, y); size = the map's. Throws Error for a map into another size, an
+ *  unknown method, a per-texel texture that is not a grid of width x height tiles, or a result
+ *  over memoryLimit(). */
+FittedMaterial remapFittedMaterial(const FittedMaterial& file, const CoordinateMap& map);
+
+/** remapFittedMaterial of the material, loaded back as a Material (no source file). */
+osg::ref_ptr<Material> remapMaterial(const Material& material, const CoordinateMap& map);
+
+/** The map as an R32I texture, each texel (sample row << 16) | sample column, NEAREST, no
+ *  mipmaps, for texelFetch through an isampler2D. Throws Error for a sample wider or taller
+ *  than 65535 texels. */
+osg::ref_ptr<osg::Texture2D> createCoordinateMapTexture(const CoordinateMap& map);
+
+/** What renders `material` through a map when applied on top of `materialState`, the material's
+ *  own StateSet (Material::sharedStateSet or createStateSet): the method's coordinate-map program
+ *  and the map texture on the first texture unit `materialState` leaves free, with its sampler
+ *  uniform. Throws Error if the program's source is missing. */
+osg::ref_ptr<osg::StateSet> createCoordinateMapStateSet(const Material& material,
+                                                        const osg::StateSet& materialState,
+                                                        osg::Texture2D* mapTexture);
+
+}  // namespace osgBTF

@@ -1,0 +1,129 @@
+// Rendering through a coordinate map (materials/CoordinateMapRendering.h), every registered
+// method: the GPU render through a random map equals the GPU render of the materialised material
+// (its per-texel textures remapped on the CPU) and shows, at every pixel, the texel the map
+// names in the plain render; the CPU evaluation at the mapped texels equals the materialised
+// material's exactly.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include <gtest/gtest.h>
+
+#include "harness/MaterialImage.h"
+#include "harness/sample/BlockMap.h"
+#include "harness/sample/SampleBtf.h"
+#include "materials/CoordinateMapRendering.h"
+#include "materials/pca/Pca.h"
+#include "scene/MaterialNode.h"
+#include "tests/gl/GlTestEnv.h"
+
+using namespace osgBTF;
+
+namespace {
+
+/** Every third Bonn direction: quick fits, interpolation still all over the hemisphere. */
+DirectionSet fewDirections() {
+    const DirectionSet bonn = DirectionSet::bonn81();
+    std::vector<Direction> directions;
+    for (std::size_t i = 0; i < bonn.size(); i += 3) directions.push_back(bonn[i]);
+    return DirectionSet("bonn81/3", directions);
+}
+
+// The two renders run the same per-texel arithmetic on the same stored values in two programs
+// (with and without the map's define); only the compiler's choices (contraction into FMA,
+// reassociation) may differ between them: a few float ulps of values below 10.
+constexpr double kSameArithmetic = 1e-6;
+
+std::string testName(const ::testing::TestParamInfo<std::string>& info) {
+    std::string name = info.param;
+    std::replace(name.begin(), name.end(), '-', '_');
+    return name;
+}
+
+}  // namespace
+
+class CoordinateMapGpu : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(CoordinateMapGpu, RenderThroughTheMapEqualsTheMaterialisedMaterial) {
+    SampleOptions options;
+    options.width = 8;
+    options.height = 6;  // not square: catches swapped axes
+    options.views = options.lights = fewDirections();
+    const MethodInfo& info = findMethod(GetParam());
+    osg::ref_ptr<Material> material =
+        info.fit(makeSampleBtf(options), FitOptions::parse(info.quickFitOptions));
+    // Random texels on a grid unlike the sample's in both axes: a swapped axis, a flipped row or
+    // the map's size taken for the sample's (osgBTF_size) shows almost everywhere.
+    const CoordinateMap map = makeBlockCoordinateMap(12, 10, 8, 6, 1, 11);
+    osg::ref_ptr<Material> remapped = remapMaterial(*material, map);
+    const glm::vec3 view = Direction{31.7f, 77}.toVector(), light = Direction{52, 200}.toVector();
+
+    HeadlessRenderer& renderer = test::sharedRenderer();
+    const FloatImage gpuMapped = renderMaterialImage(renderer, *material, map, view, light);
+    const FloatImage gpuRemapped = renderMaterialImage(renderer, *remapped, view, light);
+    const FloatImage gpuPlain = renderMaterialImage(renderer, *material, view, light);
+    const FloatImage cpuMapped = evaluateMaterialImage(*material, map, view, light);
+    const FloatImage cpuRemapped = evaluateMaterialImage(*remapped, view, light);
+
+    ASSERT_EQ(gpuMapped.width, 12);
+    ASSERT_EQ(gpuMapped.height, 10);
+    EXPECT_EQ(cpuMapped.pixels, cpuRemapped.pixels);  // exactly
+    const double materialised = maxAbsDifference(gpuMapped, gpuRemapped);
+    EXPECT_LE(materialised, kSameArithmetic);
+
+    // Each pixel is the plain render's texel map(x, y) (image rows are top-down).
+    double picked = 0, brightest = 0;
+    for (int y = 0; y < map.height; ++y)
+        for (int x = 0; x < map.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const float got = gpuMapped.at(x, map.height - 1 - y, c);
+                const float expected =
+                    gpuPlain.at(map.sampleX(x, y), options.height - 1 - map.sampleY(x, y), c);
+                picked = std::max(picked, double(std::abs(got - expected)));
+                brightest = std::max(brightest, double(got));
+            }
+    EXPECT_LE(picked, kSameArithmetic);
+    EXPECT_GT(brightest, 0.01) << "nothing rendered";
+    const double gpuCpu = maxAbsDifference(gpuMapped, cpuMapped);
+    std::cout << GetParam() << " through a 12x10 map: GPU vs materialised GPU " << materialised
+              << ", vs plain render at the mapped texels " << picked << ", GPU vs CPU " << gpuCpu
+              << " (plain: "
+              << maxAbsDifference(gpuPlain, evaluateMaterialImage(*material, view, light)) << ")\n";
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryMethod, CoordinateMapGpu, ::testing::ValuesIn(methodNames()),
+                         testName);
+
+// The scene path: a MaterialNode drawing a material through a map (its shared StateSet, its
+// own StateSet, the map StateSet, its lights) renders what the node draws for the materialised
+// material.
+TEST(CoordinateMapGpu, MaterialNodeThroughAMapEqualsTheMaterialisedMaterial) {
+    SampleOptions options;
+    options.width = 8;
+    options.height = 6;
+    options.views = options.lights = fewDirections();
+    osg::ref_ptr<Material> material =
+        PcaMaterial::fit(makeSampleBtf(options), FitOptions::parse("components=3"));
+    auto map = std::make_shared<const CoordinateMap>(makeBlockCoordinateMap(24, 20, 8, 6, 1, 5));
+    osg::ref_ptr<Material> remapped = remapMaterial(*material, *map);
+    HeadlessRenderer& renderer = test::sharedRenderer();
+    // One pixel per map texel; no LightSource and no view: the node's white headlight.
+    const auto render = [&](Material* m, std::shared_ptr<const CoordinateMap> through) {
+        osg::ref_ptr<MaterialNode> node = new MaterialNode(m);
+        EXPECT_TRUE(node->setCoordinateMap(through));
+        EXPECT_EQ(node->usesCoordinateMap(), through != nullptr);
+        node->addChild(createFullScreenQuad().get());
+        osg::ref_ptr<osg::Image> image = renderer.render(node.get(), orthoUnitSquare(24, 20));
+        const float* rgba = reinterpret_cast<const float*>(image->data());
+        return std::vector<float>(rgba, rgba + 24 * 20 * 4);
+    };
+    const std::vector<float> mapped = render(material.get(), map);
+    const std::vector<float> materialised = render(remapped.get(), nullptr);
+    double worst = 0, brightest = 0;
+    for (std::size_t i = 0; i < mapped.size(); ++i) {
+        worst = std::max(worst, double(std::abs(mapped[i] - materialised[i])));
+        if (i % 4 != 3) brightest = std::max(brightest, double(mapped[i]));
+    }
+    EXPECT_LE(worst, kSameArithmetic);
+    EXPECT_GT(brightest, 0.01) << "nothing rendered";
+}
