@@ -162,9 +162,10 @@ osg::ref_ptr<osg::StateSet> createCoordinateMapStateSet(const Material& material
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     stateSet->setAttributeAndModes(coordinateMapProgram(material.methodName()).get(),
                                    osg::StateAttribute::ON);
-    // After every unit the material uses (the list is indexed by unit), so no sampler of the
-    // method shares the map's unit (GL refuses samplers of different types on one unit).
-    const int unit = int(materialState.getTextureAttributeList().size());
+    const int unit = shader::kCoordinateMapUnit;
+    if (int(materialState.getTextureAttributeList().size()) > unit)
+        throw Error("method '" + material.methodName() + "' uses texture unit " +
+                    std::to_string(unit) + ", which the coordinate map needs");
     stateSet->setTextureAttribute(unit, mapTexture, osg::StateAttribute::ON);
     stateSet->addUniform(new osg::Uniform(shader::kCoordinateMap, unit));
     return stateSet;

@@ -64,8 +64,8 @@ osg::ref_ptr<osg::Texture2D> createCoordinateMapTexture(const CoordinateMap& map
 
 /** What renders `material` through a map when applied on top of `materialState`, the material's
  *  own StateSet (Material::sharedStateSet or createStateSet): the method's coordinate-map program
- *  and the map texture on the first texture unit `materialState` leaves free, with its sampler
- *  uniform. Throws Error if the program's source is missing. */
+ *  and the map texture on unit shader::kCoordinateMapUnit (15), with its sampler uniform. Throws
+ *  Error if the program's source is missing or the material uses that unit. */
 osg::ref_ptr<osg::StateSet> createCoordinateMapStateSet(const Material& material,
                                                         const osg::StateSet& materialState,
                                                         osg::Texture2D* mapTexture);

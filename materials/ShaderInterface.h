@@ -28,6 +28,11 @@ constexpr const char* kTextureScale = "osgBTF_textureScale";    ///< float, tili
  * adds, and the integer sampler it then reads (R32I, (sample row << 16) | sample column). */
 constexpr const char* kCoordinateMapDefine = "OSGBTF_COORDINATE_MAP";
 constexpr const char* kCoordinateMap = "osgBTF_coordinateMap";
+/** The map's texture unit: the last of the 16 every GL 3.x fragment stage has. A fixed unit
+ *  rather than the first free one, because methods also point samplers their variant never
+ *  reads at units without a texture (ptm), and GL refuses to draw when samplers of different
+ *  types share a unit. */
+constexpr int kCoordinateMapUnit = 15;
 
 /** Grid and texel row width of the direction lookup tables (materials/DirectionLookup.h):
  *  shaders/common/directions.glsl's `const int btfDirectionGrid` and `btfDirectionTableWidth`
