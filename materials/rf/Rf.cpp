@@ -3,7 +3,6 @@
 #include "materials/rf/Rf.h"
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -37,11 +36,15 @@ struct StoredArray {
     std::vector<float> RfMaterial::*member;
 };
 
-std::array<StoredArray, 3> storedArrays(std::size_t views, int lobes) {
-    return {
-        {{"rhoD", "rfRhoD", 1, 3, MaterialTexture::UNorm8, &RfMaterial::rhoD},
-         {"rhoV", "rfRhoV", int(views), 3, MaterialTexture::Half, &RfMaterial::rhoV},
-         {"lobes", "rfLobes", int(views) * lobes, 4, MaterialTexture::Half, &RfMaterial::lobes}}};
+/** Without the diffuse term there is no rhoD array (nothing stored, nothing counted). */
+std::vector<StoredArray> storedArrays(std::size_t views, int lobes, RfMaterial::Variant variant) {
+    std::vector<StoredArray> arrays;
+    if (variant.diffuse)
+        arrays.push_back({"rhoD", "rfRhoD", 1, 3, MaterialTexture::UNorm8, &RfMaterial::rhoD});
+    arrays.push_back({"rhoV", "rfRhoV", int(views), 3, MaterialTexture::Half, &RfMaterial::rhoV});
+    arrays.push_back({"lobes", "rfLobes", int(views) * lobes * (variant.rgb ? 3 : 1), 4,
+                      MaterialTexture::Half, &RfMaterial::lobes});
+    return arrays;
 }
 
 double bytesPerValue(MaterialTexture::PixelKind kind) {
@@ -81,6 +84,7 @@ RfMaterial::RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop)
       rhoV(other.rhoV),
       lobes(other.lobes),
       _lobes(other._lobes),
+      _variant(other._variant),
       _viewLookup(other._viewLookup),
       _lightVectors(other._lightVectors) {}
 
@@ -90,12 +94,13 @@ void RfMaterial::assignFrom(const Material& other) {
     rhoV = o.rhoV;
     lobes = o.lobes;
     _lobes = o._lobes;
+    _variant = o._variant;
     _viewLookup = o._viewLookup;
     _lightVectors = o._lightVectors;
 }
 
 void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
-                          int lobeCount) {
+                          int lobeCount, Variant variant) {
     if (width <= 0 || height <= 0)
         throw Error("rf: invalid size " + std::to_string(width) + "x" + std::to_string(height));
     if (lobeCount < 1 || lobeCount > kMaxLobes)
@@ -103,30 +108,40 @@ void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSe
                     std::to_string(lobeCount));
     if (views.size() < 3) throw Error("rf: needs at least 3 measured views to interpolate");
     if (lights.size() == 0) throw Error("rf: needs at least one measured light");
-    const std::size_t layers = views.size() * std::size_t(lobeCount);
+    const std::size_t channels = variant.rgb ? 3 : 1;
+    const std::size_t layers = views.size() * channels * std::size_t(lobeCount);
     if (layers > std::size_t(kMaxLayers))
         throw Error("rf: " + std::to_string(views.size()) + " views x " +
+                    (variant.rgb ? "3 colour channels (colour=rgb) x " : "") +
                     std::to_string(lobeCount) + " lobes need " + std::to_string(layers) +
                     " texture layers, more than the " + std::to_string(kMaxLayers) +
                     " OpenGL guarantees");
     const std::size_t texels = std::size_t(width) * std::size_t(height);
-    checkMemory(std::uint64_t(texels) * (3 + views.size() * (3 + 4 * lobeCount)) * sizeof(float),
+    checkMemory(std::uint64_t(texels) *
+                    ((variant.diffuse ? 3 : 0) + views.size() * (3 + 4 * channels * lobeCount)) *
+                    sizeof(float),
                 "rf model");
     _viewLookup = DirectionLookup(views);
     _lightVectors.clear();
     for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
     _lobes = lobeCount;
-    rhoD.assign(texels * 3, 0.0f);
+    _variant = variant;
+    rhoD.assign(variant.diffuse ? texels * 3 : 0, 0.0f);
     rhoV.assign(texels * views.size() * 3, 0.0f);
     lobes.assign(texels * layers * 4, 0.0f);
     setGeometry(width, height, std::move(views), std::move(lights));
 }
 
 osg::ref_ptr<RfMaterial> RfMaterial::create(int width, int height, DirectionSet views,
-                                            DirectionSet lights, int lobeCount) {
+                                            DirectionSet lights, int lobeCount, Variant variant) {
     osg::ref_ptr<RfMaterial> m = new RfMaterial;
-    m->setShape(width, height, std::move(views), std::move(lights), lobeCount);
+    m->setShape(width, height, std::move(views), std::move(lights), lobeCount, variant);
     return m;
+}
+
+osg::ref_ptr<RfMaterial> RfMaterial::create(int width, int height, DirectionSet views,
+                                            DirectionSet lights, int lobeCount) {
+    return create(width, height, std::move(views), std::move(lights), lobeCount, Variant());
 }
 
 void RfMaterial::roundToStorage() {
@@ -144,6 +159,8 @@ RfMaterial::Settings RfMaterial::settingsFrom(const FitOptions& options) {
     s.iterations = o.integer("iterations");
     s.starts = o.integer("starts");
     s.maxExponent = o.number("max-exponent");
+    s.variant.diffuse = o.flag("diffuse");
+    s.variant.rgb = o.choice("colour") == "rgb";
     return s;
 }
 
@@ -210,13 +227,17 @@ struct LobeResidual {
 using Solver = ceres::TinySolver<LobeResidual>;
 using Vector = Eigen::VectorXd;
 
-/** Fits the lobes of one texel in all measured views and then its colours. One per TBB task. */
+/** Fits the lobes of one texel in all measured views and then its colours. One per TBB task.
+ *  A lobe group is the k lobes of one view (luminance) or of one view and colour channel (rgb):
+ *  group g = view * channels + channel, the order of the lobe layers. */
 class TexelFitter {
 public:
     TexelFitter(const BtfSource& btf, const RfMaterial::Settings& settings)
         : _settings(settings),
           _views(btf.viewCount()),
           _lights(btf.lightCount()),
+          _channels(settings.variant.rgb ? 3 : 1),
+          _groups(_views * _channels),
           _lightXyz(_lights * 3),
           _luminance(_lights),
           _residual(_lights) {
@@ -237,10 +258,11 @@ public:
     }
 
     std::uint64_t iterations = 0;  ///< LM iterations over all solves
-    std::uint64_t fallbacks = 0;   ///< (texel, view) fits that kept their initialisation
+    std::uint64_t fallbacks = 0;   ///< (texel, lobe group) fits that kept their initialisation
 
     /** abrdf: the texel's [view][light][rgb] values; previous: the left neighbour's lobe
-     *  parameters (a warm start) or empty. Writes the texel's final, rounded model into m. */
+     *  parameters per lobe group (a warm start) or empty. Writes the texel's final, rounded model
+     *  into m. */
     void fitTexel(const float* abrdf, std::vector<Vector>& previous, RfMaterial& m,
                   std::size_t texel) {
         // Pass 1: rho_d = 0, the lobes see the data as measured and the closed form finds any
@@ -249,19 +271,20 @@ public:
         // came out worse than the Lambert baseline.) Pass 2, where the texel's lowest value is
         // at least 0.01: the lobes fitted to the data minus that minimum (what recovers a model
         // with a real floor), pass 1 as a second start; the better pass (total squared error of
-        // the stored model) is kept.
+        // the stored model) is kept. Without the diffuse term there is no floor to fit above.
         const double zero[3] = {0, 0, 0};
-        std::vector<Vector> first(_views);
+        std::vector<Vector> first(_groups);
         std::vector<float> fitted = fitLobes(abrdf, zero, previous, first);
         if (!previous.empty()) previous = first;
         std::vector<float> kept = fitted;  // storeTexel rescales its input in place
         const double error1 = storeTexel(abrdf, fitted, m, texel);
+        if (!_settings.variant.diffuse) return;
         double floor[3] = {std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
                            std::numeric_limits<double>::max()};
         for (std::size_t i = 0; i < _views * _lights; ++i)
             for (int c = 0; c < 3; ++c) floor[c] = std::min(floor[c], double(abrdf[i * 3 + c]));
         if (std::max({floor[0], floor[1], floor[2]}) >= 0.01) {
-            std::vector<Vector> second(_views);
+            std::vector<Vector> second(_groups);
             std::vector<float> refitted = fitLobes(abrdf, floor, first, second);
             if (storeTexel(abrdf, refitted, m, texel) > error1) {
                 storeTexel(abrdf, kept, m, texel);
@@ -272,24 +295,32 @@ public:
     }
 
 private:
-    /** The lobes of every view of one texel for its data minus `floor`; `starts` holds a start
-     *  per view (or empty vectors), `results` receives the LM parameters. Returns (a, b, c, n)
-     *  per view and lobe. */
+    /** The lobes of every lobe group of one texel for its data minus `floor`; `starts` holds a
+     *  start per group (or empty vectors), `results` receives the LM parameters. Returns
+     *  (a, b, c, n) per group and lobe. */
     std::vector<float> fitLobes(const float* abrdf, const double floor[3],
                                 const std::vector<Vector>& starts, std::vector<Vector>& results) {
         const int k = _settings.lobes;
-        std::vector<float> fitted(_views * std::size_t(k) * 4);
-        for (std::size_t v = 0; v < _views; ++v) {
+        std::vector<float> fitted(_groups * std::size_t(k) * 4);
+        for (std::size_t g = 0; g < _groups; ++g) {
+            const std::size_t v = g / _channels;
             const float* y = abrdf + v * _lights * 3;
-            for (std::size_t l = 0; l < _lights; ++l)
-                _luminance[l] = ((y[l * 3] - floor[0]) + (y[l * 3 + 1] - floor[1]) +
-                                 (y[l * 3 + 2] - floor[2])) /
-                                3.0;
-            const Vector* start = v < starts.size() && starts[v].size() ? &starts[v] : nullptr;
+            // Luminance lobes fit the mean of the channels (rho_v supplies the colour); rgb
+            // lobes fit their own channel.
+            if (_channels == 1) {
+                for (std::size_t l = 0; l < _lights; ++l)
+                    _luminance[l] = ((y[l * 3] - floor[0]) + (y[l * 3 + 1] - floor[1]) +
+                                     (y[l * 3 + 2] - floor[2])) /
+                                    3.0;
+            } else {
+                const std::size_t c = g % _channels;
+                for (std::size_t l = 0; l < _lights; ++l) _luminance[l] = y[l * 3 + c] - floor[c];
+            }
+            const Vector* start = g < starts.size() && starts[g].size() ? &starts[g] : nullptr;
             const Vector best = fitView(v, start);
-            results[v] = best;
+            results[g] = best;
             for (int i = 0; i < k; ++i) {
-                float* out = &fitted[(v * k + i) * 4];
+                float* out = &fitted[(g * k + i) * 4];
                 for (int a = 0; a < 3; ++a) out[a] = float(best[4 * i + a]);
                 out[3] = float(_problem.exponent(best[4 * i + 3]));
             }
@@ -297,8 +328,9 @@ private:
         return fitted;
     }
 
-    /** The lobes of one view for the luminance in _luminance: up to `starts` initialisations,
-     *  each refined by LM; the best valid result (finite, peak bounded) wins. */
+    /** The lobes of one view for the target in _luminance (luminance or one channel): up to
+     *  `starts` initialisations, each refined by LM; the best valid result (finite, peak
+     *  bounded) wins. */
     Vector fitView(std::size_t v, const Vector* neighbour) {
         double maxY = 0, energy = 0;
         for (double y : _luminance) {
@@ -421,19 +453,20 @@ private:
     /** Rounds the lobes to half, then solves the colour terms in closed form with exactly those
      *  lobes: per channel, rho_d over all views jointly with rho_v per view (rho_v eliminated:
      *  rho_v = A_v - rho_d B_v, leaving a 1-D least-squares problem in rho_d), rho_d rounded to
-     *  8 bits, then rho_v with the rounded rho_d, rounded to half. Returns the texel's total
-     *  squared error of the stored model. */
+     *  8 bits, then rho_v with the rounded rho_d, rounded to half (rho_d = 0 without the diffuse
+     *  term). Channel c uses the lobe sum of its own group with rgb lobes. Returns the texel's
+     *  total squared error of the stored model. */
     double storeTexel(const float* abrdf, std::vector<float>& fitted, RfMaterial& m,
                       std::size_t texel) {
         const int k = _settings.lobes;
         const std::size_t texels = m.texelCount();
         const float nLow = toHalf(float(RfMaterial::kMinExponent));
         const float nHigh = toHalf(float(_settings.maxExponent));
-        std::vector<float> S(_views * _lights);
+        std::vector<float> S(_groups * _lights);
         std::vector<glm::vec3> L(_lights);
         for (std::size_t l = 0; l < _lights; ++l) L[l] = glm::vec3(light(l));
-        for (std::size_t v = 0; v < _views; ++v) {
-            float* p = &fitted[v * k * 4];
+        for (std::size_t g = 0; g < _groups; ++g) {
+            float* p = &fitted[g * k * 4];
             // Scale the lobes so that their sum peaks at 1 over the measured lights: rho_v then
             // carries the magnitude and the lobe bases stay near 1, where half is most precise.
             float peak = 0;
@@ -449,21 +482,25 @@ private:
             for (int i = 0; i < k; ++i) {
                 for (int a = 0; a < 3; ++a) p[4 * i + a] = toHalf(p[4 * i + a]);
                 p[4 * i + 3] = std::clamp(toHalf(p[4 * i + 3]), nLow, nHigh);
-                std::copy_n(p + 4 * i, 4, &m.lobes[((v * k + i) * texels + texel) * 4]);
+                std::copy_n(p + 4 * i, 4, &m.lobes[((g * k + i) * texels + texel) * 4]);
             }
             for (std::size_t l = 0; l < _lights; ++l) {
                 float s = 0;
                 for (int i = 0; i < k; ++i) s += lobeValue(p + 4 * i, L[l]);
-                S[v * _lights + l] = s;
+                S[g * _lights + l] = s;
             }
         }
         double squaredError = 0;
         for (int c = 0; c < 3; ++c) {
+            // Lobe sum of view v for this channel: S[(v * _channels + own) * _lights + l].
+            const std::size_t own = _channels == 1 ? 0 : std::size_t(c);
+            const float* Sc = &S[own * _lights];
+            const std::size_t stride = _channels * _lights;
             std::vector<double> A(_views, 0.0), B(_views, 0.0), SS(_views, 0.0);
             for (std::size_t v = 0; v < _views; ++v) {
                 double sy = 0, s1 = 0, ss = 0;
                 for (std::size_t l = 0; l < _lights; ++l) {
-                    const double s = S[v * _lights + l];
+                    const double s = Sc[v * stride + l];
                     sy += s * abrdf[(v * _lights + l) * 3 + c];
                     s1 += s;
                     ss += s * s;
@@ -474,25 +511,28 @@ private:
                     B[v] = s1 / ss;
                 }
             }
-            double eg = 0, gg = 0;
-            for (std::size_t v = 0; v < _views; ++v)
-                for (std::size_t l = 0; l < _lights; ++l) {
-                    const double s = S[v * _lights + l];
-                    const double g = 1.0 - B[v] * s;
-                    eg += (abrdf[(v * _lights + l) * 3 + c] - A[v] * s) * g;
-                    gg += g * g;
-                }
-            const float d = toUNorm8(gg > 1e-12 ? float(eg / gg) : 0.0f);
-            m.rhoD[texel * 3 + c] = d;
+            float d = 0;
+            if (_settings.variant.diffuse) {
+                double eg = 0, gg = 0;
+                for (std::size_t v = 0; v < _views; ++v)
+                    for (std::size_t l = 0; l < _lights; ++l) {
+                        const double s = Sc[v * stride + l];
+                        const double g = 1.0 - B[v] * s;
+                        eg += (abrdf[(v * _lights + l) * 3 + c] - A[v] * s) * g;
+                        gg += g * g;
+                    }
+                d = toUNorm8(gg > 1e-12 ? float(eg / gg) : 0.0f);
+                m.rhoD[texel * 3 + c] = d;
+            }
             for (std::size_t v = 0; v < _views; ++v) {
                 double sy = 0;
                 for (std::size_t l = 0; l < _lights; ++l)
-                    sy += S[v * _lights + l] * (abrdf[(v * _lights + l) * 3 + c] - d);
+                    sy += Sc[v * stride + l] * (abrdf[(v * _lights + l) * 3 + c] - d);
                 const float rho = SS[v] > 1e-20 ? toHalf(float(std::max(0.0, sy / SS[v]))) : 0.0f;
                 m.rhoV[(v * texels + texel) * 3 + c] = rho;
                 for (std::size_t l = 0; l < _lights; ++l) {
                     const double r =
-                        abrdf[(v * _lights + l) * 3 + c] - d - rho * S[v * _lights + l];
+                        abrdf[(v * _lights + l) * 3 + c] - d - rho * Sc[v * stride + l];
                     squaredError += r * r;
                 }
             }
@@ -502,6 +542,8 @@ private:
 
     RfMaterial::Settings _settings;
     std::size_t _views, _lights;
+    std::size_t _channels;  ///< lobe channels: 1 (luminance) or 3 (rgb)
+    std::size_t _groups;    ///< lobe groups per texel: views x channels
     std::vector<double> _lightXyz, _luminance, _residual, _lobe;
     std::vector<glm::dvec3> _mirror;
     LobeResidual _problem;
@@ -513,13 +555,14 @@ private:
 osg::ref_ptr<RfMaterial> RfMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const Settings settings = settingsFrom(options);
     if (btf.empty()) throw Error("rf: the measured BTF is empty");
-    osg::ref_ptr<RfMaterial> m =
-        create(btf.width(), btf.height(), btf.views(), btf.lights(), settings.lobes);
+    osg::ref_ptr<RfMaterial> m = create(btf.width(), btf.height(), btf.views(), btf.lights(),
+                                        settings.lobes, settings.variant);
 
     // Blocks of consecutive texels (along rows): gathering their ABRDFs reads each measured
     // image in contiguous runs, and each texel can start from its left neighbour's lobes.
     const std::size_t blockSize = 32, texels = btf.texelCount();
     const std::size_t views = btf.viewCount(), lights = btf.lightCount();
+    const std::size_t groups = views * std::size_t(m->lobeChannels());
     const std::size_t blocks = (texels + blockSize - 1) / blockSize;
     std::atomic<std::uint64_t> iterations{0}, fallbacks{0};
     Progress progress("rf fit", texels);
@@ -529,10 +572,10 @@ osg::ref_ptr<RfMaterial> RfMaterial::fit(const BtfSource& btf, const FitOptions&
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
             const std::size_t first = b * blockSize, count = std::min(blockSize, texels - first);
             btf.readAbrdfRange(first, count, abrdfs.data());
-            std::vector<Vector> previous(views);
+            std::vector<Vector> previous(groups);
             for (std::size_t t = 0; t < count; ++t) {
                 // A new row has no left neighbour in this block.
-                if ((first + t) % std::size_t(btf.width()) == 0) previous.assign(views, Vector());
+                if ((first + t) % std::size_t(btf.width()) == 0) previous.assign(groups, Vector());
                 fitter.fitTexel(&abrdfs[t * views * lights * 3], previous, *m, first + t);
             }
             progress.advance(count);
@@ -544,7 +587,7 @@ osg::ref_ptr<RfMaterial> RfMaterial::fit(const BtfSource& btf, const FitOptions&
 
     std::ostringstream seconds, meanIterations;
     seconds << progress.elapsedSeconds();
-    meanIterations << double(iterations) / double(texels * views);
+    meanIterations << double(iterations) / double(texels * groups);
     m->fitInfo["seconds"] = seconds.str();
     m->fitInfo["iterations"] = meanIterations.str();
     m->fitInfo["fallbacks"] = std::to_string(fallbacks.load());
@@ -552,35 +595,49 @@ osg::ref_ptr<RfMaterial> RfMaterial::fit(const BtfSource& btf, const FitOptions&
     std::ostringstream maxExponent;
     maxExponent << settings.maxExponent;
     m->fitInfo["max-exponent"] = maxExponent.str();
+    m->fitInfo["diffuse"] = settings.variant.diffuse ? "1" : "0";
+    m->fitInfo["colour"] = settings.variant.rgb ? "rgb" : "luminance";
     return m;
 }
 
 // ---- CPU evaluator ---------------------------------------------------------------------------
 
-float RfMaterial::lobeSum(std::size_t texel, std::size_t view, const glm::vec3& light) const {
+float RfMaterial::lobeSum(std::size_t texel, std::size_t view, const glm::vec3& light,
+                          int channel) const {
+    const std::size_t first = (view * std::size_t(lobeChannels()) + channel) * _lobes;
     float sum = 0;
     for (int i = 0; i < _lobes; ++i)
-        sum += lobeValue(&lobes[((view * _lobes + i) * texelCount() + texel) * 4], light);
+        sum += lobeValue(&lobes[((first + i) * texelCount() + texel) * 4], light);
     return sum;
 }
 
 glm::vec3 RfMaterial::reflectanceField(std::size_t texel, std::size_t view,
                                        const glm::vec3& light) const {
     const float* rho = &rhoV[(view * texelCount() + texel) * 3];
-    return glm::vec3(rho[0], rho[1], rho[2]) * lobeSum(texel, view, light);
+    // rho_c times the lobe sum of channel c, in the shader's order (shaders/rf.frag).
+    const glm::vec3 sum =
+        _variant.rgb ? glm::vec3(lobeSum(texel, view, light, 0), lobeSum(texel, view, light, 1),
+                                 lobeSum(texel, view, light, 2))
+                     : glm::vec3(lobeSum(texel, view, light));
+    return glm::vec3(rho[0], rho[1], rho[2]) * sum;
+}
+
+glm::vec3 RfMaterial::diffuse(std::size_t texel) const {
+    return _variant.diffuse ? glm::vec3(rhoD[texel * 3], rhoD[texel * 3 + 1], rhoD[texel * 3 + 2])
+                            : glm::vec3(0.0f);
 }
 
 glm::vec3 RfMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
     const std::size_t t = std::size_t(y) * _width + x;
     const InterpolationWeights w = _viewLookup.weights(view);
-    glm::vec3 color(rhoD[t * 3], rhoD[t * 3 + 1], rhoD[t * 3 + 2]);
+    glm::vec3 color = diffuse(t);
     for (int j = 0; j < 3; ++j)
         if (w.weight[j] > 0.0f) color += w.weight[j] * reflectanceField(t, w.index[j], light);
     return color;
 }
 
 void RfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
-    const glm::vec3 d(rhoD[texel * 3], rhoD[texel * 3 + 1], rhoD[texel * 3 + 2]);
+    const glm::vec3 d = diffuse(texel);
     for (std::size_t v = 0; v < _views.size(); ++v)
         for (const glm::vec3& light : _lightVectors) {
             const glm::vec3 value = d + reflectanceField(texel, v, light);
@@ -596,7 +653,7 @@ MemoryFootprint RfMaterial::memory() const {
     // Per-texel arrays only: the baked view table is derived from the direction set, not fitted
     // data (seed 001 Table 2 does not count it either).
     MemoryFootprint footprint;
-    for (const StoredArray& a : storedArrays(_views.size(), _lobes)) {
+    for (const StoredArray& a : storedArrays(_views.size(), _lobes, _variant)) {
         const std::vector<float>& data = this->*a.member;
         const double values = double(data.size()) / double(texelCount());
         footprint.valuesPerTexel += values;
@@ -611,7 +668,9 @@ MemoryFootprint RfMaterial::memory() const {
 FittedMaterial RfMaterial::toFittedMaterial() const {
     FittedMaterial file = writeCommon();
     file.parameters["lobes"] = std::to_string(_lobes);
-    for (const StoredArray& a : storedArrays(_views.size(), _lobes))
+    file.parameters["diffuse"] = _variant.diffuse ? "1" : "0";
+    file.parameters["colour"] = _variant.rgb ? "rgb" : "luminance";
+    for (const StoredArray& a : storedArrays(_views.size(), _lobes, _variant))
         file.textures.push_back(
             {a.name, _width, _height, a.depth, a.channels, a.kind, this->*a.member});
     return file;
@@ -626,12 +685,26 @@ osg::ref_ptr<RfMaterial> RfMaterial::fromFile(const FittedMaterial& file) {
     } catch (const std::logic_error&) {
         fail(file.source, "parameter 'lobes' is not an integer");
     }
+    // Files written before the options "diffuse" and "colour" existed hold the default model.
+    Variant variant;
+    const auto hasDiffuse = file.parameters.find("diffuse");
+    if (hasDiffuse != file.parameters.end()) {
+        if (hasDiffuse->second != "0" && hasDiffuse->second != "1")
+            fail(file.source, "parameter 'diffuse' must be 0 or 1, got " + hasDiffuse->second);
+        variant.diffuse = hasDiffuse->second == "1";
+    }
+    const auto colour = file.parameters.find("colour");
+    if (colour != file.parameters.end()) {
+        if (colour->second != "luminance" && colour->second != "rgb")
+            fail(file.source, "parameter 'colour' must be luminance or rgb, got " + colour->second);
+        variant.rgb = colour->second == "rgb";
+    }
     try {
-        m->setShape(m->_width, m->_height, m->_views, m->_lights, lobeCount);
+        m->setShape(m->_width, m->_height, m->_views, m->_lights, lobeCount, variant);
     } catch (const Error& e) {
         fail(file.source, e.what());
     }
-    for (const StoredArray& a : storedArrays(m->_views.size(), lobeCount)) {
+    for (const StoredArray& a : storedArrays(m->_views.size(), lobeCount, variant)) {
         const MaterialTexture& t = file.texture(a.name);
         if (t.width != m->_width || t.height != m->_height || t.depth != a.depth ||
             t.channels != a.channels || t.kind != a.kind)
@@ -653,13 +726,22 @@ osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, methodName(), _width, _height);
     int unit = 0;
-    for (const StoredArray& a : storedArrays(_views.size(), _lobes)) {
+    if (!_variant.diffuse) {
+        // The shader samples rfRhoD either way (one program for every variant); without the
+        // diffuse term it reads texel (0, 0) of this black 1x1 texture, so the sampler still has
+        // a unit of its own type.
+        const MaterialTexture black{"rhoD", 1, 1, 1, 3, MaterialTexture::UNorm8, {0, 0, 0}};
+        addTexture(*stateSet, createFloatTexture(black).get(), "rfRhoD", unit++);
+    }
+    for (const StoredArray& a : storedArrays(_views.size(), _lobes, _variant)) {
         const MaterialTexture t{a.name,     _width, _height,        a.depth,
                                 a.channels, a.kind, this->*a.member};
         addTexture(*stateSet, createFloatTexture(t).get(), a.sampler, unit++);
     }
     _viewLookup.addToStateSet(*stateSet, "rfViewTable", unit);
     stateSet->addUniform(new osg::Uniform("rfLobeCount", _lobes));
+    stateSet->addUniform(new osg::Uniform("rfLobeChannels", lobeChannels()));
+    stateSet->addUniform(new osg::Uniform("rfDiffuse", _variant.diffuse ? 1 : 0));
     return stateSet;
 }
 
@@ -672,10 +754,13 @@ const bool registered = registerMethod([] {
     m.name = "rf";
     m.description =
         "reflectance fields (Meseth 2003): per measured view, rho_d + rho_v(v) RGB x k light "
-        "lobes (a l_x + b l_y + c l_z)^n, views blended with interpolation weights";
+        "lobes (a l_x + b l_y + c l_z)^n, views blended with interpolation weights; diffuse=0 "
+        "and colour=rgb give seed 002's per-view Lafortune BTF";
     m.options = {
-        OptionSpec::integer("lobes", defaults.lobes, 1, RfMaterial::kMaxLobes,
-                            "lobes per view (8 x 151 UBO2014 views = 1208 array layers < 2048)"),
+        OptionSpec::integer(
+            "lobes", defaults.lobes, 1, RfMaterial::kMaxLobes,
+            "lobes per view, or per view and colour channel with colour=rgb (8 x 151 "
+            "UBO2014 views = 1208 array layers < 2048)"),
         OptionSpec::integer("iterations", defaults.iterations, 1, OptionSpec::kNoLimit,
                             "Levenberg-Marquardt iterations per start"),
         OptionSpec::integer("starts", defaults.starts, 1, 3,
@@ -685,7 +770,15 @@ const bool registered = registerMethod([] {
         // Above 256 a base a little over 1 overflows half precision; below 1 no cosine fits.
         OptionSpec::number("max-exponent", defaults.maxExponent, 1, 256,
                            "largest lobe exponent n (the Bonn lights are 15 degrees apart: "
-                           "sharper lobes are unconstrained between them)")};
+                           "sharper lobes are unconstrained between them)"),
+        OptionSpec::flag("diffuse", defaults.variant.diffuse,
+                         "1: the light- and view-independent floor rho_d (seed 001); 0: lobes "
+                         "only, seed 002's per-view Lafortune BTF"),
+        OptionSpec::choice("colour", "luminance", {"luminance", "rgb"},
+                           "luminance: k lobes per view times an RGB rho_v (seed 002's luminance "
+                           "model with its base colour); rgb: k lobes per view and colour channel "
+                           "(seed 002's RGB model; 3x the lobe layers: Bonn's 81 views take up to "
+                           "8, UBO2014's 151 up to 4)")};
     m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return RfMaterial::fit(btf, o);
     };
@@ -694,15 +787,17 @@ const bool registered = registerMethod([] {
     };
     m.createInstance = []() -> osg::Object* { return new RfMaterial; };
     m.shaderCost = [](const Material& material) {
-        // View lookup, rhoD; per blended view (3): weight test, rhoV fetch, per lobe: layer index
-        // 2, 3-term dot 5, test, select, pow, add; then 3 for the weighted add.
+        // View lookup, rhoD (fetched from a black 1x1 texture without the diffuse term); per
+        // blended view (3): weight test, rhoV fetch, per lobe: layer index 2, 3-term dot 5,
+        // test, select, pow, add; then 3 for the weighted add. rgb: every lobe once per channel.
         const RfMaterial& m = static_cast<const RfMaterial&>(material);
-        const int k = m.lobeCount();
+        const int k = m.lobeCount(), c = m.lobeChannels();
         const DirectionLookup::Cost v = m.viewLookup().cost();
         return ShaderCost::ofEvaluate(
-            v.alu + 3 * (4 + 11 * k), v.tex + 1 + 3 * (1 + k),
-            "ALU 33k+22+L, TEX 3k+4+T (k lobes per view; L = " + std::to_string(v.alu) +
-                ", T = " + std::to_string(v.tex) + ": the view lookup)");
+            v.alu + 3 * (4 + 11 * c * k), v.tex + 1 + 3 * (1 + c * k),
+            "ALU " + std::to_string(33 * c) + "k+22+L, TEX " + std::to_string(3 * c) +
+                "k+4+T (k lobes per view" + (c == 3 ? " and colour channel" : "") + "; L = " +
+                std::to_string(v.alu) + ", T = " + std::to_string(v.tex) + ": the view lookup)");
     };
     m.order = 30;
     return m;

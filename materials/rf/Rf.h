@@ -12,6 +12,15 @@
 //   BTF(x, v, l) ~ sum_j w_j(v) RF_{v_j}(x, l)
 //
 // rho_d, rho_v RGB; the lobes are scalar (luminance), so colour varies only through rho_v.
+//
+// Seed 002's per-view Lafortune BTF (section 3.2) is this model with two options (README.md):
+// diffuse=0 drops rho_d (its lobes have no diffuse term), and colour=rgb gives every colour
+// channel its own k lobes (its RGB model, 2 lobes per channel), rho_v then a per-channel scale:
+//
+//   RF_v(x, l)_c = [rho_d(x)_c +] rho_v(x, v)_c * sum_i max(0, (a, b, c)_vci(x) . l)^n_vci(x)
+//
+// With the view fixed, the seed's Lafortune lobe [C_x u_x v_x + C_y u_y v_y + C_z u_z v_z]^n is
+// ((C_x v_x, C_y v_y, C_z v_z) . u)^n: exactly this lobe in the light direction.
 // seed 001's equation (5) writes the lobe as a dot product without the exponent in the garbled
 // text extraction; the exponent n is Meseth's definition ("similar to the Lafortune lobes") and
 // the value count of Table 2 (4 values per lobe) confirms it. max(0, .) keeps a lobe's base
@@ -22,6 +31,7 @@
 //   rho_v   RGB per view, half                        3 V values,        6 V bytes
 //   lobes   (a, b, c, n) per view and lobe, half      4 k V values,      8 k V bytes
 //   total   3 + V (3 + 4k) = 894 values, 3 + 2 V (3 + 4k) = 1785 bytes for V = 81, k = 2.
+// diffuse=0 stores no rho_d; colour=rgb stores 3 k lobes per view (12 k V values).
 //
 // Fit (fit()): per texel and measured view, Levenberg-Marquardt (Ceres' TinySolver, analytic
 // Jacobian) of the lobes to the view's luminance over the measured lights, several starts,
@@ -40,12 +50,18 @@ namespace osgBTF {
 
 class RfMaterial : public Material {
 public:
+    /** The model's terms beyond the lobe count (options "diffuse" and "colour"). */
+    struct Variant {
+        bool diffuse = true;  ///< has rho_d (seed 001); false: lobes only (seed 002)
+        bool rgb = false;     ///< k lobes per colour channel instead of k luminance lobes
+    };
     /** Fit settings; see settingsFrom() for the option names. */
     struct Settings {
-        int lobes = 2;            ///< lobes per view, 1..8
+        int lobes = 2;            ///< lobes per view (and channel with rgb), 1..8
         int iterations = 20;      ///< Levenberg-Marquardt iterations per start
         int starts = 2;           ///< initialisations tried per (texel, view), 1..3
         double maxExponent = 64;  ///< upper bound of n (the Bonn lights are 15 degrees apart)
+        Variant variant;
     };
     /** Smallest exponent a lobe may have (n > 0 keeps the lobe a lobe). */
     static constexpr double kMinExponent = 0.25;
@@ -58,16 +74,20 @@ public:
     void assignFrom(const Material& other) override;
     META_Object(osgBTF, RfMaterial)
 
-        /** Reads and validates "lobes", "iterations", "starts", "max-exponent"; throws Error for an
-         *  unknown option or a value out of range. */
+        /** Reads and validates "lobes", "iterations", "starts", "max-exponent", "diffuse",
+         *  "colour"; throws Error for an unknown option or a value out of range. */
         static Settings settingsFrom(const FitOptions& options);
     /** Fits the model to a measured BTF (see the file comment). Throws Error for bad options or
      *  data the model cannot hold. Fills fitInfo: seconds, lobes, iterations (mean LM iterations
-     *  per texel and view), fallbacks (fits that kept their initialisation). */
+     *  per texel and view, and channel with rgb), fallbacks (fits that kept their
+     *  initialisation), max-exponent, diffuse, colour. */
     static osg::ref_ptr<RfMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<RfMaterial> fromFile(const FittedMaterial& file);
     /** A zero model of the given shape: memory accounting, tests and synthetic data. Throws Error
      *  if the shape is invalid (fewer than 3 views, lobes out of range, too many layers). */
+    static osg::ref_ptr<RfMaterial> create(int width, int height, DirectionSet views,
+                                           DirectionSet lights, int lobes, Variant variant);
+    /** The default variant (rho_d, luminance lobes). */
     static osg::ref_ptr<RfMaterial> create(int width, int height, DirectionSet views,
                                            DirectionSet lights, int lobes);
 
@@ -78,21 +98,30 @@ public:
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
+    /** Lobes per view (luminance) or per view and colour channel (rgb). */
     int lobeCount() const { return _lobes; }
+    bool hasDiffuse() const { return _variant.diffuse; }
+    /** 1 (luminance lobes) or 3 (lobes per colour channel). */
+    int lobeChannels() const { return _variant.rgb ? 3 : 1; }
+    Variant variant() const { return _variant; }
     const DirectionLookup& viewLookup() const { return _viewLookup; }
-    /** The reflectance field of measured view `view` without rho_d: rho_v * lobe sum. */
+    /** The reflectance field of measured view `view` without rho_d: rho_v * lobe sum(s). */
     glm::vec3 reflectanceField(std::size_t texel, std::size_t view, const glm::vec3& light) const;
-    /** sum_i max(0, (a, b, c)_i . light)^n_i of one texel and measured view. */
-    float lobeSum(std::size_t texel, std::size_t view, const glm::vec3& light) const;
+    /** rho_d of one texel, or 0 without the diffuse term. */
+    glm::vec3 diffuse(std::size_t texel) const;
+    /** sum_i max(0, (a, b, c)_i . light)^n_i of one texel, measured view and lobe channel (0 for
+     *  luminance lobes, 0..2 for rgb). */
+    float lobeSum(std::size_t texel, std::size_t view, const glm::vec3& light,
+                  int channel = 0) const;
     /** Rounds every array to its storage precision (rho_d to 1/255 in [0, 1], the rest to half),
      *  as the fitter does; call it after setting values by hand. */
     void roundToStorage();
 
-    /** rho_d: [y][x][rgb], rows bottom-up; multiples of 1/255. */
+    /** rho_d: [y][x][rgb], rows bottom-up; multiples of 1/255. Empty without the diffuse term. */
     std::vector<float> rhoD;
     /** rho_v: [view][y][x][rgb]. */
     std::vector<float> rhoV;
-    /** Lobes: [view * lobeCount() + lobe][y][x][a, b, c, n]. */
+    /** Lobes: [(view * lobeChannels() + channel) * lobeCount() + lobe][y][x][a, b, c, n]. */
     std::vector<float> lobes;
 
 protected:
@@ -100,9 +129,11 @@ protected:
 
 private:
     /** Sizes the arrays and builds the view interpolation. */
-    void setShape(int width, int height, DirectionSet views, DirectionSet lights, int lobes);
+    void setShape(int width, int height, DirectionSet views, DirectionSet lights, int lobes,
+                  Variant variant);
 
     int _lobes = 0;
+    Variant _variant;
     DirectionLookup _viewLookup;
     std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
 };
