@@ -133,3 +133,31 @@ TEST(SampleBtf, ValuesAreInRangeAndShadowsFollowTheLight) {
     EXPECT_GT(aBrighter, 0.1f);
     EXPECT_GT(bBrighter, 0.1f);
 }
+
+// The weave repeats every two cells (8 texels at 16 texels and 2 threads): without variation the
+// sample equals itself shifted by that period, with variation its cells differ (that is what
+// makes tiling it visible and synthesis worth testing on it).
+TEST(SampleBtf, VariationBreaksThePeriodWithinTheSample) {
+    SampleOptions options;
+    options.width = options.height = 16;
+    options.views = DirectionSet("one", {{0, 0}});
+    options.lights = DirectionSet("two", {{0, 0}, {45, 30}});
+    auto largestShiftDifference = [](const MeasuredBtf& btf) {
+        float largest = 0;
+        for (std::size_t l = 0; l < 2; ++l) {
+            const std::vector<float> image = btf.image(0, l);
+            for (int y = 0; y < 16; ++y)
+                for (int x = 0; x < 8; ++x)
+                    for (int c = 0; c < 3; ++c)
+                        largest = std::max(largest,
+                                           std::fabs(image[(std::size_t(y) * 16 + x) * 3 + c] -
+                                                     image[(std::size_t(y) * 16 + x + 8) * 3 + c]));
+        }
+        return largest;
+    };
+    EXPECT_LT(largestShiftDifference(makeSampleBtf(options)), 1e-4f);
+    options.variation = 0.6f;
+    const MeasuredBtf varied = makeSampleBtf(options);
+    EXPECT_GT(largestShiftDifference(varied), 0.02f);
+    EXPECT_EQ(largestShiftDifference(makeSampleBtf(options)), largestShiftDifference(varied));
+}

@@ -38,7 +38,18 @@ struct Surface {
     }
 };
 
-Surface makeWeave(int w, int h, int threads) {
+/** A value in [-1, 1] fixed by the cell and a salt (integer hash: the same on every platform). */
+float cellNoise(int cu, int cv, unsigned salt) {
+    unsigned x = unsigned(cu) * 73856093u ^ unsigned(cv) * 19349663u ^ salt * 83492791u;
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return float(x & 0xffffu) / 32767.5f - 1.0f;
+}
+
+Surface makeWeave(int w, int h, int threads, float variation) {
     Surface s{w, h, {}, {}, {}, {}, 0.0f};
     const std::size_t n = std::size_t(w) * h;
     s.height.resize(n);
@@ -58,9 +69,15 @@ Surface makeWeave(int w, int h, int threads) {
             const float arch = 0.6f + 0.4f * std::sin(kPi * along);     // rises over the crossing
             const float ridges = 0.08f * std::sin(kPi * 6.0f * along);  // twisted fibres
             const std::size_t i = std::size_t(y) * w + x;
-            s.height[i] = amplitude * (profile * arch + ridges * profile);
+            const float lift = 1.0f + 0.3f * variation * cellNoise(cu, cv, 1);
+            s.height[i] = lift * amplitude * (profile * arch + ridges * profile);
             s.albedo[i] = alongX ? glm::vec3(0.62f, 0.18f, 0.12f) : glm::vec3(0.85f, 0.72f, 0.35f);
             s.albedo[i] *= 0.75f + 0.25f * profile;
+            if (variation > 0.0f)
+                s.albedo[i] *=
+                    glm::vec3(1.0f) +
+                    0.35f * variation *
+                        glm::vec3(cellNoise(cu, cv, 2), cellNoise(cu, cv, 3), cellNoise(cu, cv, 4));
             s.gloss[i] = alongX ? 0.25f : 0.12f;
         }
     }
@@ -123,7 +140,8 @@ MeasuredBtf makeSampleBtf(const SampleOptions& options) {
     MeasuredBtf btf(options.width, options.height, options.views, options.lights, options.storage);
     btf.source = "built-in sample (" + std::to_string(options.width) + "x" +
                  std::to_string(options.height) + ")";
-    const Surface s = makeWeave(options.width, options.height, options.threadsPerTile);
+    const Surface s =
+        makeWeave(options.width, options.height, options.threadsPerTile, options.variation);
     const std::size_t texels = btf.texelCount();
 
     // Shadowing depends on texel and light only: compute it once per light.

@@ -19,6 +19,11 @@ struct SampleOptions {
     DirectionSet lights = DirectionSet::bonn81();
     Storage storage = Storage::Float;
     int threadsPerTile = 2;  ///< weave repeats across the sample
+    /** 0: every weave cell identical (the sample is periodic within itself). Above 0: each cell
+     *  gets its own tint and thread height, up to +-35 % and +-30 % of them at 1 (a hash of the
+     *  cell, the same on every run), so the sample holds no repeat of its own: tiling it shows
+     *  the sample's period, which synthesis (`btf synthesize`) is meant to hide. */
+    float variation = 0.0f;
 };
 
 MeasuredBtf makeSampleBtf(const SampleOptions& options = {});

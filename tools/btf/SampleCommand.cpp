@@ -21,6 +21,8 @@ Runner addSampleCommand(CLI::App& app, CommonOptions&) {
         int size = 64;
         std::string format = "jpg";
         int quality = 95;
+        float variation = 0.0f;
+        int threads = 2;
     };
     auto options = std::make_shared<Options>();
     command->add_option("-o,--output", options->output, "Output zip file")->required();
@@ -36,10 +38,22 @@ Runner addSampleCommand(CLI::App& app, CommonOptions&) {
     command->add_option("--quality", options->quality, "JPEG quality")
         ->check(CLI::Range(1, 100))
         ->capture_default_str();
+    command
+        ->add_option("--variation", options->variation,
+                     "0: every weave cell alike; up to 1: each cell its own tint (+-35 %) and "
+                     "thread height (+-30 %), so tiling the sample shows its period (a test input "
+                     "for btf synthesize)")
+        ->check(CLI::Range(0.0f, 1.0f))
+        ->capture_default_str();
+    command->add_option("--threads", options->threads, "Weave repeats (threads) across the sample")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
     return [options] {
         const auto start = std::chrono::steady_clock::now();
         SampleOptions sample;
         sample.width = sample.height = options->size;
+        sample.variation = options->variation;
+        sample.threadsPerTile = options->threads;
         const MeasuredBtf btf = makeSampleBtf(sample);
         const Ubo2003ImageFormat format = options->format == "png"   ? Ubo2003ImageFormat::Png
                                           : options->format == "hdr" ? Ubo2003ImageFormat::Hdr
