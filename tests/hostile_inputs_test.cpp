@@ -29,6 +29,7 @@
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2003.h"
 #include "loaders/Ubo2014.h"
+#include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
 using namespace osgBTF;
@@ -517,6 +518,19 @@ TEST(HostileInputs, FittedMaterialWithAbsurdWindowOrDepthIsRefused) {
                              "channels: needs 89.4 GiB, more than the memory limit of 8.0 GiB" +
                              kRaise);
     expectSmall(r, "fitted material 1e9 texels wide");
+
+    // The same file as a scene's material, through the osgdb_btfmat plugin.
+    const std::string btfmat = dir.file("wide.btfmat");
+    fs::copy_file(wide, btfmat);
+    r = refusalOf([&] {
+        const osgDB::ReaderWriter::ReadResult result = readNode(btfmat);
+        throw Error(result.success() ? "read" : result.message());
+    });
+    EXPECT_EQ(r.message, btfmat +
+                             ": textures of 1 part(s), the largest 1000000000x4 pixels x 3 "
+                             "channels: needs 89.4 GiB, more than the memory limit of 8.0 GiB" +
+                             kRaise);
+    expectSmall(r, "fitted material 1e9 texels wide through osgdb_btfmat");
 
     // osgBTF.depth (int attribute: name, type, size 4, value) claiming 2^31 - 1 slices.
     std::string bytes = readBytes(deep);
