@@ -13,6 +13,7 @@
 #include "core/Error.h"
 #include "core/FloatImage.h"
 #include "core/MeasuredBtf.h"
+#include "core/SizeGuard.h"
 
 namespace osgBTF {
 
@@ -128,6 +129,11 @@ CoordinateMap readCoordinateMap(const std::string& path) {
     map.height = image.height;
     map.sampleWidth = sampleWidth;
     map.sampleHeight = sampleHeight;
+    // The image is still held while the entries are filled: both must fit.
+    checkMemory(saturatedProduct({std::uint64_t(image.width), std::uint64_t(image.height),
+                                  std::uint64_t(image.channels) * 4 + 2 * sizeof(std::int32_t)}),
+                path + ": coordinate map of " + std::to_string(image.width) + "x" +
+                    std::to_string(image.height) + " entries");
     map.coordinates.resize(std::size_t(image.width) * image.height * 2);
     for (int y = 0; y < map.height; ++y)
         for (int x = 0; x < map.width; ++x) {

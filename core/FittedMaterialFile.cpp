@@ -24,6 +24,7 @@
 #include "core/Error.h"
 #include "core/FloatImage.h"
 #include "core/MeasuredBtf.h"
+#include "core/SizeGuard.h"
 
 namespace fs = std::filesystem;
 
@@ -227,7 +228,9 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
         t.kind = MaterialTexture::UNorm8;
     }
 
-    checkMemory(std::uint64_t(t.valueCount()) * 8, path + ": " + what);
+    checkMemory(saturatedProduct({std::uint64_t(t.width), std::uint64_t(t.height),
+                                  std::uint64_t(t.depth), std::uint64_t(t.channels), 8}),
+                path + ": " + what);
     std::vector<float> fileRows(t.valueCount());
     const std::size_t xStride = sizeof(float) * std::size_t(t.channels);
     Imf::FrameBuffer frameBuffer;
@@ -265,7 +268,27 @@ DirectionSet readDirections(const Imf::Header& header, const char* attribute,
     }
 }
 
+/** Refuses a file whose textures cannot fit before OpenEXR's C++ reader allocates anything sized
+ *  from its headers: every texture is kept, each read through one more buffer of its size. */
+void checkMaterialSize(const std::string& path) {
+    const std::vector<ExrPartSize> sizes = readExrPartSizes(path);
+    std::uint64_t total = 0;
+    std::size_t largest = 0;
+    for (std::size_t i = 0; i < sizes.size(); ++i) {
+        const std::uint64_t bytes = exrReadBytes(sizes[i], 2);
+        total = bytes > UINT64_MAX - total ? UINT64_MAX : total + bytes;
+        if (bytes > exrReadBytes(sizes[largest], 2)) largest = i;
+    }
+    if (sizes.empty()) return;
+    const ExrPartSize& big = sizes[largest];
+    checkMemory(total, path + ": textures of " + std::to_string(sizes.size()) +
+                           " part(s), the largest " + std::to_string(big.width) + "x" +
+                           std::to_string(big.height) + " pixels x " +
+                           std::to_string(big.channels) + " channels");
+}
+
 FittedMaterial readMaterial(const std::string& path) {
+    checkMaterialSize(path);
     Imf::MultiPartInputFile file(path.c_str());
     const Imf::Header& header = file.header(0);
     const auto* method = header.findTypedAttribute<Imf::StringAttribute>(kMethodAttribute);

@@ -24,6 +24,7 @@
 
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
+#include "core/SizeGuard.h"
 
 namespace fs = std::filesystem;
 
@@ -145,8 +146,11 @@ FloatImage readExrPart(Imf::MultiPartInputFile& file, int part, const std::strin
     names = canonicalChannelOrder(std::move(names));
 
     const std::int64_t channels = std::int64_t(names.size());
-    checkMemory(std::uint64_t(width) * std::uint64_t(height) * std::uint64_t(channels) * 4,
-                path + where);
+    // readExrPartSizes checked the same sizes before the file was opened; this guards callers
+    // that opened it themselves.
+    checkMemory(
+        saturatedProduct({std::uint64_t(width), std::uint64_t(height), std::uint64_t(channels), 4}),
+        path + where);
     FloatImage image{int(width), int(height), int(channels)};
     image.channelNames = names;
 
@@ -159,6 +163,13 @@ FloatImage readExrPart(Imf::MultiPartInputFile& file, int part, const std::strin
     input.setFrameBuffer(frameBuffer);
     input.readPixels(dw.min.y, dw.max.y);
     return image;
+}
+
+std::string exrPartsText(const std::string& path, const std::vector<ExrPartSize>& sizes, int part) {
+    const ExrPartSize& p = sizes[std::size_t(part)];
+    return path + ": " + std::to_string(p.width) + "x" + std::to_string(p.height) + " pixels x " +
+           std::to_string(p.channels) + " channels" +
+           (sizes.size() > 1 ? " (part " + std::to_string(part) + ")" : "");
 }
 
 /** Runs `body` and turns the codecs' exceptions into Error messages that name the file. */
@@ -190,9 +201,10 @@ FloatImage readWithOiio(const std::string& path, int part) {
         fail(path, "volume images (depth " + std::to_string(spec.depth) + ") are not supported");
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
         fail(path, "image has no pixels");
-    checkMemory(
-        std::uint64_t(spec.width) * std::uint64_t(spec.height) * std::uint64_t(spec.nchannels) * 4,
-        path);
+    checkMemory(saturatedProduct({std::uint64_t(spec.width), std::uint64_t(spec.height),
+                                  std::uint64_t(spec.nchannels), 4}),
+                path + ": " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                    " pixels x " + std::to_string(spec.nchannels) + " channels");
     FloatImage image(spec.width, spec.height, spec.nchannels);
     image.channelNames = spec.channelnames;
     image.channelNames.resize(std::size_t(spec.nchannels));
@@ -289,6 +301,9 @@ FloatImage readFloatImage(const std::string& path, int part) {
     checkReadable(path);
     if (part < 0) fail(path, "invalid part index " + std::to_string(part));
     if (hasExrMagic(path)) {
+        const std::vector<ExrPartSize> sizes = readExrPartSizes(path);
+        if (std::size_t(part) < sizes.size())
+            checkMemory(exrReadBytes(sizes[std::size_t(part)]), exrPartsText(path, sizes, part));
         return withExrErrors(path, [&] {
             Imf::MultiPartInputFile file(path.c_str());
             if (part >= file.parts())
@@ -310,6 +325,15 @@ FloatImage readFloatImage(const std::string& path, int part) {
 std::vector<FloatImage> readExrParts(const std::string& path) {
     checkReadable(path);
     if (!hasExrMagic(path)) fail(path, "not an OpenEXR file (wrong magic number)");
+    const std::vector<ExrPartSize> sizes = readExrPartSizes(path);
+    // All parts are kept at once, so their sum is what must fit.
+    std::uint64_t total = 0;
+    for (const ExrPartSize& size : sizes) {
+        const std::uint64_t bytes = exrReadBytes(size);
+        total = bytes > UINT64_MAX - total ? UINT64_MAX : total + bytes;
+    }
+    checkMemory(total, path + ": " + std::to_string(sizes.size()) +
+                           (sizes.size() == 1 ? " part" : " parts"));
     return withExrErrors(path, [&] {
         Imf::MultiPartInputFile file(path.c_str());
         std::vector<FloatImage> images;

@@ -26,6 +26,7 @@
 
 #include "core/Error.h"
 #include "core/Progress.h"
+#include "core/SizeGuard.h"
 
 namespace osgBTF {
 
@@ -94,8 +95,10 @@ public:
     /** Every entry name with its zip index, junk already removed. */
     const std::vector<std::pair<std::string, std::uint64_t>>& names() const { return _names; }
 
-    std::vector<unsigned char> read(const Member& member) const {
-        return _zip ? readZip(member) : readFile(member);
+    /** The member's bytes; `most` bounds what a member may claim (0: no bound but the memory
+     *  limit), checked before anything is allocated for it. */
+    std::vector<unsigned char> read(const Member& member, std::uint64_t most = 0) const {
+        return _zip ? readZip(member, most) : readFile(member, most);
     }
 
 private:
@@ -137,12 +140,43 @@ private:
         std::sort(_names.begin(), _names.end());
     }
 
-    std::vector<unsigned char> readZip(const Member& member) const {
+    /** Refuses a member size before it is allocated: above `most`, or above the memory limit. */
+    void checkSize(const Member& member, std::uint64_t size, std::uint64_t most) const {
+        if (most && size > most)
+            fail(_path, "member '" + member.name + "' is " + std::to_string(size) +
+                            " bytes, more than any encoding of the archive's images needs (at "
+                            "most " +
+                            std::to_string(most) + " bytes)");
+        checkMemory(size,
+                    _path + ": member '" + member.name + "' of " + std::to_string(size) + " bytes");
+    }
+
+    std::vector<unsigned char> readZip(const Member& member, std::uint64_t most) const {
         zip_stat_t stat;
         zip_stat_init(&stat);
         if (zip_stat_index(_zip, member.zipIndex, 0, &stat) != 0 || !(stat.valid & ZIP_STAT_SIZE))
             fail(_path,
                  "member '" + member.name + "': cannot read its size: " + zip_strerror(_zip));
+        // The size is the central directory's claim, not what inflating gives: deflate expands
+        // at most 1032:1 (258-byte matches in 2 bits), so a larger claim is a lie (a zip bomb's
+        // or a corrupt directory's) and is refused before allocating for it.
+        if ((stat.valid & ZIP_STAT_COMP_SIZE) && (stat.valid & ZIP_STAT_COMP_METHOD)) {
+            const bool stored = stat.comp_method == ZIP_CM_STORE;
+            const bool deflated =
+                stat.comp_method == ZIP_CM_DEFLATE || stat.comp_method == ZIP_CM_DEFLATE64;
+            const std::uint64_t bound = stored ? stat.comp_size
+                                        : stat.comp_size > (UINT64_MAX - 1024) / 1032
+                                            ? UINT64_MAX
+                                            : stat.comp_size * 1032 + 1024;
+            if ((stored || deflated) && stat.size > bound)
+                fail(_path, "member '" + member.name + "' claims " + std::to_string(stat.size) +
+                                " bytes uncompressed from " + std::to_string(stat.comp_size) +
+                                (stored ? " stored bytes"
+                                        : " deflated bytes, more than deflate can expand "
+                                          "(1032:1)") +
+                                ": a corrupt archive or a zip bomb");
+        }
+        checkSize(member, stat.size, most);
         zip_file_t* file = zip_fopen_index(_zip, member.zipIndex, 0);
         if (!file) fail(_path, "member '" + member.name + "': " + zip_strerror(_zip));
         std::vector<unsigned char> bytes(stat.size);
@@ -168,8 +202,11 @@ private:
         return bytes;
     }
 
-    std::vector<unsigned char> readFile(const Member& member) const {
+    std::vector<unsigned char> readFile(const Member& member, std::uint64_t most) const {
         const fs::path file = fs::path(_path) / member.name;
+        std::error_code ec;
+        const std::uint64_t size = fs::file_size(file, ec);
+        if (!ec) checkSize(member, size, most);
         std::ifstream in(file, std::ios::binary);
         if (!in) fail(file.string(), std::string("cannot open: ") + std::strerror(errno));
         std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
@@ -315,6 +352,10 @@ void decodeImage(const std::string& archive, const Member& member,
                  const std::vector<unsigned char>& bytes, bool useProxy, const Curve& curve,
                  DecodeScratch& scratch, const std::function<Target(int, int)>& destination) {
     const std::string where = "member '" + member.name + "'";
+    // OpenEXR's C++ reader (OIIO's) allocates chunk offset tables sized from the header as it
+    // opens a file; the headers are checked against the member's size first.
+    if (member.parsed.extension == "exr")
+        readExrPartSizes(archive + ": " + where, bytes.data(), bytes.size());
     OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
     std::string tempFile;
     struct TempRemover {
@@ -500,24 +541,29 @@ MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options) {
         viewIndex[{int(std::lround(views[i].theta)), int(std::lround(views[i].phi))}] = int(i);
 
     const std::size_t nL = lights.size(), nV = views.size();
-    std::vector<int> grid(nL * nV, -1);
+    // Up to 91 x 360 directions each: a grid of nL x nV slots is sized only once the members
+    // fill it, since a few thousand names could otherwise ask for gigabytes of empty slots.
+    std::map<std::size_t, int> slots;
     for (std::size_t i = 0; i < members.size(); ++i) {
         Member& m = members[i];
         m.light = lightIndex.at({m.parsed.lightTheta, m.parsed.lightPhi});
         m.view = viewIndex.at({m.parsed.viewTheta, m.parsed.viewPhi});
-        int& slot = grid[std::size_t(m.light) * nV + m.view];
-        if (slot >= 0)
-            fail(path, "members '" + members[slot].name + "' and '" + m.name +
+        const auto [slot, added] = slots.emplace(std::size_t(m.light) * nV + m.view, int(i));
+        if (!added)
+            fail(path, "members '" + members[slot->second].name + "' and '" + m.name +
                            "' hold the same image (" +
                            tokens(m.parsed.lightTheta, m.parsed.lightPhi, m.parsed.viewTheta,
                                   m.parsed.viewPhi) +
                            ")");
-        slot = int(i);
     }
-    const std::size_t missing = std::size_t(std::count(grid.begin(), grid.end(), -1));
+    const std::size_t missing = nL * nV - slots.size();
     if (missing > 0) {
-        const std::size_t first =
-            std::size_t(std::find(grid.begin(), grid.end(), -1) - grid.begin());
+        // The first empty slot: at most slots.size() slots precede it.
+        std::size_t first = 0;
+        for (const auto& entry : slots) {
+            if (entry.first != first) break;
+            ++first;
+        }
         const Direction& l = lights[first / nV];
         const Direction& v = views[first % nV];
         fail(path, std::to_string(missing) + " of " + std::to_string(nL * nV) +
@@ -538,20 +584,30 @@ MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options) {
 
     const Curve curve(options.curve);
     DecodeScratch firstScratch;
-    const Member& firstMember = members[grid[0]];
+    const Member& firstMember = members[std::size_t(slots.begin()->second)];
     int width = 0, height = 0;
     decodeImage(path, firstMember, source.read(firstMember), proxyOk[firstMember.parsed.extension],
                 curve, firstScratch, [&](int w, int h) {
                     width = w;
                     height = h;
+                    // The first header's size decides everything: checked before its pixels
+                    // are decoded, so an image claiming 100000x100000 pixels allocates nothing.
+                    std::ostringstream what;
+                    what << path << ": BTF of " << w << "x" << h << " texels x " << nV
+                         << " views x " << nL << " lights";
+                    checkMemory(MeasuredBtf::bytesNeeded(w, h, nV, nL, options.storage),
+                                what.str());
                     firstScratch.image.resize(std::size_t(w) * h * 3);
                     return Target{firstScratch.image.data(), nullptr};
                 });
+    // An encoded image of width x height pixels is never larger than twice its raw RGBA float
+    // pixels plus 16 MiB of metadata; larger members are refused before they are read, so the
+    // members in flight stay bounded by the image size.
+    const std::uint64_t mostBytes =
+        std::min(saturatedProduct({std::uint64_t(width), std::uint64_t(height), 2 * 16}),
+                 UINT64_MAX - (16u << 20)) +
+        (16u << 20);
 
-    std::ostringstream what;
-    what << path << ": BTF of " << width << "x" << height << " texels x " << nV << " views x " << nL
-         << " lights";
-    checkMemory(MeasuredBtf::bytesNeeded(width, height, nV, nL, options.storage), what.str());
     MeasuredBtf btf(width, height, views, lights, options.storage);
     btf.source = path;
     btf.setImage(firstMember.view, firstMember.light, firstScratch.image.data());
@@ -586,7 +642,7 @@ MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options) {
                 }
                 auto job = std::make_shared<Job>();
                 job->member = order[next++];
-                job->bytes = source.read(*job->member);
+                job->bytes = source.read(*job->member, mostBytes);
                 return job;
             }) &
             tbb::make_filter<std::shared_ptr<Job>, void>(
