@@ -143,6 +143,9 @@ private:
         if (zip_stat_index(_zip, member.zipIndex, 0, &stat) != 0 || !(stat.valid & ZIP_STAT_SIZE))
             fail(_path,
                  "member '" + member.name + "': cannot read its size: " + zip_strerror(_zip));
+        // The size is the archive's claim (fuzz/regression/ubo2003_zip/: 914 bytes claiming
+        // 3.75 GiB).
+        checkMemory(stat.size, _path + ": member '" + member.name + "'");
         zip_file_t* file = zip_fopen_index(_zip, member.zipIndex, 0);
         if (!file) fail(_path, "member '" + member.name + "': " + zip_strerror(_zip));
         std::vector<unsigned char> bytes(stat.size);
@@ -544,14 +547,17 @@ MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options) {
                 curve, firstScratch, [&](int w, int h) {
                     width = w;
                     height = h;
+                    // Before the first image's buffers: its header's size is a claim
+                    // (fuzz/regression/ubo2003_zip/: a 2x2 JPEG patched to 60000x60000).
+                    std::ostringstream what;
+                    what << path << ": BTF of " << w << "x" << h << " texels x " << nV
+                         << " views x " << nL << " lights";
+                    checkMemory(MeasuredBtf::bytesNeeded(w, h, nV, nL, options.storage),
+                                what.str());
                     firstScratch.image.resize(std::size_t(w) * h * 3);
                     return Target{firstScratch.image.data(), nullptr};
                 });
 
-    std::ostringstream what;
-    what << path << ": BTF of " << width << "x" << height << " texels x " << nV << " views x " << nL
-         << " lights";
-    checkMemory(MeasuredBtf::bytesNeeded(width, height, nV, nL, options.storage), what.str());
     MeasuredBtf btf(width, height, views, lights, options.storage);
     btf.source = path;
     btf.setImage(firstMember.view, firstMember.light, firstScratch.image.data());
