@@ -40,12 +40,16 @@ std::string g_fixtures;
 /** The loaders read files: each input is written to one file per process and extension in a
  *  private folder under the temporary directory (tmpfs on most systems), rewritten per input. */
 std::string writeInput(const std::uint8_t* data, std::size_t size, const std::string& name) {
-    static const fs::path folder = [] {
-        fs::path dir = fs::temp_directory_path() / ("osgbtf-fuzz-" + std::to_string(::getpid()));
-        fs::create_directories(dir);
-        return dir;
-    }();
-    const std::string path = (folder / name).string();
+    // Removed at exit, so test runs leave nothing behind.
+    static const struct Folder {
+        fs::path path = fs::temp_directory_path() / ("osgbtf-fuzz-" + std::to_string(::getpid()));
+        Folder() { fs::create_directories(path); }
+        ~Folder() {
+            std::error_code ignored;
+            fs::remove_all(path, ignored);
+        }
+    } folder;
+    const std::string path = (folder.path / name).string();
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
     out.close();
