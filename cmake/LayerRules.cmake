@@ -2,8 +2,10 @@
 # includes a higher one: the runtime libosgBTF (core, loaders, materials, scene) must build and
 # ship without harness/ (libosgBTFHarness), and the plugins load only the runtime.
 #   core <- loaders, materials, synthesis <- scene <- harness <- tools, examples; scene <- plugins
-# tests/ and bench/ may include everything below them. Used by cmake/CheckLayers.cmake (the
-# layers.include_graph test) and tested on fake trees by tests/layers/CheckLayersTest.cmake.
+# tests/, fuzz/ and bench/ may include everything below them (fuzz/ holds the fuzz targets'
+# bodies, which the regression test in tests/ calls, and their seed generator). Used by
+# cmake/CheckLayers.cmake (the layers.include_graph test) and tested on fake trees by
+# tests/layers/CheckLayersTest.cmake.
 
 set(OSGBTF_LAYER_ALLOWED_core core)
 set(OSGBTF_LAYER_ALLOWED_loaders core loaders)
@@ -14,9 +16,11 @@ set(OSGBTF_LAYER_ALLOWED_harness core loaders materials synthesis scene harness)
 set(OSGBTF_LAYER_ALLOWED_tools core loaders materials synthesis scene harness tools)
 set(OSGBTF_LAYER_ALLOWED_examples core loaders materials synthesis scene harness examples)
 set(OSGBTF_LAYER_ALLOWED_plugins core loaders materials synthesis scene plugins)
-set(OSGBTF_LAYER_ALLOWED_tests core loaders materials synthesis scene harness plugins tests)
+set(OSGBTF_LAYER_ALLOWED_fuzz core loaders materials synthesis scene harness plugins fuzz)
+set(OSGBTF_LAYER_ALLOWED_tests core loaders materials synthesis scene harness plugins fuzz tests)
 set(OSGBTF_LAYER_ALLOWED_bench core loaders materials synthesis scene harness bench)
-set(OSGBTF_LAYERS core loaders materials synthesis scene harness tools examples plugins tests bench)
+set(OSGBTF_LAYERS core loaders materials synthesis scene harness tools examples plugins fuzz tests
+                  bench)
 
 # Sets OUT_VAR to one message per include of a layer the including file's layer may not use:
 #   <file>: includes "<path>", but <layer>/ may include only <allowed>/

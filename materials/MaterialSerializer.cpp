@@ -74,10 +74,14 @@ bool readFittedMaterial(osgDB::InputStream& is, FittedMaterial& fitted) {
     is.readWrappedString(fitted.method);
     unsigned count = 0;
     is >> count >> is.BEGIN_BRACKET;
-    for (unsigned i = 0; i < count; ++i) {
+    // Counts come from the file: stop at the first stream error or empty name (what reads past
+    // the end give), or a damaged count (e.g. 4000000000, fuzz/open/hang-*)
+    // spins for minutes on reads that all fail. Saved materials never have empty names.
+    for (unsigned i = 0; i < count && !is.getException(); ++i) {
         std::string key, value;
         is.readWrappedString(key);
         is.readWrappedString(value);
+        if (key.empty()) fail(fitted.source, "a parameter has no name (damaged or truncated)");
         fitted.parameters[key] = value;
     }
     is >> is.END_BRACKET;
@@ -86,15 +90,23 @@ bool readFittedMaterial(osgDB::InputStream& is, FittedMaterial& fitted) {
     is.readWrappedString(lights);
     is >> count >> is.BEGIN_BRACKET;
     bool ok = true;
-    for (unsigned i = 0; i < count; ++i) {
+    for (unsigned i = 0; i < count && !is.getException(); ++i) {
         MaterialTexture texture;
         int kind = 0;
         std::string data;
         is.readWrappedString(texture.name);
         is >> texture.width >> texture.height >> texture.depth >> texture.channels >> kind;
         is.readWrappedString(data);
+        if (texture.name.empty())
+            fail(fitted.source, "a texture has no name (damaged or truncated)");
+        if (kind < MaterialTexture::Half || kind > MaterialTexture::UNorm8)
+            fail(fitted.source, "texture '" + texture.name + "' has an unknown pixel kind " +
+                                    std::to_string(kind));
         texture.kind = MaterialTexture::PixelKind(kind);
-        ok = ok && fromHex(data, texture.data) && texture.data.size() == texture.valueCount();
+        // Positive sizes first: valueCount() of negative ones wraps around and can match.
+        ok = ok && texture.width > 0 && texture.height > 0 && texture.depth > 0 &&
+             texture.channels > 0 && fromHex(data, texture.data) &&
+             texture.data.size() == texture.valueCount();
         fitted.textures.push_back(std::move(texture));
     }
     is >> is.END_BRACKET;

@@ -33,7 +33,8 @@ write_tree(${WORK}/good
   harness/headless/H.cpp "#include \"scene/S.h\""
   plugins/btf/P.cpp "#include \"scene/S.h\"\n#include \"plugins/btf/P.h\""
   tools/btf/T.cpp "#include \"harness/H.h\""
-  tests/x_test.cpp "#include \"harness/H.h\"\n#include \"plugins/btf/P.h\"")
+  fuzz/F.cpp "#include \"plugins/btf/P.h\"\n#include \"harness/H.h\""
+  tests/x_test.cpp "#include \"harness/H.h\"\n#include \"plugins/btf/P.h\"\n#include \"fuzz/F.h\"")
 expect(${WORK}/good)
 
 # Upward includes: each one reported once, with the file, the include and the rule.
@@ -43,12 +44,14 @@ write_tree(${WORK}/bad
   materials/M.cpp "  #  include \"harness/headless/HeadlessRenderer.h\""
   synthesis/K.cpp "#include \"materials/Material.h\""
   scene/S.cpp "#include \"harness/MaterialImage.h\""
-  plugins/btf/P.cpp "#include \"core/A.h\"\n#include \"harness/Compare.h\"")
+  plugins/btf/P.cpp "#include \"core/A.h\"\n#include \"harness/Compare.h\""
+  fuzz/F.cpp "#include \"tools/btf/Commands.h\"")
 expect(${WORK}/bad
   "core/A.h: includes \"loaders/L.h\", but core/ may include only core/"
   "loaders/L.cpp: includes \"materials/Material.h\", but loaders/ may include only core/, loaders/"
   "materials/M.cpp: includes \"harness/headless/HeadlessRenderer.h\", but materials/ may include only core/, materials/"
   "synthesis/K.cpp: includes \"materials/Material.h\", but synthesis/ may include only core/, synthesis/"
   "scene/S.cpp: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, scene/"
-  "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, synthesis/, scene/, plugins/")
+  "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, synthesis/, scene/, plugins/"
+  "fuzz/F.cpp: includes \"tools/btf/Commands.h\", but fuzz/ may include only core/, loaders/, materials/, synthesis/, scene/, harness/, plugins/, fuzz/")
 message(STATUS "layer checker: fake trees give the expected messages")

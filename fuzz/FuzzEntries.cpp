@@ -1,0 +1,181 @@
+#include "fuzz/FuzzEntries.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <osg/Notify>
+#include <osgDB/FileNameUtils>
+#include <osgDB/Options>
+#include <osgDB/ReaderWriter>
+#include <osgDB/Registry>
+
+#include "core/CoordinateMap.h"
+#include "core/Error.h"
+#include "core/FittedMaterialFile.h"
+#include "core/MeasuredBtf.h"
+#include "core/Progress.h"
+#include "loaders/Ubo2003.h"
+#include "loaders/Ubo2014.h"
+#include "plugins/btf/ReaderWriterBTF.h"
+
+namespace fs = std::filesystem;
+
+namespace osgBTF::fuzz {
+
+namespace {
+
+/** Far above what any small input legitimately needs and far below libFuzzer's 2 GB RSS limit,
+ *  so a header claiming a huge size meets the memory guard instead of the allocator. */
+constexpr std::uint64_t kMemoryLimit = std::uint64_t(256) << 20;
+/** decodeUbo2014 only for BTFs of at most this many values: decoding is not parsing, and a
+ *  valid 100-byte file can describe millions of values (e.g. rank 0 factors). */
+constexpr std::uint64_t kMaxDecodedValues = std::uint64_t(1) << 20;
+
+std::string g_fixtures;
+
+/** The loaders read files: each input is written to one file per process and extension in a
+ *  private folder under the temporary directory (tmpfs on most systems), rewritten per input. */
+std::string writeInput(const std::uint8_t* data, std::size_t size, const std::string& name) {
+    // Removed at exit, so test runs leave nothing behind.
+    static const struct Folder {
+        fs::path path = fs::temp_directory_path() / ("osgbtf-fuzz-" + std::to_string(::getpid()));
+        Folder() { fs::create_directories(path); }
+        ~Folder() {
+            std::error_code ignored;
+            fs::remove_all(path, ignored);
+        }
+    } folder;
+    const std::string path = (folder.path / name).string();
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+    out.close();
+    if (!out) throw Error(path + ": cannot write the fuzz input");
+    return path;
+}
+
+/** The process works in `dir` while alive, so file names from an input resolve only there. */
+class InFolder {
+public:
+    explicit InFolder(const std::string& dir) : _previous(::open(".", O_RDONLY | O_DIRECTORY)) {
+        if (::chdir(dir.c_str()) != 0) throw Error(dir + ": cannot enter the fixtures folder");
+    }
+    ~InFolder() {
+        if (_previous >= 0) {
+            if (::fchdir(_previous) != 0) std::perror("osgBTF fuzz: fchdir");
+            ::close(_previous);
+        }
+    }
+    InFolder(const InFolder&) = delete;
+    InFolder& operator=(const InFolder&) = delete;
+
+private:
+    int _previous;
+};
+
+const osgBTF::plugin::ReaderWriterBTF& reader(const std::string& extension) {
+    // One per extension, as the four plugin modules; built once (their option tables walk the
+    // method registry).
+    static const osg::ref_ptr<osgBTF::plugin::ReaderWriterBTF> btfmat =
+        new osgBTF::plugin::ReaderWriterBTF("btfmat");
+    static const osg::ref_ptr<osgBTF::plugin::ReaderWriterBTF> btf =
+        new osgBTF::plugin::ReaderWriterBTF("btf");
+    static const osg::ref_ptr<osgBTF::plugin::ReaderWriterBTF> zip =
+        new osgBTF::plugin::ReaderWriterBTF("zip");
+    static const osg::ref_ptr<osgBTF::plugin::ReaderWriterBTF> pseudo =
+        new osgBTF::plugin::ReaderWriterBTF("btfmaterial");
+    if (extension == "btf") return *btf;
+    if (extension == "zip") return *zip;
+    if (extension == "btfmaterial") return *pseudo;
+    return *btfmat;
+}
+
+}  // namespace
+
+const std::vector<Target>& targets() {
+    static const std::vector<Target> all = {
+        {"ubo2003_zip", ubo2003Zip},         {"ubo2014", ubo2014},
+        {"fitted_material", fittedMaterial}, {"coordinate_map", coordinateMap},
+        {"btfmat_plugin", btfmatPlugin},     {"plugin_names", pluginNames},
+        {"scene_file", sceneFile},
+    };
+    return all;
+}
+
+const Target* findTarget(const std::string& name) {
+    for (const Target& target : targets())
+        if (name == target.name) return &target;
+    return nullptr;
+}
+
+void setUp(const std::string& fixtures) {
+    g_fixtures = fs::absolute(fixtures).string();
+    setMemoryLimit(kMemoryLimit);
+    Progress::setEnabled(false);
+    osg::setNotifyLevel(osg::FATAL);
+}
+
+void ubo2003Zip(const std::uint8_t* data, std::size_t size) {
+    const std::string path = writeInput(data, size, "input.zip");
+    if (!mayBeUbo2003(path)) return;
+    loadUbo2003(path);
+}
+
+void ubo2014(const std::uint8_t* data, std::size_t size) {
+    const std::string path = writeInput(data, size, "input.btf");
+    LoadOptions headerOnly;
+    headerOnly.headerOnly = true;
+    readUbo2014(path, headerOnly);
+    const Ubo2014Factors factors = readUbo2014(path);
+    // long double: the product of header fields can wrap around 64 bits.
+    const long double values = (long double)factors.width * factors.height * factors.views.size() *
+                               factors.lights.size() * 3;
+    if (values <= (long double)kMaxDecodedValues) {
+        LoadOptions half;
+        half.storage = Storage::Half;
+        decodeUbo2014(factors, half);
+    }
+}
+
+void fittedMaterial(const std::uint8_t* data, std::size_t size) {
+    loadFittedMaterial(writeInput(data, size, "input.exr"));
+}
+
+void coordinateMap(const std::uint8_t* data, std::size_t size) {
+    readCoordinateMap(writeInput(data, size, "input-map.exr"));
+}
+
+void btfmatPlugin(const std::uint8_t* data, std::size_t size) {
+    const std::string path = writeInput(data, size, "input.btfmat");
+    osg::ref_ptr<osgDB::Options> options = new osgDB::Options("cache=off");
+    reader("btfmat").readNode(path, options.get());
+}
+
+void pluginNames(const std::uint8_t* data, std::size_t size) {
+    const std::string text(reinterpret_cast<const char*>(data), size);
+    const auto newline = text.find('\n');
+    const std::string name = text.substr(0, newline);
+    const std::string optionString = newline == std::string::npos ? "" : text.substr(newline + 1);
+    if (name.find('/') != std::string::npos || name.find("..") != std::string::npos ||
+        name.find('\0') != std::string::npos || name.find("cache=") != std::string::npos)
+        return;
+    InFolder inFixtures(g_fixtures);
+    // cache=off last: the last word wins, so no input writes fits anywhere.
+    osg::ref_ptr<osgDB::Options> options = new osgDB::Options(optionString + " cache=off");
+    const std::string extension = osgDB::getLowerCaseFileExtension(name);
+    reader(extension).readNode(name, options.get());
+}
+
+void sceneFile(const std::uint8_t* data, std::size_t size) {
+    osgDB::ReaderWriter* osgt = osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
+    if (!osgt) throw Error("osgDB has no .osgt reader (Debian's osgdb_osg plugin)");
+    InFolder inFixtures(g_fixtures);
+    std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
+    osg::ref_ptr<osgDB::Options> options = new osgDB::Options("cache=off");
+    osgt->readNode(in, options.get());
+}
+
+}  // namespace osgBTF::fuzz

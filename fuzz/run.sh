@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Runs every fuzz target (or the ones named) for SECONDS each, one after the other, on a corpus
+# that starts from the seeds and the regression inputs; prints libFuzzer's final figures.
+#   fuzz/run.sh BUILD_FUZZ SEEDS SECONDS [TARGET...]
+# BUILD_FUZZ: a build with -DOSGBTF_BUILD_FUZZERS=ON (fuzz/README.md); SEEDS: the output folder
+# of osgbtf_fuzz_seeds. Corpora grow in fuzz/out/corpus/<target> (kept between runs), findings
+# land in fuzz/out/findings/<target>-*, logs in fuzz/out/logs/<target>.log.
+set -euo pipefail
+if [ $# -lt 3 ]; then
+  sed -n '2,7p' "$0"
+  exit 2
+fi
+build=$(realpath "$1") seeds=$(realpath "$2") seconds=$3
+shift 3
+here=$(cd "$(dirname "$0")" && pwd)
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] ||
+  targets=(ubo2003_zip ubo2014 fitted_material coordinate_map btfmat_plugin plugin_names scene_file)
+out=$here/out
+mkdir -p "$out/corpus" "$out/findings" "$out/logs"
+for t in "${targets[@]}"; do
+  corpus=$out/corpus/$t
+  mkdir -p "$corpus"
+  [ -d "$seeds/$t" ] && cp -n "$seeds/$t"/* "$corpus"/ 2>/dev/null || true
+  cp -n "$here/regression/$t"/* "$corpus"/ 2>/dev/null || true
+  # -timeout=5: an input over 5 s is a hang (issue 16); -rss_limit_mb: libFuzzer's default,
+  # stated; -max_len: large enough for the seeds (fitted materials of a few KB).
+  set +e
+  "$build/bin/fuzz_$t" "$corpus" -dict="$here/dict/$t.dict" -max_total_time="$seconds" \
+    -timeout=5 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+    -artifact_prefix="$out/findings/$t-" >"$out/logs/$t.log" 2>&1
+  status=$?
+  set -e
+  echo "== $t (exit $status): $(grep -E '^#[0-9]+' "$out/logs/$t.log" | tail -1)"
+  grep -E '^stat::(number_of_executed_units|peak_rss_mb)' "$out/logs/$t.log" || true
+  ls "$out/findings" | grep "^$t-" || true
+done

@@ -1,0 +1,138 @@
+// Replays fuzz/regression/<target>/ (inputs that once crashed or hung a fuzz target, plus a few
+// seeds) through the fuzz targets' own bodies (fuzz/FuzzEntries.h), so every build checks them
+// without clang. Each input may be refused with an osgBTF::Error; any other exception fails here,
+// and a crash or sanitizer report fails the test process.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <typeinfo>
+
+#include <gtest/gtest.h>
+#include <osg/Notify>
+#include <osgDB/ReaderWriter>
+#include <osgDB/Registry>
+
+#include "NotifyCapture.h"
+#include "TestUtil.h"
+#include "core/Error.h"
+#include "core/MeasuredBtf.h"
+#include "core/Progress.h"
+#include "fuzz/FuzzEntries.h"
+#include "loaders/Ubo2003.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+class FuzzRegression : public ::testing::TestWithParam<std::string> {
+protected:
+    // setUp changes process-wide settings; put them back for the tests that follow in the same
+    // process (a plain run of the test binary).
+    void SetUp() override {
+        _memoryLimit = osgBTF::memoryLimit();
+        _progress = osgBTF::Progress::enabled();
+        _notify = osg::getNotifyLevel();
+        osgBTF::fuzz::setUp(OSGBTF_SOURCE_DIR "/fuzz/fixtures");
+    }
+    void TearDown() override {
+        osgBTF::setMemoryLimit(_memoryLimit);
+        osgBTF::Progress::setEnabled(_progress);
+        osg::setNotifyLevel(_notify);
+    }
+
+private:
+    std::uint64_t _memoryLimit = 0;
+    bool _progress = false;
+    osg::NotifySeverity _notify = osg::NOTICE;
+};
+
+TEST_P(FuzzRegression, EveryInputIsReadOrRefusedWithAnError) {
+    const osgBTF::fuzz::Target* target = osgBTF::fuzz::findTarget(GetParam());
+    ASSERT_NE(target, nullptr);
+    const fs::path folder = fs::path(OSGBTF_SOURCE_DIR) / "fuzz" / "regression" / GetParam();
+    std::vector<fs::path> inputs;
+    for (const auto& entry : fs::directory_iterator(folder))
+        if (entry.is_regular_file()) inputs.push_back(entry.path());
+    std::sort(inputs.begin(), inputs.end());
+    // An empty or missing folder would pass vacuously.
+    ASSERT_FALSE(inputs.empty()) << folder;
+    for (const fs::path& input : inputs) {
+        std::ifstream in(input, std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(in)),
+                                std::istreambuf_iterator<char>());
+        ASSERT_TRUE(in.good() || in.eof()) << input;
+        try {
+            target->run(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+        } catch (const osgBTF::Error&) {
+            // A refusal with a message: what the parsers are for.
+        } catch (const std::exception& e) {
+            ADD_FAILURE() << input.filename() << ": " << typeid(e).name() << ": " << e.what();
+        }
+    }
+}
+
+std::vector<std::string> targetNames() {
+    std::vector<std::string> names;
+    for (const osgBTF::fuzz::Target& target : osgBTF::fuzz::targets()) names.push_back(target.name);
+    return names;
+}
+
+INSTANTIATE_TEST_SUITE_P(Targets, FuzzRegression, ::testing::ValuesIn(targetNames()),
+                         [](const auto& info) { return info.param; });
+
+// The findings' messages, on their regression inputs (fuzz/README.md, "Findings").
+class FuzzFindings : public ::testing::Test {
+protected:
+    void SetUp() override {
+        _memoryLimit = osgBTF::memoryLimit();
+        osgBTF::setMemoryLimit(std::uint64_t(256) << 20);
+    }
+    void TearDown() override { osgBTF::setMemoryLimit(_memoryLimit); }
+    static std::string input(const std::string& target, const std::string& name) {
+        return OSGBTF_SOURCE_DIR "/fuzz/regression/" + target + "/" + name;
+    }
+
+private:
+    std::uint64_t _memoryLimit = 0;
+};
+
+TEST_F(FuzzFindings, ZipMemberClaimingGigabytesIsRefusedBeforeAllocating) {
+    const std::string path = input("ubo2003_zip", "member-claims-3.75GiB.zip");
+    // 0xF0000000 bytes from 81 deflated ones: beyond deflate's 1032:1, refused before the memory
+    // limit is even asked.
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadUbo2003(path); }),
+              path +
+                  ": member '00000 tl000 pl000 tv000 pv000.png' claims 4026531840 bytes "
+                  "uncompressed from 81 deflated bytes, more than deflate can expand (1032:1): a "
+                  "corrupt archive or a zip bomb");
+}
+
+TEST_F(FuzzFindings, ImageClaimingHugeSizeIsRefusedBeforeItsBuffers) {
+    const std::string path = input("ubo2003_zip", "claims-60000x60000-jpeg.zip");
+    // 60000 x 60000 texels x 2 views x 2 lights x 3 floats = 172.8e9 bytes = 160.9 GiB.
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadUbo2003(path); }),
+              path +
+                  ": BTF of 60000x60000 texels x 2 views x 2 lights: needs 160.9 GiB, more than "
+                  "the memory limit of 256.0 MiB (raise it with --memory-limit or "
+                  "OSGBTF_MEMORY_LIMIT)");
+}
+
+TEST_F(FuzzFindings, EmbeddedMaterialWithUnknownPixelKindIsRefused) {
+    std::ifstream in(input("scene_file", "ub-pixel-kind-7.osgt"), std::ios::binary);
+    std::stringstream scene;
+    scene << in.rdbuf();
+    osgDB::ReaderWriter* osgt = osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
+    ASSERT_NE(osgt, nullptr);
+    osgBTF::test::ScopedNotifyCapture capture;
+    osgDB::ReaderWriter::ReadResult result = osgt->readNode(scene);
+    ASSERT_TRUE(result.validNode());
+    EXPECT_NE(capture.text().find("osgBTF::MaterialNode: material embedded in the scene: texture "
+                                  "'albedo' has an unknown pixel kind 7 (the node draws its "
+                                  "children without the material)"),
+              std::string::npos)
+        << capture.text();
+}
+
+}  // namespace
