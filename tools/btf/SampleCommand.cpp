@@ -22,7 +22,7 @@ Runner addSampleCommand(CLI::App& app, CommonOptions&) {
         std::string format = "jpg";
         int quality = 95;
         float variation = 0.0f;
-        int threads = 2;
+        int weaveRepeats = 2;
     };
     auto options = std::make_shared<Options>();
     command->add_option("-o,--output", options->output, "Output zip file")->required();
@@ -45,7 +45,9 @@ Runner addSampleCommand(CLI::App& app, CommonOptions&) {
                      "for btf synthesize)")
         ->check(CLI::Range(0.0f, 1.0f))
         ->capture_default_str();
-    command->add_option("--threads", options->threads, "Weave repeats (threads) across the sample")
+    command
+        ->add_option("--weave-repeats", options->weaveRepeats,
+                     "How often the weave pattern repeats across the sample")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
     return [options] {
@@ -53,7 +55,7 @@ Runner addSampleCommand(CLI::App& app, CommonOptions&) {
         SampleOptions sample;
         sample.width = sample.height = options->size;
         sample.variation = options->variation;
-        sample.threadsPerTile = options->threads;
+        sample.threadsPerTile = options->weaveRepeats;
         const MeasuredBtf btf = makeSampleBtf(sample);
         const Ubo2003ImageFormat format = options->format == "png"   ? Ubo2003ImageFormat::Png
                                           : options->format == "hdr" ? Ubo2003ImageFormat::Hdr
