@@ -86,6 +86,48 @@ EnvironmentMap EnvironmentMap::downsampled(int newWidth) const {
     return out;
 }
 
+namespace {
+
+/** The range of dot(d, n) over texel (c, r). A linear function's extremes on a lat-long
+ *  rectangle lie at its corners, where an edge runs tangent to the function's level lines, or at
+ *  +-n inside it, so those few points give the exact range. */
+void normalRange(const EnvironmentMap& map, int c, int r, const glm::vec3& normal, double& lo,
+                 double& hi) {
+    const double nx = normal.x, ny = normal.y, nz = normal.z;
+    const double theta0 = kPi * double(map.height - 1 - r) / map.height;
+    const double theta1 = kPi * double(map.height - r) / map.height;
+    const double phi0 = 2.0 * kPi * c / map.width + double(map.rotationDegrees) * kPi / 180.0;
+    const double dphi = 2.0 * kPi / map.width;
+    lo = 2, hi = -2;
+    auto f = [&](double theta, double phi) {
+        const double v =
+            std::sin(theta) * (nx * std::cos(phi) + ny * std::sin(phi)) + nz * std::cos(theta);
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+    };
+    auto inPhi = [&](double phi) {
+        const double d = phi - phi0 - 2.0 * kPi * std::floor((phi - phi0) / (2.0 * kPi));
+        return d <= dphi;
+    };
+    const double phiN = std::atan2(ny, nx);
+    for (double theta : {theta0, theta1}) {
+        for (double phi : {phi0, phi0 + dphi}) f(theta, phi);
+        for (double phi : {phiN, phiN + kPi})
+            if (inPhi(phi)) f(theta, phi);
+    }
+    for (double phi : {phi0, phi0 + dphi}) {
+        const double a = nx * std::cos(phi) + ny * std::sin(phi);
+        const double t = std::atan2(a, nz);
+        for (double theta : {t, t + kPi, t - kPi})
+            if (theta >= theta0 && theta <= theta1) f(theta, phi);
+    }
+    const double thetaN = std::acos(std::clamp(nz, -1.0, 1.0));
+    if (thetaN >= theta0 && thetaN <= theta1 && inPhi(phiN)) hi = 1;
+    if (kPi - thetaN >= theta0 && kPi - thetaN <= theta1 && inPhi(phiN + kPi)) lo = -1;
+}
+
+}  // namespace
+
 int horizonSplit(int width) {
     return std::max(1, (512 + width - 1) / std::max(1, width));
 }
@@ -110,18 +152,13 @@ std::vector<EnvironmentSample> visibleEnvironment(const EnvironmentMap& map,
         for (int c = 0; c < map.width; ++c) {
             const glm::vec3 radiance = map.texel(c, r);
             const glm::vec3 centre = map.direction(c + 0.5, r + 0.5);
-            // The largest angle from the centre to the texel's corners and edge midpoints bounds
-            // how far the texel reaches; only texels within it of the horizon are split.
-            double reach = 0;
-            for (double du : {0.0, 0.5, 1.0})
-                for (double dv : {0.0, 0.5, 1.0}) {
-                    const float d = glm::dot(centre, map.direction(c + du, r + dv));
-                    reach = std::max(reach, std::acos(std::clamp(double(d), -1.0, 1.0)));
-                }
-            const double elevation = std::asin(std::clamp(double(glm::dot(centre, frame.normal)),
-                                                          -1.0, 1.0));  // above the horizon
-            if (std::abs(elevation) > reach * 1.05 + 1e-6) {
-                if (elevation > 0) add(centre, map.solidAngle(r), radiance);
+            double lo = 0, hi = 0;
+            normalRange(map, c, r, frame.normal, lo, hi);
+            // Boundaries that lie on the horizon (a surface facing +Z, an even map height) leave
+            // rounding-sized values on the wrong side: those texels are not split.
+            if (hi <= 1e-9) continue;
+            if (lo >= -1e-9) {
+                add(centre, map.solidAngle(r), radiance);
                 continue;
             }
             // Parts equal in azimuth and in cos(theta), so each has the exact solid angle of its

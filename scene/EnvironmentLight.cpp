@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <osg/Light>
+#include <osg/LightSource>
 #include <osg/Notify>
 #include <osgDB/FileUtils>
 #include <osgDB/InputStream>
@@ -20,7 +22,30 @@ EnvironmentLight::EnvironmentLight(const EnvironmentLight& other, const osg::Cop
       _exposure(other._exposure),
       _rotation(other._rotation),
       _projectionWidth(other._projectionWidth),
-      _map(other._map) {}
+      _map(other._map),
+      _exposureUniform(new osg::Uniform("osgBTF_envExposure", other._exposure)) {}
+
+void EnvironmentLight::setExposure(float exposure) {
+    _exposure = exposure;
+    _exposureUniform->set(exposure);
+}
+
+osg::ref_ptr<osg::Group> representativeLightSources(const EnvironmentLight& light, int count) {
+    osg::ref_ptr<osg::Group> group = new osg::Group;
+    group->setName("osgBTF environment lights");
+    if (!light.hasMap()) return group;
+    int n = 0;
+    for (const RepresentativeLight& r : medianCutLights(light.map(), count)) {
+        osg::ref_ptr<osg::Light> l = new osg::Light(n++);
+        const glm::vec3 p = r.power * light.getExposure();
+        l->setDiffuse(osg::Vec4(p.x, p.y, p.z, 1.0f));
+        l->setPosition(osg::Vec4(r.direction.x, r.direction.y, r.direction.z, 0.0f));
+        osg::ref_ptr<osg::LightSource> source = new osg::LightSource;
+        source->setLight(l);
+        group->addChild(source);
+    }
+    return group;
+}
 
 EnvironmentMap EnvironmentLight::mapFromImage(const osg::Image& image, const std::string& name) {
     if (image.s() < 1 || image.t() < 1 || !image.data()) throw Error(name + ": empty image");

@@ -12,8 +12,10 @@
 
 #include <string>
 
+#include <osg/Group>
 #include <osg/Image>
 #include <osg/Object>
+#include <osg/Uniform>
 #include <osg/ref_ptr>
 #include <osgDB/Options>
 
@@ -39,8 +41,11 @@ public:
     void setImage(const osg::Image& image);
     void setMap(EnvironmentMap map);
 
-    void setExposure(float exposure) { _exposure = exposure; }
+    void setExposure(float exposure);
     float getExposure() const { return _exposure; }
+    /** osgBTF_envExposure, shared by every StateSet applyEnvironmentLighting makes (so a new
+     *  exposure shows in the next frame, nothing recomputed). */
+    osg::Uniform* getExposureUniform() const { return _exposureUniform.get(); }
     /** Degrees about +Z, counter-clockwise seen from above. */
     void setRotation(float degrees) { _rotation = degrees; }
     float getRotation() const { return _rotation; }
@@ -68,6 +73,12 @@ private:
     float _exposure = 1.0f, _rotation = 0.0f;
     int _projectionWidth = 128;
     EnvironmentMap _map;
+    osg::ref_ptr<osg::Uniform> _exposureUniform = new osg::Uniform("osgBTF_envExposure", 1.0f);
 };
+
+/** Directional osg::LightSources for representative lights (medianCutLights of the light's
+ *  rotated map; diffuse = power x exposure, position = the direction toward the light, w = 0):
+ *  MaterialNode feeds them to any method's point-light shader (at most 8 lights there). */
+osg::ref_ptr<osg::Group> representativeLightSources(const EnvironmentLight& light, int count = 8);
 
 }  // namespace osgBTF

@@ -13,7 +13,10 @@
 
 #include "core/Error.h"
 #include "core/Progress.h"
+#include "materials/EnvironmentState.h"
+#include "materials/Material.h"
 #include "materials/ShaderInterface.h"
+#include "scene/EnvironmentLight.h"
 
 namespace osgBTF {
 
@@ -186,6 +189,26 @@ std::vector<GeometryEnvironment> computeVertexEnvironment(const osg::Node& lit,
     }
     progress.finish();
     return result;
+}
+
+std::size_t applyEnvironmentLighting(osg::Node& lit, const osg::Node* occluders,
+                                     const Material& material, const EnvironmentLight& light,
+                                     const VertexEnvironmentOptions& options) {
+    if (!hasFoldedEnvironment(material.methodName()))
+        throw Error("environment: method '" + material.methodName() +
+                    "' has no folded environment lighting");
+    std::vector<GeometryEnvironment> lighting =
+        computeVertexEnvironment(lit, occluders, material.lights(), light.projectionMap(), options);
+    for (GeometryEnvironment& entry : lighting) {
+        std::vector<std::vector<float>> folded(entry.g.size());
+        tbb::parallel_for(std::size_t(0), entry.g.size(), [&](std::size_t i) {
+            folded[i] = foldEnvironment(material, entry.g[i]);
+        });
+        osg::ref_ptr<osg::StateSet> state = environmentStateSet(material, folded);
+        state->addUniform(light.getExposureUniform());
+        entry.geometry->setStateSet(state);
+    }
+    return lighting.size();
 }
 
 }  // namespace osgBTF

@@ -74,4 +74,18 @@ std::vector<GeometryEnvironment> computeVertexEnvironment(const osg::Node& lit,
                                                           const EnvironmentMap& map,
                                                           const VertexEnvironmentOptions& options);
 
+class EnvironmentLight;
+class Material;
+
+/** Environment lighting for a linear method (hasFoldedEnvironment: pca), put into the scene:
+ *  computeVertexEnvironment for every geometry below `lit`, folded per vertex on worker threads,
+ *  and each geometry's StateSet replaced by environmentStateSet (materials/EnvironmentState.h)
+ *  plus the light's exposure uniform (shared: setExposure is real-time). The material's own
+ *  StateSet must be applied above the geometries (a MaterialNode holding the material does).
+ *  Run it again when the map, its rotation or the geometry changes. Returns the geometries lit;
+ *  throws Error for a method without folding or a light without a map. */
+std::size_t applyEnvironmentLighting(osg::Node& lit, const osg::Node* occluders,
+                                     const Material& material, const EnvironmentLight& light,
+                                     const VertexEnvironmentOptions& options = {});
+
 }  // namespace osgBTF

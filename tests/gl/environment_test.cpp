@@ -15,6 +15,9 @@
 #include "materials/EnvironmentState.h"
 #include "materials/ShaderInterface.h"
 #include "materials/pca/Pca.h"
+#include "scene/EnvironmentLight.h"
+#include "scene/MaterialNode.h"
+#include "scene/VertexEnvironment.h"
 #include "tests/gl/GlTestEnv.h"
 
 using namespace osgBTF;
@@ -156,4 +159,45 @@ TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
             }
         }
     EXPECT_GT(largest, 0.01);
+}
+
+TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
+    // End to end: a MaterialNode over the square, applyEnvironmentLighting with a white
+    // environment, seen straight from above (view +Z everywhere): each texel equals the CPU
+    // integral of the point-light rendering; a new exposure shows without recomputation.
+    osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+    EnvironmentMap white;
+    white.width = 64;
+    white.height = 32;
+    white.rgb.assign(64 * 32 * 3, 1.0f);
+    light->setMap(white);
+    osg::ref_ptr<MaterialNode> node = new MaterialNode;
+    node->setMaterial(const_cast<PcaMaterial*>(&pca()));
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(square());
+    // The real eye direction (w = 0); an earlier test left a fixed view in the shared program,
+    // and GL keeps a program's uniform values until they are set again.
+    geode->getOrCreateStateSet()->addUniform(
+        new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
+    node->addChild(geode);
+    std::size_t reports = 0;
+    VertexEnvironmentOptions options;
+    options.progress = [&](std::size_t, std::size_t) { ++reports; };
+    EXPECT_EQ(applyEnvironmentLighting(*node, node.get(), pca(), *light, options), 1u);
+    EXPECT_EQ(reports, 4u);
+    const std::vector<EnvironmentSample> samples = visibleEnvironment(white, SurfaceFrame{});
+    for (float exposure : {1.0f, 2.0f}) {
+        light->setExposure(exposure);
+        osg::ref_ptr<osg::Image> image =
+            test::sharedRenderer().render(node, orthoUnitSquare(32, 32));
+        for (int ty = 0; ty < 4; ++ty)
+            for (int tx = 0; tx < 4; ++tx) {
+                const glm::vec3 expected =
+                    exposure * environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+                for (int ch = 0; ch < 3; ++ch)
+                    EXPECT_NEAR(test::pixel(*image, tx * 8 + 4, ty * 8 + 3, ch), expected[ch],
+                                1e-4 * expected[ch] + 1e-6)
+                        << "exposure " << exposure << " texel " << tx << ", " << ty;
+            }
+    }
 }
