@@ -161,6 +161,37 @@ TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
     EXPECT_GT(largest, 0.01);
 }
 
+TEST(EnvironmentGpu, OneBrightTexelDrawsThePointLightImage) {
+    // Issue 15: one bright texel centred on the measured direction (45, 0) (a 108 x 54 map
+    // turned by half a column) gives the image of a point light there of intensity L Omega: the
+    // CPU point-light evaluation, which the pca GL tests match on the GPU.
+    const int index = pca().lights().find(45.0f, 0.0f);
+    ASSERT_GE(index, 0);
+    EnvironmentMap map;
+    map.width = 108;
+    map.height = 54;
+    map.rgb.assign(108 * 54 * 3, 0.0f);
+    map.rotationDegrees = -360.0f * 0.5f / 108.0f;
+    const int row = 54 - 1 - 13;
+    const glm::vec3 radiance(50.0f, 20.0f, 10.0f);
+    for (int ch = 0; ch < 3; ++ch) map.rgb[std::size_t(row) * 108 * 3 + ch] = radiance[ch];
+    const std::vector<glm::vec3> g = projectEnvironment(visibleEnvironment(map, SurfaceFrame{}),
+                                                        DirectionInterpolator(pca().lights()));
+    const std::vector<std::vector<float>> folded(4, foldEnvironment(pca(), g));
+    const glm::vec3 view = glm::normalize(glm::vec3(0.3f, 0.3f, 0.8f));
+    const Rendered r = render(folded, view, 1.0f);
+    const float omega = float(map.solidAngle(row));
+    for (int ty = 0; ty < 4; ++ty)
+        for (int tx = 0; tx < 4; ++tx) {
+            const glm::vec3 pointLight =
+                radiance * omega * pca().evaluate(tx, ty, view, pca().lights().vector(index));
+            for (int ch = 0; ch < 3; ++ch)
+                EXPECT_NEAR(test::pixel(*r.image, tx * 8 + 4, ty * 8 + 3, ch), pointLight[ch],
+                            1e-4 * glm::length(pointLight) + 1e-6)
+                    << "texel " << tx << ", " << ty << " channel " << ch;
+        }
+}
+
 TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
     // End to end: a MaterialNode over the square, applyEnvironmentLighting with a white
     // environment, seen straight from above (view +Z everywhere): each texel equals the CPU
