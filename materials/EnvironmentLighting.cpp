@@ -146,12 +146,42 @@ std::vector<EnvironmentSample> visibleEnvironment(const EnvironmentMap& map,
         if (occluded && occluded(frame.position, world)) return;
         samples.push_back({glm::normalize(local), omega, radiance});
     };
+    // Centre directions from per-column and per-row sines and cosines (no trigonometry per
+    // texel); a texel farther from the horizon than its row's reach (the largest angle from its
+    // centre to its corners and edge midpoints, the same for every column) is whole on one side,
+    // and only the others need the exact range.
+    std::vector<double> cosPhi(std::size_t(map.width)), sinPhi(std::size_t(map.width));
+    for (int c = 0; c < map.width; ++c) {
+        const double phi =
+            2.0 * kPi * (c + 0.5) / map.width + double(map.rotationDegrees) * kPi / 180.0;
+        cosPhi[std::size_t(c)] = std::cos(phi);
+        sinPhi[std::size_t(c)] = std::sin(phi);
+    }
     for (int r = 0; r < map.height; ++r) {
         const double theta0 = kPi * double(map.height - 1 - r) / map.height;
         const double theta1 = kPi * double(map.height - r) / map.height;
+        const double sinTheta = std::sin(0.5 * (theta0 + theta1));
+        const double cosTheta = std::cos(0.5 * (theta0 + theta1));
+        double reach = 0;
+        {
+            const glm::vec3 centre = map.direction(0.5, r + 0.5);
+            for (double du : {0.0, 0.5, 1.0})
+                for (double dv : {0.0, 0.5, 1.0}) {
+                    const double d = glm::dot(centre, map.direction(du, r + dv));
+                    reach = std::max(reach, std::acos(std::clamp(d, -1.0, 1.0)));
+                }
+        }
+        const double margin = std::sin(std::min(kPi / 2, reach * 1.05 + 1e-6));
         for (int c = 0; c < map.width; ++c) {
             const glm::vec3 radiance = map.texel(c, r);
-            const glm::vec3 centre = map.direction(c + 0.5, r + 0.5);
+            const glm::vec3 centre(float(sinTheta * cosPhi[std::size_t(c)]),
+                                   float(sinTheta * sinPhi[std::size_t(c)]), float(cosTheta));
+            const double elevation = glm::dot(centre, frame.normal);  // sine of it
+            if (elevation > margin) {
+                add(centre, map.solidAngle(r), radiance);
+                continue;
+            }
+            if (elevation < -margin) continue;
             double lo = 0, hi = 0;
             normalRange(map, c, r, frame.normal, lo, hi);
             // Boundaries that lie on the horizon (a surface facing +Z, an even map height) leave
