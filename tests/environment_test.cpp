@@ -374,3 +374,37 @@ TEST(Environment, EveryMethodAgainstTheBruteForceIntegral) {
         }
     }
 }
+
+TEST(Environment, MedianCutKeepsPowerAndPlacesLightsAtTheEnergy) {
+    const EnvironmentMap sky = smoothSky(64);
+    glm::dvec3 total(0.0);
+    for (int r = 0; r < sky.height; ++r)
+        for (int c = 0; c < sky.width; ++c)
+            total += glm::dvec3(sky.texel(c, r)) * sky.solidAngle(r);
+    for (int count : {1, 8, 16}) {
+        const std::vector<RepresentativeLight> lights = medianCutLights(sky, count);
+        ASSERT_EQ(int(lights.size()), count);
+        glm::dvec3 sum(0.0);
+        for (const RepresentativeLight& l : lights) {
+            sum += glm::dvec3(l.power);
+            EXPECT_NEAR(glm::length(l.direction), 1.0f, 1e-5f);
+        }
+        for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(sum[ch], total[ch], 1e-5 * total[ch]);
+    }
+    // One bright texel on a black map: the light of its region sits at its centre with its
+    // power, whichever way the cuts fall.
+    EnvironmentMap dark = uniformMap(64, 32, glm::vec3(0.0f));
+    const glm::vec3 radiance(100.0f, 50.0f, 25.0f);
+    for (int ch = 0; ch < 3; ++ch) dark.rgb[(std::size_t(20) * 64 + 9) * 3 + ch] = radiance[ch];
+    bool found = false;
+    for (const RepresentativeLight& l : medianCutLights(dark, 16)) {
+        if (l.power.x == 0.0f) continue;
+        found = true;
+        EXPECT_NEAR(glm::dot(l.direction, dark.direction(9.5, 20.5)), 1.0f, 1e-6f);
+        EXPECT_NEAR(l.power.x, radiance.x * dark.solidAngle(20), 1e-5 * radiance.x);
+    }
+    EXPECT_TRUE(found);
+    EXPECT_EQ(errorOf([&] { medianCutLights(sky, 12); }),
+              "environment: representative light count 12 is not a power of two between 1 and "
+              "1024");
+}

@@ -9,6 +9,7 @@
 #include <osg/Geometry>
 #include <osg/Group>
 #include <osg/Image>
+#include <osg/LightSource>
 #include <osg/MatrixTransform>
 #include <osgDB/ReadFile>
 #include <osgDB/WriteFile>
@@ -228,4 +229,26 @@ TEST(VertexEnvironment, OccluderBlocksItsSolidAngle) {
     const std::vector<GeometryEnvironment> open =
         computeVertexEnvironment(*ground, scene.get(), DirectionSet::bonn81(), white(64), off);
     EXPECT_NEAR(open[0].visibleSolidAngle[centre], 2 * kPi, 1e-3);
+}
+
+TEST(EnvironmentLight, RepresentativeLightSourcesCarryThePowerTimesExposure) {
+    osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+    EXPECT_EQ(representativeLightSources(*light, 8)->getNumChildren(), 0u);  // no map: no lights
+    light->setMap(white(32));
+    light->setExposure(0.5f);
+    const osg::ref_ptr<osg::Group> group = representativeLightSources(*light, 8);
+    ASSERT_EQ(group->getNumChildren(), 8u);
+    double red = 0;
+    for (unsigned i = 0; i < 8; ++i) {
+        const osg::LightSource* source = dynamic_cast<osg::LightSource*>(group->getChild(i));
+        ASSERT_TRUE(source);
+        red += source->getLight()->getDiffuse().r();
+        EXPECT_EQ(source->getLight()->getPosition().w(), 0.0f);  // directional
+    }
+    // A white sphere of radiance 1 carries 4 pi, times the exposure.
+    EXPECT_NEAR(red, 0.5 * 4 * kPi, 1e-4);
+    EXPECT_EQ(light->getExposureUniform()->getName(), "osgBTF_envExposure");
+    float exposure = 0;
+    light->getExposureUniform()->get(exposure);
+    EXPECT_EQ(exposure, 0.5f);
 }
