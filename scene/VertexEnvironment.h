@@ -82,8 +82,9 @@ class Material;
  *  and each geometry's StateSet replaced by environmentStateSet (materials/EnvironmentState.h)
  *  plus the light's exposure uniform (shared: setExposure is real-time). The material's own
  *  StateSet must be applied above the geometries (a MaterialNode holding the material does).
- *  Run it again when the map, its rotation or the geometry changes. Returns the geometries lit;
- *  throws Error for a method without folding or a light without a map. */
+ *  The geometries must draw triangles (the program's geometry stage takes triangles; quads
+ *  are a GL error). Run it again when the map, its rotation or the geometry changes. Returns the
+ * geometries lit; throws Error for a method without folding or a light without a map. */
 std::size_t applyEnvironmentLighting(osg::Node& lit, const osg::Node* occluders,
                                      const Material& material, const EnvironmentLight& light,
                                      const VertexEnvironmentOptions& options = {});
