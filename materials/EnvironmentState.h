@@ -1,0 +1,51 @@
+// osgBTF: GPU state for environment lighting of linear methods (seed 004 section 5.2).
+//
+// Per vertex, the environment folded into the method's light basis (foldEnvironment) is far too
+// large for vertex attributes or varyings (pca: views x (c + 1) RGB = 81 x 17 x 3 floats), so it
+// goes into one float texture per geometry, addressed linearly by vertex index. The program
+// (shaders/common/environment.vert, environment_geom.glsl, shaders/environment/<method>.frag)
+// hands every fragment the three vertex indices of its triangle (flat) and its barycentric
+// coordinates; the fragment blends the three vertices' folded values across the triangle and
+// interpolates views as the method's point-light shader does. Only the nearest views of each
+// fragment are read, so the cost per fragment is 3 vertices x 3 views x (c + 1) fetches.
+//
+// Use: the material's sharedStateSet() above the geometry (textures, tables, uniforms), the
+// environmentStateSet() on the geometry (program, data texture, exposure).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <osg/Program>
+#include <osg/StateSet>
+
+namespace osgBTF {
+
+class Material;
+
+/** Texture unit of the per-vertex data (above every method's own units). */
+constexpr int kEnvironmentDataUnit = 12;
+
+/** Whether the method's environment lighting is folded per vertex (exact) rather than drawn
+ *  with representative lights. */
+bool hasFoldedEnvironment(const std::string& method);
+
+/** Folded data of one vertex (pca: foldPca). Throws Error "environment: method 'X' has no
+ *  folded environment lighting" for the others. */
+std::vector<float> foldEnvironment(const Material& material, const std::vector<glm::vec3>& g);
+
+/** RGB values per vertex in foldEnvironment's result. */
+std::size_t foldedStride(const Material& material);
+
+/** The method's environment program, built once per process and method. Throws Error as
+ *  foldEnvironment, or if a shader source is missing. */
+osg::ref_ptr<osg::Program> environmentProgram(const std::string& method);
+
+/** Program, per-vertex data texture (folded[v] for vertex index v, each of foldedStride values)
+ *  and exposure for one geometry. Throws Error for data of the wrong size. */
+osg::ref_ptr<osg::StateSet> environmentStateSet(const Material& material,
+                                                const std::vector<std::vector<float>>& folded,
+                                                float exposure = 1.0f);
+
+}  // namespace osgBTF
