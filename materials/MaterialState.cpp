@@ -138,6 +138,7 @@ void addCommonState(osg::StateSet& stateSet, const std::string& method, int widt
     stateSet.setAttributeAndModes(methodProgram(method).get(), osg::StateAttribute::ON);
     stateSet.addUniform(new osg::Uniform(shader::kSize, width, height));
     stateSet.addUniform(new osg::Uniform(shader::kTextureScale, 1.0f));
+    stateSet.addUniform(new osg::Uniform(shader::kTerminatorTexture, shader::kTerminatorUnit));
 }
 
 }  // namespace osgBTF
