@@ -25,6 +25,7 @@
 #include "scene/ShadowTerminator.h"
 #include "tests/NotifyCapture.h"
 #include "tests/gl/GlTestEnv.h"
+#include "tests/gl/MaterialGpuCheck.h"
 
 using namespace osgBTF;
 using namespace osgBTF::test;
@@ -228,6 +229,24 @@ TEST(ShadowTerminatorGpu, OffAndAlphaZeroReproduceTheImageWithoutIt) {
     node->setShadowTerminator(false);
     osg::ref_ptr<osg::Image> grazingOff = sharedRenderer().render(root.get(), camera.setup);
     EXPECT_GT(maxDifference(*grazingOn, *grazingOff), 100e-6 * scale);
+}
+
+TEST(ShadowTerminatorGpu, AMaterialsOwnStateSetIsWithoutItAfterANodeDrewIt) {
+    // A GL program keeps the last value given to a uniform: after a MaterialNode drew with the
+    // terminator on, the material's own StateSet (btf eval, btf compare, the GPU checks) must
+    // still render the measured BTF, here at a light angle the terminator would darken to 0.
+    osg::ref_ptr<LambertMaterial> material = constantLambert(0.5f);
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    root->addChild(lightSource(0, directionAt(85)).get());
+    root->addChild(patchNode(material.get()).get());
+    osg::ref_ptr<osg::Image> node =
+        sharedRenderer().render(root.get(), patchViewFrom(10, 0, 8, 0.3).setup);
+    EXPECT_EQ(centre(*node), 0.0f);
+    const osg::Vec4 l = directionAt(85);
+    const test::GpuCpuComparison r =
+        test::compareGpuWithCpu(*material, Direction{10, 0}.toVector(), {l.x(), l.y(), l.z()});
+    EXPECT_GT(r.pixelsCompared, 8);
+    EXPECT_LE(r.maxAbsDifference, 1e-5) << r.worst;
 }
 
 namespace {
