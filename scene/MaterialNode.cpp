@@ -591,12 +591,11 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
     if (!scene || depthPass || !scene->getShadowTechnique()) return nullptr;
     const auto* technique = dynamic_cast<const osgShadow::ShadowMap*>(scene->getShadowTechnique());
     if (!technique) {
-        if (!_shadowNoticeGiven)
+        if (!_shadowNoticeGiven.exchange(true))
             OSG_NOTICE << "osgBTF::MaterialNode: shadow technique '"
                        << scene->getShadowTechnique()->className()
                        << "' is not supported (osgShadow::ShadowMap is): no cast shadows"
                        << std::endl;
-        _shadowNoticeGiven = true;
         return nullptr;
     }
     const int unit = int(technique->getTextureUnit());

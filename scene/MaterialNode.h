@@ -24,6 +24,7 @@
 // draws its children with their own state, so the rest of the scene is unaffected.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -219,7 +220,7 @@ protected:
     /** The shadow-map state for this cull, or null when the node is not below a ShadowedScene
      *  with a ShadowMap, or is being culled for the technique's own depth pass. */
     osg::StateSet* shadowStateSet(osgUtil::CullVisitor& cv);
-    mutable bool _shadowNoticeGiven = false;
+    std::atomic<bool> _shadowNoticeGiven{false};  // cull threads of several cameras
     mutable std::mutex _lightsMutex;  // cull threads of several cameras may share this node
     mutable std::map<const osg::Camera*, CameraLights> _lightsPerCamera;
 };
