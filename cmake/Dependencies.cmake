@@ -1,5 +1,5 @@
 # Every dependency comes from Debian 12 packages (see .ci/run for the package list).
-find_package(OpenSceneGraph 3.6 REQUIRED COMPONENTS osgDB osgUtil osgGA osgViewer osgText)
+find_package(OpenSceneGraph 3.6 REQUIRED COMPONENTS osgDB osgUtil osgGA osgViewer osgText osgShadow)
 # osgbtf::osg: what libosgBTF's headers and code use (osg, osgDB, osgUtil, OpenThreads); the
 # installed osgBTFConfig.cmake defines the same target. osgbtf::osgviewer adds the rest for the
 # tools, examples and tests.

@@ -9,9 +9,12 @@
 
 #include <osg/Light>
 #include <osg/MatrixTransform>
+#include <osg/ShapeDrawable>
 #include <osgDB/FileNameUtils>
 #include <osgDB/Registry>
 #include <osgDB/WriteFile>
+#include <osgShadow/ShadowMap>
+#include <osgShadow/ShadowedScene>
 #include <osgText/Text>
 #include <osgUtil/SmoothingVisitor>
 
@@ -305,6 +308,112 @@ void writeNodeAtomically(const osg::Node& node, const std::string& path) {
         fs::remove(temporary, error);
         fail(path, "cannot rename the written scene into place: " + error.message());
     }
+}
+
+osg::ref_ptr<osg::Group> createShadowedClothScene(const std::string& materialFile,
+                                                  float textureScale,
+                                                  const osgDB::Options* options) {
+    osg::ref_ptr<osgShadow::ShadowedScene> scene = new osgShadow::ShadowedScene;
+    scene->setName("shadowed cloth");
+    osg::ref_ptr<osgShadow::ShadowMap> technique = new osgShadow::ShadowMap;
+    technique->setTextureSize(osg::Vec2s(2048, 2048));
+    scene->setShadowTechnique(technique.get());
+
+    // Fill first, key last: ShadowMap shadows the last light it meets.
+    osg::ref_ptr<osg::LightSource> fill = new osg::LightSource;
+    fill->setName("fill light (cool, directional, no shadows)");
+    fill->getLight()->setLightNum(0);
+    fill->getLight()->setPosition(osg::Vec4(0.8f, -0.9f, 0.5f, 0.0f));
+    fill->getLight()->setDiffuse(osg::Vec4(0.25f, 0.3f, 0.42f, 1.0f));
+    fill->getLight()->setAmbient(osg::Vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    osg::ref_ptr<osg::LightSource> key = new osg::LightSource;
+    key->setName("key light (warm, directional, casts shadows)");
+    key->getLight()->setLightNum(1);
+    key->getLight()->setPosition(osg::Vec4(skySunDirection(), 0.0f));  // the sky's sun
+    key->getLight()->setDiffuse(osg::Vec4(1.0f, 0.93f, 0.82f, 1.0f));
+    key->getLight()->setAmbient(osg::Vec4(0.08f, 0.08f, 0.08f, 1.0f));
+    scene->addChild(fill.get());
+    scene->addChild(key.get());
+    // The plain shapes are lit by OSG's fixed-function lighting (ShadowMap's shader only
+    // fragments): both lights on for the whole scene, not only below their LightSources.
+    fill->setStateSetModes(*scene->getOrCreateStateSet(), osg::StateAttribute::ON);
+    key->setStateSetModes(*scene->getOrCreateStateSet(), osg::StateAttribute::ON);
+
+    osg::ref_ptr<MaterialNode> cloth = new MaterialNode;
+    cloth->setName("cloth");
+    cloth->setTextureScale(textureScale);
+    if (!cloth->setMaterialFile(materialFile, options))
+        fail(materialFile, cloth->getMaterialError());
+    cloth->addChild(createClothModel(56).get());  // tangents: added by the node
+    scene->addChild(cloth.get());
+
+    // The table under the cloth (its top hidden by it) and the floor the folds shadow. The
+    // cloth model is tilted 25 degrees about X; so are these.
+    const osg::Matrix tilt = osg::Matrix::rotate(osg::DegreesToRadians(25.0), osg::X_AXIS);
+    osg::ref_ptr<osg::MatrixTransform> furniture = new osg::MatrixTransform(tilt);
+    osg::ref_ptr<osg::Geode> props = new osg::Geode;
+    props->setName("table and floor");
+    osg::ref_ptr<osg::ShapeDrawable> table =
+        new osg::ShapeDrawable(new osg::Cylinder(osg::Vec3(0, 0, -0.55f), 0.58f, 1.1f));
+    table->setColor(osg::Vec4(0.35f, 0.22f, 0.12f, 1.0f));
+    osg::ref_ptr<osg::ShapeDrawable> floor =
+        new osg::ShapeDrawable(new osg::Box(osg::Vec3(0, 0, -1.13f), 3.2f, 3.2f, 0.06f));
+    floor->setColor(osg::Vec4(0.6f, 0.6f, 0.58f, 1.0f));
+    props->addDrawable(table.get());
+    props->addDrawable(floor.get());
+    furniture->addChild(props.get());
+    scene->addChild(furniture.get());
+    return scene;
+}
+
+osg::Vec3 skySunDirection() {
+    const double azimuth = osg::DegreesToRadians(210.0), elevation = osg::DegreesToRadians(35.0);
+    return osg::Vec3(float(std::cos(elevation) * std::cos(azimuth)),
+                     float(std::cos(elevation) * std::sin(azimuth)), float(std::sin(elevation)));
+}
+
+FloatImage createSkyEnvironment(int width, int height) {
+    if (width < 8 || height < 4)
+        throw Error("createSkyEnvironment: size must be at least 8 x 4, got " +
+                    std::to_string(width) + " x " + std::to_string(height));
+    FloatImage image(width, height, 3);
+    image.channelNames = {"R", "G", "B"};
+    const osg::Vec3d sun(skySunDirection());
+    const osg::Vec3d zenith(0.18, 0.32, 0.75), horizon(0.75, 0.8, 0.9), ground(0.12, 0.1, 0.08);
+    // The sun's disc: 0.53 degrees across, so at 512 x 256 (0.7 degrees per texel) it is one
+    // bright texel plus its glow, which carries most of the sky's directional light.
+    const double sunRadius = osg::DegreesToRadians(0.265), sunRadiance = 20000 * zenith.z();
+    for (int y = 0; y < height; ++y) {
+        const double elevation = osg::PI_2 - osg::PI * (y + 0.5) / height;
+        for (int x = 0; x < width; ++x) {
+            const double azimuth = 2 * osg::PI * (x + 0.5) / width;
+            const osg::Vec3d d(std::cos(elevation) * std::cos(azimuth),
+                               std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+            osg::Vec3d c;
+            if (elevation >= 0) {
+                // Haze: the horizon colour fades into the zenith's over the lower ~30 degrees.
+                const double t = std::pow(1.0 - std::sin(elevation), 4.0);
+                c = zenith * (1 - t) + horizon * t;
+            } else {
+                const double t = std::min(1.0, -std::sin(elevation) * 8.0);
+                c = horizon * 0.4 * (1 - t) + ground * t;
+            }
+            const double angle = std::acos(std::clamp(d * sun, -1.0, 1.0));
+            const double glow = 2.0 * std::exp(-angle / osg::DegreesToRadians(4.0)) +
+                                0.4 * std::exp(-angle / osg::DegreesToRadians(25.0));
+            c += osg::Vec3d(1.0, 0.85, 0.6) * glow;
+            // The disc, area-weighted per texel so its total power does not depend on the size.
+            const double texelSolidAngle =
+                (2 * osg::PI / width) * (osg::PI / height) * std::max(std::cos(elevation), 1e-6);
+            const double discSolidAngle = osg::PI * sunRadius * sunRadius;
+            const double texelRadius = std::sqrt(texelSolidAngle / osg::PI);
+            if (angle < std::max(sunRadius, texelRadius))
+                c += osg::Vec3d(1.0, 0.95, 0.85) * sunRadiance *
+                     std::min(1.0, discSolidAngle / texelSolidAngle);
+            for (int k = 0; k < 3; ++k) image.at(x, y, k) = float(c[k]);
+        }
+    }
+    return image;
 }
 
 }  // namespace osgBTF::examples

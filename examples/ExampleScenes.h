@@ -16,6 +16,8 @@
 #include <osg/LightSource>
 #include <osgDB/Options>
 
+#include "core/FloatImage.h"
+
 namespace osgBTF::examples {
 
 /** A unit sphere, poles on +-Z, s around the equator, t from pole to pole. */
@@ -53,6 +55,29 @@ std::vector<osg::ref_ptr<osg::LightSource>> createTwoLights(float rowWidth);
 osg::ref_ptr<osg::Group> createSideBySideScene(osg::Node* model,
                                                const std::vector<SceneItem>& items, float spacing,
                                                float textureScale, const osgDB::Options* options);
+
+/** The shadowed cloth scene (seed 004's setting): the draped cloth (createClothModel(56): 3249
+ *  vertices, coarse enough to show what the smooth terminator does) under a MaterialNode with
+ *  `materialFile`, on its round table, over a floor, inside an osgShadow::ShadowedScene with an
+ *  osgShadow::ShadowMap (2048 texels), lit by a cool fill light and a warm key light that casts
+ *  the shadows (the last light: ShadowMap's and MaterialNode's default choice). The table and
+ *  floor are plain OSG geometry, drawn by ShadowMap's own shader. Throws Error like
+ *  createSideBySideScene. */
+osg::ref_ptr<osg::Group> createShadowedClothScene(const std::string& materialFile,
+                                                  float textureScale,
+                                                  const osgDB::Options* options);
+
+/** The direction toward the sun of createSkyEnvironment (Z up): azimuth 210 degrees from +X
+ *  toward +Y, elevation 35 degrees. */
+osg::Vec3 skySunDirection();
+
+/** A procedural HDR sky (CC0, made here, nothing downloaded): a latitude-longitude map, column x
+ *  at azimuth 360 * (x + 0.5) / width degrees from +X toward +Y, row y (0 = top) at elevation
+ *  90 - 180 * (y + 0.5) / height degrees (Z up); a blue gradient from zenith to a bright hazy
+ *  horizon, a dark brown ground below it, and a sun (0.53 degrees across, radiance 20000 times
+ *  the zenith's, with a glow) in skySunDirection(). RGB, linear radiance, all values finite and
+ *  positive. Throws Error for a size under 8 x 4. */
+FloatImage createSkyEnvironment(int width = 512, int height = 256);
 
 /** Writes a node with osgDB (the format follows the extension) to a temporary name beside
  *  `path`, then renames it, so a reader never sees half a file. Throws Error "PATH: ..." on

@@ -40,6 +40,11 @@ std::vector<std::string> sharedTextures(const std::string& method);
  *  fragment shader compiled with `#define OSGBTF_COORDINATE_MAP 1` (shader::kCoordinateMapDefine,
  *  after its #version line). Built once per process and method, like methodProgram. */
 osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method);
+/** methodProgram's variant that samples an osgShadow::ShadowMap for one light (both stages
+ *  compiled with shader::kShadowMapDefine; with `coordinateMap` also kCoordinateMapDefine, the
+ *  coordinate-map variant's). Built once per process, method and variant; used by MaterialNode
+ *  below an osgShadow::ShadowedScene. */
+osg::ref_ptr<osg::Program> shadowMapProgram(const std::string& method, bool coordinateMap);
 
 /** Throws Error "MAPNAME: made for a WxH sample, but material 'MATERIAL' is wxh"
  *  (MATERIAL: its source file, else its method) when the map does not point into the

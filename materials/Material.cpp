@@ -1,8 +1,10 @@
 #include "materials/Material.h"
 
 #include <algorithm>
+#include <map>
 #include <mutex>
 #include <sstream>
+#include <tuple>
 
 #include <osg/Shader>
 
@@ -167,19 +169,25 @@ osg::ref_ptr<Material> loadMaterial(const std::string& path) {
 
 namespace {
 
-osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordinateMap) {
+osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordinateMap,
+                                          bool shadowMap = false) {
     static std::mutex mutex;
-    static std::map<std::pair<std::string, bool>, osg::ref_ptr<osg::Program>> programs;
+    static std::map<std::tuple<std::string, bool, bool>, osg::ref_ptr<osg::Program>> programs;
     std::lock_guard<std::mutex> lock(mutex);
-    auto& program = programs[{method, coordinateMap}];
+    auto& program = programs[{method, coordinateMap, shadowMap}];
     if (!program) {
         osg::ref_ptr<osg::Program> created = new osg::Program;
-        created->setName("osgBTF_" + method + (coordinateMap ? "_coordinateMap" : ""));
+        created->setName("osgBTF_" + method + (coordinateMap ? "_coordinateMap" : "") +
+                         (shadowMap ? "_shadowMap" : ""));
         const std::string vert = "common/btf.vert", frag = method + ".frag";
-        osg::ref_ptr<osg::Shader> vs = new osg::Shader(osg::Shader::VERTEX, shaderSource(vert));
+        std::string vertex = shaderSource(vert);
+        // The shadow variant reads the technique's TexGen in the vertex stage too.
+        if (shadowMap) vertex = addShaderDefine(vertex, shader::kShadowMapDefine);
+        osg::ref_ptr<osg::Shader> vs = new osg::Shader(osg::Shader::VERTEX, vertex);
         vs->setName(shaderOrigin(vert));
         std::string fragment = shaderSource(frag);
         if (coordinateMap) fragment = addShaderDefine(fragment, shader::kCoordinateMapDefine);
+        if (shadowMap) fragment = addShaderDefine(fragment, shader::kShadowMapDefine);
         osg::ref_ptr<osg::Shader> fs = new osg::Shader(osg::Shader::FRAGMENT, fragment);
         fs->setName(shaderOrigin(frag));
         created->addShader(vs);
@@ -198,6 +206,10 @@ osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
 
 osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method) {
     return programVariant(method, true);
+}
+
+osg::ref_ptr<osg::Program> shadowMapProgram(const std::string& method, bool coordinateMap) {
+    return programVariant(method, coordinateMap, true);
 }
 
 }  // namespace osgBTF

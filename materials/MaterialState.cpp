@@ -138,6 +138,12 @@ void addCommonState(osg::StateSet& stateSet, const std::string& method, int widt
     stateSet.setAttributeAndModes(methodProgram(method).get(), osg::StateAttribute::ON);
     stateSet.addUniform(new osg::Uniform(shader::kSize, width, height));
     stateSet.addUniform(new osg::Uniform(shader::kTextureScale, 1.0f));
+    // Off unless a MaterialNode's StateSet (applied after this one) turns it on. Set here, not
+    // left to the GLSL default: a program keeps the last value any StateSet gave a uniform, so
+    // a draw after a MaterialNode's would otherwise inherit its terminator.
+    stateSet.addUniform(new osg::Uniform(shader::kTerminator, false));
+    stateSet.addUniform(new osg::Uniform(shader::kTerminatorAlpha, 0.0f));
+    stateSet.addUniform(new osg::Uniform(shader::kTerminatorTexture, shader::kTerminatorUnit));
 }
 
 }  // namespace osgBTF

@@ -34,6 +34,27 @@ constexpr const char* kCoordinateMap = "osgBTF_coordinateMap";
  *  types share a unit. */
 constexpr int kCoordinateMapUnit = 15;
 
+/** Smooth shadow terminator (seed 004 sec. 4.3; scene/ShadowTerminator.h): btf.vert computes
+ *  u = (1 + cos(alpha + angle(n, l))) / 2 per vertex and light, btf_main.glsl multiplies each
+ *  light's term by the blurred step texture at u. Off unless kTerminator is true (MaterialNode
+ *  sets it; a material's own StateSet, as `btf eval` and the GPU checks use it, leaves it off). */
+constexpr const char* kTerminator = "osgBTF_terminator";                ///< bool
+constexpr const char* kTerminatorAlpha = "osgBTF_terminatorAlpha";      ///< float, radians
+constexpr const char* kTerminatorTexture = "osgBTF_terminatorTexture";  ///< sampler1D
+/** A fixed unit, set by addCommonState even when off: an unset sampler1D would point at unit 0,
+ *  where the methods keep other sampler types, and GL refuses such draws. */
+constexpr int kTerminatorUnit = 14;
+
+/** Cast shadows from an osgShadow::ShadowMap (scene/README.md): the program variant compiled with
+ *  kShadowMapDefine samples the technique's depth texture, rebound by MaterialNode on
+ *  kShadowMapUnit, at the coordinates of the technique's eye-linear TexGen (read in btf.vert from
+ *  gl_EyePlane*[kShadowTexGenUnit]), for light kShadowLight only. */
+constexpr const char* kShadowMapDefine = "OSGBTF_SHADOW_MAP";
+constexpr const char* kShadowMap = "osgBTF_shadowMap";                ///< sampler2DShadow
+constexpr const char* kShadowTexGenUnit = "osgBTF_shadowTexGenUnit";  ///< int
+constexpr const char* kShadowLight = "osgBTF_shadowLight";            ///< int, -1: none
+constexpr int kShadowMapUnit = 13;
+
 /** Grid and texel row width of the direction lookup tables (materials/DirectionLookup.h):
  *  shaders/common/directions.glsl's `const int btfDirectionGrid` and `btfDirectionTableWidth`
  *  (a power of 2: the shader splits addresses with a mask). 32 cells across the disc keep the

@@ -1,5 +1,6 @@
 #include "scene/MaterialNode.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <system_error>
@@ -11,6 +12,8 @@
 #include <osg/Transform>
 #include <osg/View>
 #include <osgDB/FileUtils>
+#include <osgShadow/ShadowMap>
+#include <osgShadow/ShadowedScene>
 #include <osgUtil/CullVisitor>
 #include <osgUtil/GLObjectsVisitor>
 #include <osgUtil/IncrementalCompileOperation>
@@ -19,6 +22,7 @@
 #include "core/Error.h"
 #include "materials/CoordinateMapRendering.h"
 #include "scene/OpenMaterial.h"
+#include "scene/ShadowTerminator.h"
 
 namespace osgBTF {
 
@@ -246,7 +250,8 @@ unsigned generateTangents(osg::Node& node) {
 
 // ---- MaterialNode --------------------------------------------------------------------------
 
-MaterialNode::MaterialNode() {
+MaterialNode::MaterialNode()
+    : _terminatorAlpha(kDefaultTerminatorAlpha), _terminatorSoftness(kDefaultTerminatorSoftness) {
     createNodeState();
 }
 
@@ -263,7 +268,11 @@ MaterialNode::MaterialNode(const MaterialNode& other, const osg::CopyOp& copyop)
       _map(other._map),
       _mapFile(other._mapFile),
       _mapError(other._mapError),
-      _mapStateSet(other._mapStateSet) {
+      _mapStateSet(other._mapStateSet),
+      _terminator(other._terminator),
+      _terminatorAlpha(other._terminatorAlpha),
+      _terminatorSoftness(other._terminatorSoftness),
+      _shadowLight(other._shadowLight) {
     // The material (and its shared StateSet) and the map state are shared; per-node and
     // per-camera state is not.
     createNodeState();
@@ -273,6 +282,43 @@ void MaterialNode::createNodeState() {
     _textureScaleUniform = new osg::Uniform("osgBTF_textureScale", _textureScale);
     _nodeStateSet = new osg::StateSet;
     _nodeStateSet->addUniform(_textureScaleUniform.get());
+    _terminatorUniform = new osg::Uniform(shader::kTerminator, false);
+    _terminatorAlphaUniform = new osg::Uniform(shader::kTerminatorAlpha, 0.0f);
+    _nodeStateSet->addUniform(_terminatorUniform.get());
+    _nodeStateSet->addUniform(_terminatorAlphaUniform.get());
+    updateTerminatorState();
+}
+
+void MaterialNode::updateTerminatorState() {
+    // The texture's unit is fixed; a method that binds a texture there itself keeps it, and the
+    // node draws that material without the terminator (reported when the material is set).
+    const osg::StateSet* material = materialStateSet();
+    const bool unitFree =
+        !material || int(material->getTextureAttributeList().size()) <= shader::kTerminatorUnit;
+    const bool on = _terminator && unitFree;
+    _terminatorUniform->set(on);
+    _terminatorAlphaUniform->set(float(osg::DegreesToRadians(double(_terminatorAlpha))));
+    if (on)
+        _nodeStateSet->setTextureAttribute(shader::kTerminatorUnit,
+                                           terminatorTexture(_terminatorSoftness).get());
+    else
+        _nodeStateSet->removeTextureAttribute(shader::kTerminatorUnit,
+                                              osg::StateAttribute::TEXTURE);
+}
+
+void MaterialNode::setShadowTerminator(bool enabled) {
+    _terminator = enabled;
+    updateTerminatorState();
+}
+
+void MaterialNode::setTerminatorAlpha(float degrees) {
+    _terminatorAlpha = degrees;
+    updateTerminatorState();
+}
+
+void MaterialNode::setTerminatorSoftness(float softness) {
+    _terminatorSoftness = std::clamp(softness, 0.0f, 1.0f);
+    updateTerminatorState();
 }
 
 void MaterialNode::setMaterial(Material* material) {
@@ -291,6 +337,13 @@ void MaterialNode::setMaterial(Material* material) {
         _materialFile.clear();
     }
     updateMapState();
+    updateTerminatorState();
+    if (_terminator && _material &&
+        int(_material->sharedStateSet()->getTextureAttributeList().size()) >
+            shader::kTerminatorUnit)
+        OSG_WARN << "osgBTF::MaterialNode: method '" << _material->methodName()
+                 << "' uses texture unit " << shader::kTerminatorUnit
+                 << ", which the shadow terminator needs (the node draws it without)" << std::endl;
     generateTangents();
 }
 
@@ -482,12 +535,121 @@ osg::StateSet* MaterialNode::lightStateSet(osgUtil::CullVisitor& cv) {
     entry.frameNumber = stamp ? stamp->getFrameNumber() : ~0u;
     const std::vector<EyeLight> lights = collectLights(cv);
     entry.count->set(int(lights.size()));
+    entry.lights = lights;
     for (int i = 0; i < kMaxLights; ++i) {
         const bool used = i < int(lights.size());
         entry.positions->setElement(i, used ? lights[i].position : osg::Vec4());
         entry.colors->setElement(i, used ? lights[i].color : osg::Vec3());
     }
     return entry.stateSet.get();
+}
+
+namespace {
+
+/** Which of `lights` an osgShadow::ShadowMap given no light of its own shadows: the last
+ *  osg::Light of the render stage's positional state, found after culling the shadowed scene;
+ *  here the last one culled so far (the same when the scene's LightSources come before its
+ *  models), matched to `lights` by its eye-space position. Else the last of `lights`. */
+int techniqueLight(osgUtil::CullVisitor& cv, const std::vector<EyeLight>& lights) {
+    const int last = int(lights.size()) - 1;
+    osgUtil::RenderStage* stage = cv.getRenderStage();
+    if (!stage || !stage->getPositionalStateContainer()) return last;
+    const osg::Light* selected = nullptr;
+    const osg::RefMatrix* matrix = nullptr;
+    for (const auto& [attribute, at] : stage->getPositionalStateContainer()->getAttrMatrixList())
+        if (const auto* light = dynamic_cast<const osg::Light*>(attribute.get())) {
+            selected = light;
+            matrix = at.get();
+        }
+    if (!selected) return last;
+    const EyeLight eye = toEyeLight(*selected, matrix ? osg::Matrixd(*matrix) : osg::Matrixd());
+    for (int i = last; i >= 0; --i) {
+        const osg::Vec4 d = lights[std::size_t(i)].position - eye.position;
+        if (d.length2() < 1e-8f * std::max(1.0f, eye.position.length2())) return i;
+    }
+    return last;
+}
+
+}  // namespace
+
+osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
+    // Below a ShadowedScene, and not in its technique's depth pass: ShadowMap culls the shadowed
+    // scene twice, once for the view (its StateSet with the depth texture and TexGen pushed) and
+    // once below its own render-to-texture Camera, which then follows the ShadowedScene on the
+    // node path. That pass only needs depth, and must not sample the texture it writes.
+    const osg::NodePath& path = cv.getNodePath();
+    const osgShadow::ShadowedScene* scene = nullptr;
+    bool depthPass = false;
+    for (const osg::Node* node : path) {
+        if (auto* shadowed = dynamic_cast<const osgShadow::ShadowedScene*>(node)) {
+            scene = shadowed;
+            depthPass = false;
+        } else if (scene && dynamic_cast<const osg::Camera*>(node)) {
+            depthPass = true;
+        }
+    }
+    if (!scene || depthPass || !scene->getShadowTechnique()) return nullptr;
+    const auto* technique = dynamic_cast<const osgShadow::ShadowMap*>(scene->getShadowTechnique());
+    if (!technique) {
+        if (!_shadowNoticeGiven.exchange(true))
+            OSG_NOTICE << "osgBTF::MaterialNode: shadow technique '"
+                       << scene->getShadowTechnique()->className()
+                       << "' is not supported (osgShadow::ShadowMap is): no cast shadows"
+                       << std::endl;
+        return nullptr;
+    }
+    const int unit = int(technique->getTextureUnit());
+    // The depth texture, as the technique's StateSet (pushed before its traversal) binds it.
+    osg::Texture* depth = nullptr;
+    for (osgUtil::StateGraph* graph = cv.getCurrentStateGraph(); graph && !depth;
+         graph = graph->_parent) {
+        const osg::StateSet* stateSet = graph->getStateSet();
+        if (!stateSet) continue;
+        auto* texture = dynamic_cast<osg::Texture*>(const_cast<osg::StateAttribute*>(
+            stateSet->getTextureAttribute(unit, osg::StateAttribute::TEXTURE)));
+        if (texture && texture->getShadowComparison()) depth = texture;
+    }
+    if (!depth) return nullptr;
+
+    std::lock_guard<std::mutex> lock(_lightsMutex);
+    CameraLights& entry = _lightsPerCamera[cv.getCurrentCamera()];
+    osg::ref_ptr<osg::Texture> current;
+    const bool stale = !entry.shadowStateSet || !entry.shadowTexture.lock(current) ||
+                       current.get() != depth || entry.shadowUnit != unit ||
+                       entry.shadowMapState != _mapStateSet.get();
+    if (stale) {
+        osg::ref_ptr<osg::StateSet> state = new osg::StateSet;
+        state->setAttributeAndModes(
+            shadowMapProgram(_material->methodName(), _mapStateSet.valid()).get(),
+            osg::StateAttribute::ON);
+        state->setTextureAttribute(shader::kShadowMapUnit, depth, osg::StateAttribute::ON);
+        state->addUniform(new osg::Uniform(shader::kShadowMap, shader::kShadowMapUnit));
+        state->addUniform(new osg::Uniform(shader::kShadowTexGenUnit, unit));
+        entry.shadowLight = new osg::Uniform(shader::kShadowLight, -1);
+        entry.shadowLight->setDataVariance(osg::Object::DYNAMIC);
+        state->addUniform(entry.shadowLight.get());
+        // The technique binds its texture on its unit with OVERRIDE; what this node's state put
+        // there (the material's textures use units from 0, ShadowMap's default is 1) is bound
+        // again, PROTECTED, so the material keeps its texture and the shader reads the depth
+        // texture from kShadowMapUnit instead.
+        for (const osg::StateSet* own : std::initializer_list<const osg::StateSet*>{
+                 materialStateSet(), _nodeStateSet.get(), _mapStateSet.get()})
+            if (own)
+                if (const osg::StateAttribute* texture =
+                        own->getTextureAttribute(unit, osg::StateAttribute::TEXTURE))
+                    state->setTextureAttribute(
+                        unit, const_cast<osg::StateAttribute*>(texture),
+                        osg::StateAttribute::ON | osg::StateAttribute::PROTECTED);
+        entry.camera = cv.getCurrentCamera();
+        entry.shadowStateSet = state;
+        entry.shadowTexture = depth;
+        entry.shadowUnit = unit;
+        entry.shadowMapState = _mapStateSet.get();
+    }
+    const int count = int(entry.lights.size());
+    const int light = _shadowLight >= 0 ? _shadowLight : techniqueLight(cv, entry.lights);
+    entry.shadowLight->set(light < count ? light : -1);
+    return entry.shadowStateSet.get();
 }
 
 void MaterialNode::traverse(osg::NodeVisitor& nv) {
@@ -515,7 +677,10 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
     cv->pushStateSet(_nodeStateSet.get());
     if (_mapStateSet) cv->pushStateSet(_mapStateSet.get());
     cv->pushStateSet(lightStateSet(*cv));
+    osg::StateSet* shadow = shadowStateSet(*cv);
+    if (shadow) cv->pushStateSet(shadow);
     osg::Group::traverse(nv);
+    if (shadow) cv->popStateSet();
     cv->popStateSet();
     if (_mapStateSet) cv->popStateSet();
     cv->popStateSet();
@@ -549,8 +714,10 @@ void MaterialNode::resizeGLObjectBuffers(unsigned int maxSize) {
     _nodeStateSet->resizeGLObjectBuffers(maxSize);
     if (_mapStateSet) _mapStateSet->resizeGLObjectBuffers(maxSize);
     std::lock_guard<std::mutex> lock(_lightsMutex);
-    for (auto& [camera, entry] : _lightsPerCamera)
+    for (auto& [camera, entry] : _lightsPerCamera) {
         if (entry.stateSet) entry.stateSet->resizeGLObjectBuffers(maxSize);
+        if (entry.shadowStateSet) entry.shadowStateSet->resizeGLObjectBuffers(maxSize);
+    }
 }
 
 void MaterialNode::releaseGLObjects(osg::State* state) const {
@@ -560,8 +727,10 @@ void MaterialNode::releaseGLObjects(osg::State* state) const {
     if (_mapStateSet) _mapStateSet->releaseGLObjects(state);
     std::lock_guard<std::mutex> lock(_lightsMutex);
     pruneCameraLights();
-    for (const auto& [camera, entry] : _lightsPerCamera)
+    for (const auto& [camera, entry] : _lightsPerCamera) {
         if (entry.stateSet) entry.stateSet->releaseGLObjects(state);
+        if (entry.shadowStateSet) entry.shadowStateSet->releaseGLObjects(state);
+    }
 }
 
 }  // namespace osgBTF

@@ -14,12 +14,17 @@
 //  - feeds every osg::LightSource of the scene being culled (up to 8) to the shaders in eye
 //    space, for each camera and frame; with no LightSource in the scene, the view's own light
 //    (osgViewer's headlight or sky light), or a white headlight when there is no view.
+//  - multiplies each light's term by seed 004's smooth shadow terminator (on by default, alpha
+//    15 degrees; scene/ShadowTerminator.h);
+//  - below an osgShadow::ShadowedScene whose technique is an osgShadow::ShadowMap, samples the
+//    technique's shadow map for the light it shadows (setShadowLight), with any texture unit;
 //  - optionally draws the material through a coordinate map (setCoordinateMap[File]): a large
 //    non-repeating surface from a small sample, at the cost of one dependent fetch.
 // A material that cannot be loaded is reported with OSG_WARN (file and problem); the node then
 // draws its children with their own state, so the rest of the scene is unaffected.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -32,6 +37,7 @@
 #include <osg/Light>
 #include <osg/Matrixd>
 #include <osg/StateSet>
+#include <osg/Texture>
 #include <osg/Uniform>
 #include <osg/observer_ptr>
 #include <osgDB/Options>
@@ -108,6 +114,26 @@ public:
     /** Whether the material is drawn through the map (both set, sizes matching). */
     bool usesCoordinateMap() const { return _mapStateSet.valid(); }
 
+    /** Seed 004's smooth shadow terminator (scene/ShadowTerminator.h), for every light and
+     *  method: per vertex u = (1 + cos(alpha + angle(n, l))) / 2 into a blurred 1D step of
+     *  `softness` width. On by default; off draws exactly what the node drew without it. */
+    void setShadowTerminator(bool enabled);
+    bool getShadowTerminator() const { return _terminator; }
+    /** alpha in degrees (default 15; 0 puts the boundary at n.l = 0). */
+    void setTerminatorAlpha(float degrees);
+    float getTerminatorAlpha() const { return _terminatorAlpha; }
+    /** Width in u of the blurred step (default 0.1, 0..1; 0: the hard step). */
+    void setTerminatorSoftness(float softness);
+    float getTerminatorSoftness() const { return _terminatorSoftness; }
+
+    /** Which of the node's lights (in collectLights' order) an osgShadow::ShadowMap above the
+     *  node shadows. Default -1: the light ShadowMap picks when it was given none (the last
+     *  osg::Light culled in the camera's render stage), found in cull when the scene's
+     *  LightSources come before the shadowed models, else the node's last light. Set it when
+     *  ShadowMap::setLight chooses another. */
+    void setShadowLight(int index) { _shadowLight = index; }
+    int getShadowLight() const { return _shadowLight; }
+
     /** Adds tangents (attribute 6) to every Geometry below this node that has texture
      *  coordinates on unit 0 and no attribute 6 yet. Called automatically by addChild,
      *  insertChild, replaceChild, setChild and setMaterial; call it yourself after adding
@@ -167,6 +193,13 @@ protected:
     std::string _mapFile;
     std::string _mapError;
     osg::ref_ptr<osg::StateSet> _mapStateSet;  // the map program and texture; null: no map used
+    bool _terminator = true;
+    float _terminatorAlpha;
+    float _terminatorSoftness;
+    int _shadowLight = -1;
+    osg::ref_ptr<osg::Uniform> _terminatorUniform, _terminatorAlphaUniform;
+    /** Refreshes the terminator state of _nodeStateSet (texture, uniforms). */
+    void updateTerminatorState();
 
     struct CameraLights {
         // Tells when the camera is gone (pruneCameraLights), so a camera allocated later at a
@@ -175,7 +208,19 @@ protected:
         unsigned frameNumber = ~0u;
         osg::ref_ptr<osg::StateSet> stateSet;
         osg::ref_ptr<osg::Uniform> count, positions, colors;
+        std::vector<EyeLight> lights;  // what the uniforms hold
+        // Shadow-map state (program variant, the technique's depth texture on
+        // shader::kShadowMapUnit), rebuilt when the technique's texture or unit changes.
+        osg::ref_ptr<osg::StateSet> shadowStateSet;
+        osg::observer_ptr<osg::Texture> shadowTexture;
+        int shadowUnit = -1;
+        const osg::StateSet* shadowMapState = nullptr;
+        osg::ref_ptr<osg::Uniform> shadowLight;
     };
+    /** The shadow-map state for this cull, or null when the node is not below a ShadowedScene
+     *  with a ShadowMap, or is being culled for the technique's own depth pass. */
+    osg::StateSet* shadowStateSet(osgUtil::CullVisitor& cv);
+    std::atomic<bool> _shadowNoticeGiven{false};  // cull threads of several cameras
     mutable std::mutex _lightsMutex;  // cull threads of several cameras may share this node
     mutable std::map<const osg::Camera*, CameraLights> _lightsPerCamera;
 };

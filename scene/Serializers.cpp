@@ -9,6 +9,9 @@
 //   CoordinateMapFile the coordinate map the material is drawn through (setCoordinateMapFile;
 //                     written as given, found like MaterialFile); only when the node has a map
 //                     file. A map set in memory (setCoordinateMap) is not stored.
+//   ShadowTerminator, TerminatorAlpha, TerminatorSoftness
+//                     seed 004's smooth terminator (on, 15 degrees, 0.1 by default).
+//   ShadowLight       the light an osgShadow::ShadowMap above shadows (-1: the last).
 //   EmbeddedMaterial  only for a material that has no file (fitted in memory): its whole
 //                     FittedMaterial (method, parameters, direction sets, textures with their
 //                     float bits as hex text, so .osgt is exact too).
@@ -23,6 +26,7 @@
 #include "materials/Material.h"
 #include "materials/MaterialSerializer.h"
 #include "scene/MaterialNode.h"
+#include "scene/ShadowTerminator.h"
 
 namespace {
 
@@ -87,5 +91,9 @@ REGISTER_OBJECT_WRAPPER(osgBTF_MaterialNode, new osgBTF::MaterialNode, osgBTF::M
     ADD_USER_SERIALIZER(MaterialFile);
     ADD_USER_SERIALIZER(EmbeddedMaterial);
     ADD_FLOAT_SERIALIZER(TextureScale, 1.0f);
-    ADD_USER_SERIALIZER(CoordinateMapFile);  // last: .osgt files written before it still read
+    ADD_USER_SERIALIZER(CoordinateMapFile);  // after the older ones: .osgt files written before
+    ADD_BOOL_SERIALIZER(ShadowTerminator, true);  // these still read (defaults)
+    ADD_FLOAT_SERIALIZER(TerminatorAlpha, osgBTF::kDefaultTerminatorAlpha);
+    ADD_FLOAT_SERIALIZER(TerminatorSoftness, osgBTF::kDefaultTerminatorSoftness);
+    ADD_INT_SERIALIZER(ShadowLight, -1);
 }

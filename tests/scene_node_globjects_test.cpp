@@ -18,6 +18,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
+#include "scene/ShadowTerminator.h"
 
 using namespace osgBTF;
 
@@ -135,6 +136,8 @@ TEST(SceneMaterialNodeGLObjects, IncrementalCompileCollectsTheMaterialsTexturesA
                 shared->getTextureAttribute(unit, osg::StateAttribute::TEXTURE)))
             textures.insert(texture);
     ASSERT_FALSE(textures.empty());
+    // And the node's own: the smooth terminator's step texture (shared while anything holds it).
+    textures.insert(terminatorTexture(kDefaultTerminatorSoftness).get());
     EXPECT_EQ(collect._textures, textures);
 }
 

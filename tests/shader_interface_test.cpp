@@ -37,6 +37,19 @@ TEST(ShaderInterface, GlslDeclaresTheSameNamesAndLimits) {
     EXPECT_TRUE(declares(frag, std::string("uniform ivec2 ") + shader::kSize + ";"));
     EXPECT_TRUE(declares(frag, std::string("uniform vec4 ") + shader::kFixedView + "\\b"));
     EXPECT_TRUE(declares(vert, std::string("uniform float ") + shader::kTextureScale + "\\b"));
+    // The smooth terminator (both stages) and the shadow-map variant.
+    EXPECT_TRUE(declares(vert, std::string("const int ") + shader::kMaxLightsName + " = " +
+                                   std::to_string(shader::kMaxLights) + ";"));
+    for (const std::string* stage : {&vert, &frag})
+        EXPECT_TRUE(declares(*stage, std::string("uniform bool ") + shader::kTerminator + "\\b"));
+    EXPECT_TRUE(declares(vert, std::string("uniform float ") + shader::kTerminatorAlpha + "\\b"));
+    EXPECT_TRUE(
+        declares(frag, std::string("uniform sampler1D ") + shader::kTerminatorTexture + ";"));
+    EXPECT_TRUE(declares(vert, std::string("#ifdef ") + shader::kShadowMapDefine + "\\b"));
+    EXPECT_TRUE(declares(frag, std::string("#ifdef ") + shader::kShadowMapDefine + "\\b"));
+    EXPECT_TRUE(declares(vert, std::string("uniform int ") + shader::kShadowTexGenUnit + "\\b"));
+    EXPECT_TRUE(declares(frag, std::string("uniform sampler2DShadow ") + shader::kShadowMap + ";"));
+    EXPECT_TRUE(declares(frag, std::string("uniform int ") + shader::kShadowLight + "\\b"));
     // No other copy of the limit: MaterialNode uses the header's.
     EXPECT_EQ(kMaxLights, shader::kMaxLights);
 }

@@ -17,6 +17,7 @@
 #include <osgDB/Options>
 
 #include "core/Error.h"
+#include "core/FloatImage.h"
 #include "core/Progress.h"
 #include "examples/ExampleScenes.h"
 #include "examples/btf-examples/SceneBench.h"
@@ -173,9 +174,21 @@ void run(Options options) {
         writeNodeAtomically(*scene, (dir / spec.file).string());
         std::cout << "wrote " << (dir / spec.file).string() << "\n";
     }
+    // 3. The shadowed cloth (seed 004: cast shadows and the smooth terminator) with the pca fit
+    //    when there is one, and the procedural sky it is lit like (for environment lighting).
+    const auto shadowed = std::find_if(items.begin(), items.end(),
+                                       [](const SceneItem& item) { return item.label == "pca"; });
+    const std::string clothMaterial =
+        (shadowed != items.end() ? *shadowed : items.front()).materialFile;
+    writeNodeAtomically(*createShadowedClothScene(clothMaterial, 4.0f, readOptions.get()),
+                        (dir / "cloth-shadows.osgt").string());
+    std::cout << "wrote " << (dir / "cloth-shadows.osgt").string() << " (" << clothMaterial
+              << ")\n";
+    writeFloatImage(createSkyEnvironment(), (dir / "sky.hdr").string());
+    std::cout << "wrote " << (dir / "sky.hdr").string() << " (procedural sky, CC0)\n";
     if (!options.benchFps) return;
 
-    // 3. Frames per second of each scene with each method on every object.
+    // 4. Frames per second of each scene with each method on every object.
     std::vector<BenchScene> benchScenes;
     for (const SceneSpec& spec : scenes)
         benchScenes.push_back({fs::path(spec.file).stem().string(),
@@ -202,7 +215,9 @@ int main(int argc, char** argv) {
         "Makes the built-in sample BTF (`btf sample`'s woven cloth) at --size x --size texels, "
         "fits it with each of --methods (sample-METHOD.btfmat), writes the model vase.osgt and "
         "three scenes with one object per method side by side under two lights: spheres.osgt, "
-        "cloth.osgt (a draped tablecloth) and vases.osgt (vase.osgt through a ProxyNode). The "
+        "cloth.osgt (a draped tablecloth) and vases.osgt (vase.osgt through a ProxyNode); "
+        "cloth-shadows.osgt (the cloth in an osgShadow::ShadowedScene: cast shadows and seed "
+        "004's smooth terminator, pca material) and sky.hdr (a procedural HDR sky, CC0). The "
         "scenes name the materials relative to themselves, so the folder can be moved.\n"
         "View them with `btfviewer DIR/spheres.osgt` or, with OSG_LIBRARY_PATH set to osgBTF's "
         "lib folder, stock `osgviewer DIR/spheres.osgt`."};

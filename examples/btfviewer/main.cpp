@@ -32,6 +32,8 @@
 #include <osgDB/WriteFile>
 #include <osgGA/GUIEventHandler>
 #include <osgGA/TrackballManipulator>
+#include <osgShadow/ShadowMap>
+#include <osgShadow/ShadowedScene>
 #include <osgText/Text>
 #include <osgViewer/Viewer>
 #include <osgViewer/ViewerEventHandlers>
@@ -39,6 +41,7 @@
 #include "core/Error.h"
 #include "examples/ExampleScenes.h"
 #include "scene/MaterialNode.h"
+#include "scene/ShadowTerminator.h"
 
 namespace {
 
@@ -55,6 +58,9 @@ constexpr const char* kKeyHelp =
     "  Shift + drag     orbit the light with the mouse (left button)\n"
     "  o                orbit light on / off\n"
     "  l                the scene's own lights on / off\n"
+    "  t                smooth shadow terminator on / off (every object)\n"
+    "  [ / ]            terminator alpha -/+ 5 degrees\n"
+    "  x                cast shadows on / off (a scene's osgShadow::ShadowedScene, or --shadows)\n"
     "  s                statistics: frame rate, then frame/event/update/cull/draw/GPU times,\n"
     "                   then scene counts (press again to cycle, off at the end)\n"
     "  h                OSG's help overlay;  f  full screen / window;  Space  home view\n"
@@ -84,6 +90,20 @@ public:
     std::vector<osg::ref_ptr<osg::LightSource>> lights;
 };
 
+/** Every ShadowedScene below a node. */
+class ShadowedSceneCollector : public osg::NodeVisitor {
+public:
+    ShadowedSceneCollector() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+    void apply(osg::Group& group) override {
+        if (auto* scene = dynamic_cast<osgShadow::ShadowedScene*>(&group))
+            scenes.push_back({scene, scene->getShadowTechnique()});
+        traverse(group);
+    }
+    std::vector<
+        std::pair<osg::ref_ptr<osgShadow::ShadowedScene>, osg::ref_ptr<osgShadow::ShadowTechnique>>>
+        scenes;
+};
+
 /** One material the keys can put on every object. */
 struct MaterialChoice {
     osg::ref_ptr<Material> material;
@@ -107,7 +127,30 @@ public:
     std::vector<osg::ref_ptr<osg::LightSource>> sceneLights;
     bool sceneLightsOn = true;
 
+    bool terminatorOn = true;
+    double terminatorAlpha = osgBTF::kDefaultTerminatorAlpha;
+    // Each ShadowedScene with the technique it had; shadows off: no technique.
+    std::vector<
+        std::pair<osg::ref_ptr<osgShadow::ShadowedScene>, osg::ref_ptr<osgShadow::ShadowTechnique>>>
+        shadowedScenes;
+    bool shadowsOn = true;
+
     osg::ref_ptr<osgText::Text> hud;
+
+    void applyTerminator() {
+        terminatorAlpha = std::clamp(terminatorAlpha, 0.0, 60.0);
+        for (const osg::ref_ptr<MaterialNode>& node : nodes) {
+            node->setShadowTerminator(terminatorOn);
+            node->setTerminatorAlpha(float(terminatorAlpha));
+        }
+        updateHud();
+    }
+    void toggleShadows() {
+        shadowsOn = !shadowsOn;
+        for (auto& [scene, technique] : shadowedScenes)
+            scene->setShadowTechnique(shadowsOn ? technique.get() : nullptr);
+        updateHud();
+    }
 
     void selectMaterial(int index) {
         if (index < 0 || index > int(choices.size())) return;
@@ -159,7 +202,13 @@ public:
              << (sceneLights.empty() ? ""
                  : sceneLightsOn     ? " on"
                                      : " off")
-             << "  [l]"
+             << "  [l]\n"
+             << "terminator: " << (terminatorOn ? "on" : "off") << ", alpha " << terminatorAlpha
+             << "  [t, [, ]]   cast shadows: "
+             << (shadowedScenes.empty() ? "none"
+                 : shadowsOn            ? "on"
+                                        : "off")
+             << "  [x]"
              << "   stats [s]  help [h]";
         hud->setText(text.str());
     }
@@ -212,6 +261,9 @@ public:
         usage.addKeyboardMouseBinding("Shift+drag", "Orbit the light with the mouse");
         usage.addKeyboardMouseBinding("o", "Orbit light on/off");
         usage.addKeyboardMouseBinding("l", "The scene's own lights on/off");
+        usage.addKeyboardMouseBinding("t", "Smooth shadow terminator on/off");
+        usage.addKeyboardMouseBinding("[ / ]", "Terminator alpha -/+ 5 degrees");
+        usage.addKeyboardMouseBinding("x", "Cast shadows on/off");
     }
 
 protected:
@@ -238,6 +290,14 @@ private:
             _state->toggleOrbitLight();
         else if (key == 'l')
             _state->toggleSceneLights();
+        else if (key == 't') {
+            _state->terminatorOn = !_state->terminatorOn;
+            _state->applyTerminator();
+        } else if (key == '[' || key == ']') {
+            _state->terminatorAlpha += key == ']' ? 5 : -5;
+            _state->applyTerminator();
+        } else if (key == 'x')
+            _state->toggleShadows();
         else
             return false;
         return true;
@@ -418,6 +478,19 @@ int run(osg::ArgumentParser& arguments) {
         "the home view looks from, 90 from +X (its right); elevation above the XY plane (Z up)");
     usage->addCommandLineOption("--no-orbit-light", "Start with the orbit light off");
     usage->addCommandLineOption("--no-scene-lights", "Start with the scene's own lights off");
+    usage->addCommandLineOption(
+        "--terminator-alpha DEG",
+        "Seed 004's smooth shadow terminator on every object with this alpha (default: each "
+        "object's own, 15 unless its scene says otherwise; 0..60)");
+    usage->addCommandLineOption("--no-terminator", "Start with the terminator off everywhere");
+    usage->addCommandLineOption(
+        "--shadows",
+        "Cast shadows: the inputs go into an osgShadow::ShadowedScene with a ShadowMap, the "
+        "orbit light last in it (the light it shadows; with the orbit light off, the scene's "
+        "last light); a scene with its own ShadowedScene keeps it");
+    usage->addCommandLineOption("--no-shadows",
+                                "Start with cast shadows off (as key x): every ShadowedScene "
+                                "without its technique");
     usage->addCommandLineOption("--stats", "Show the frame/GPU time statistics from the start");
     usage->addCommandLineOption("--no-hud", "No status text");
     usage->addCommandLineOption("--frames N", "Render N frames, then exit (default: until Esc)");
@@ -463,6 +536,13 @@ int run(osg::ArgumentParser& arguments) {
     const bool noSceneLights = arguments.read("--no-scene-lights");
     const bool showStats = arguments.read("--stats");
     const bool noHud = arguments.read("--no-hud");
+    double terminatorAlpha = -1;
+    while (arguments.read("--terminator-alpha", terminatorAlpha)) {
+    }
+    const bool noTerminator = arguments.read("--no-terminator");
+    const bool shadows = arguments.read("--shadows");
+    const bool noShadows = arguments.read("--no-shadows");
+    if (shadows && noShadows) throw osgBTF::Error("--shadows and --no-shadows: give one of them");
     if (!captureFile.empty() && frames < 0) frames = 3;
     if (!captureFile.empty() && frames < 1)
         throw osgBTF::Error("--frames: at least 1 frame is needed for --capture");
@@ -472,6 +552,8 @@ int run(osg::ArgumentParser& arguments) {
     if (surfaceGiven && !modelFile.empty())
         throw osgBTF::Error("--surface-size and --model: give one of them");
     if (surfaceGiven && !scaleGiven) textureScale = 1;
+    if (terminatorAlpha != -1 && !(terminatorAlpha >= 0 && terminatorAlpha <= 60))
+        throw osgBTF::Error("--terminator-alpha: must be 0..60 degrees");
 
     // osgViewer::Viewer reads its own options (--window, --screen, ...) from the arguments.
     osgViewer::Viewer viewer(arguments);
@@ -540,9 +622,27 @@ int run(osg::ArgumentParser& arguments) {
         sceneRoot->addChild(place.get());
         x += radius * 1.1f;
     }
-    root->addChild(sceneRoot.get());
-
     osg::ref_ptr<ViewerState> state = new ViewerState;
+    ShadowedSceneCollector shadowed;
+    sceneRoot->accept(shadowed);
+    // The orbit light goes last into the ShadowedScene --shadows makes, so it is the light the
+    // ShadowMap shadows; elsewhere it stays outside the scenes.
+    osg::ref_ptr<osg::Group> orbitParent = root;
+    if (shadows && shadowed.scenes.empty()) {
+        osg::ref_ptr<osgShadow::ShadowedScene> scene = new osgShadow::ShadowedScene;
+        osg::ref_ptr<osgShadow::ShadowMap> technique = new osgShadow::ShadowMap;
+        technique->setTextureSize(osg::Vec2s(2048, 2048));
+        scene->setShadowTechnique(technique.get());
+        scene->addChild(sceneRoot.get());
+        root->addChild(scene.get());
+        shadowed.scenes.push_back({scene, technique});
+        orbitParent = scene;
+    } else {
+        root->addChild(sceneRoot.get());
+    }
+    state->shadowedScenes = shadowed.scenes;
+    if (noShadows) state->toggleShadows();
+
     MaterialNodeCollector materialNodes;
     sceneRoot->accept(materialNodes);
     LightSourceCollector lights;
@@ -578,7 +678,7 @@ int run(osg::ArgumentParser& arguments) {
     state->orbitLight->getLight()->setSpecular(osg::Vec4(1, 1, 1, 1));
     state->azimuth = azimuth;
     state->elevation = std::clamp(elevation, -89.0, 89.0);
-    root->addChild(state->orbitLight.get());
+    orbitParent->addChild(state->orbitLight.get());
     if (!noHud) {
         state->hud = new osgText::Text;
         root->addChild(createHud(state->hud.get()).get());
@@ -590,6 +690,15 @@ int run(osg::ArgumentParser& arguments) {
         throw osgBTF::Error("--material " + std::to_string(firstMaterial) + ": there are " +
                             std::to_string(state->choices.size()) + " materials (0 = own)");
     state->selectMaterial(firstMaterial);
+    if (terminatorAlpha >= 0 || noTerminator) {
+        if (terminatorAlpha >= 0) state->terminatorAlpha = terminatorAlpha;
+        state->terminatorOn = !noTerminator;
+        state->applyTerminator();
+    } else if (!state->nodes.empty()) {
+        state->terminatorOn = state->nodes.front()->getShadowTerminator();
+        state->terminatorAlpha = state->nodes.front()->getTerminatorAlpha();
+        state->updateHud();
+    }
 
     viewer.setSceneData(root.get());
     osg::ref_ptr<osgGA::TrackballManipulator> manipulator = new osgGA::TrackballManipulator;

@@ -11,6 +11,26 @@ out vec3 btfEyePosition;
 out vec3 btfEyeNormal;
 out vec4 btfEyeTangent;
 
+// Smooth shadow terminator (seed 004 sec. 4.3, scene/ShadowTerminator.h), per light:
+// u = (1 + cos(alpha + angle(n, l))) / 2, looked up by btf_main.glsl in a blurred step texture.
+// Per vertex, as in the seed, not per fragment: the boundary u = 0.5 then lies on each edge where
+// the angles at its two vertices put it (the seed's figure 9), so it runs straight across a
+// coarse mesh instead of following the faceted silhouette, and it moves continuously with the
+// light. A per-fragment u would instead follow the interpolated normal that the fragment stage
+// already cuts at n.l = 0, and costs a cos and an acos per fragment and light.
+const int osgBTF_maxLights = 8;
+uniform int osgBTF_lightCount = 0;
+uniform vec4 osgBTF_lightPosition[osgBTF_maxLights];
+uniform bool osgBTF_terminator = false;
+uniform float osgBTF_terminatorAlpha = 0.0;  // radians
+out float btfTerminatorCoordinate[osgBTF_maxLights];
+
+#ifdef OSGBTF_SHADOW_MAP
+// osgShadow::ShadowMap's eye-linear TexGen on its texture unit: planes already in eye space.
+uniform int osgBTF_shadowTexGenUnit = 1;
+out vec4 btfShadowCoordinate;
+#endif
+
 void main() {
     vec4 eye = gl_ModelViewMatrix * gl_Vertex;
     btfEyePosition = eye.xyz / eye.w;
@@ -21,4 +41,18 @@ void main() {
     btfEyeTangent = vec4(mat3(gl_ModelViewMatrix) * osgBTF_tangent.xyz, osgBTF_tangent.w);
     btfTexCoord = gl_MultiTexCoord0.st * osgBTF_textureScale;
     gl_Position = gl_ModelViewProjectionMatrix * gl_Vertex;
+    vec3 n = normalize(btfEyeNormal);
+    for (int i = 0; i < osgBTF_maxLights; ++i) {
+        btfTerminatorCoordinate[i] = 1.0;
+        if (!osgBTF_terminator || i >= osgBTF_lightCount) continue;
+        vec4 p = osgBTF_lightPosition[i];
+        vec3 toLight = normalize(p.w == 0.0 ? p.xyz : p.xyz - btfEyePosition);
+        float angle = acos(clamp(dot(n, toLight), -1.0, 1.0));
+        btfTerminatorCoordinate[i] = 0.5 * (1.0 + cos(osgBTF_terminatorAlpha + angle));
+    }
+#ifdef OSGBTF_SHADOW_MAP
+    int u = osgBTF_shadowTexGenUnit;
+    btfShadowCoordinate = vec4(dot(eye, gl_EyePlaneS[u]), dot(eye, gl_EyePlaneT[u]),
+                               dot(eye, gl_EyePlaneR[u]), dot(eye, gl_EyePlaneQ[u]));
+#endif
 }

@@ -20,6 +20,33 @@ uniform vec4 osgBTF_fixedView = vec4(0.0);
  *  surface, z > 0). Measured values include the cosine term: nothing multiplies by n.l again. */
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light);
 
+// Smooth shadow terminator (btf.vert computes u per vertex and light; scene/ShadowTerminator.h is
+// the CPU reference): the light's term times the blurred step at u.
+uniform bool osgBTF_terminator = false;
+uniform sampler1D osgBTF_terminatorTexture;
+in float btfTerminatorCoordinate[osgBTF_maxLights];
+
+float btfTerminatorFactor(int i) {
+    return osgBTF_terminator ? texture(osgBTF_terminatorTexture, btfTerminatorCoordinate[i]).r
+                             : 1.0;
+}
+
+#ifdef OSGBTF_SHADOW_MAP
+// Cast shadows of an osgShadow::ShadowMap for light osgBTF_shadowLight: its depth texture
+// (compare mode on, so the lookup returns the lit fraction; outside the map its border is 1, lit).
+uniform sampler2DShadow osgBTF_shadowMap;
+uniform int osgBTF_shadowLight = -1;
+in vec4 btfShadowCoordinate;
+
+float btfShadowFactor(int i) {
+    return i == osgBTF_shadowLight ? textureProj(osgBTF_shadowMap, btfShadowCoordinate) : 1.0;
+}
+#else
+float btfShadowFactor(int i) {
+    return 1.0;
+}
+#endif
+
 #ifdef OSGBTF_COORDINATE_MAP
 // The program variant for a coordinate map (materials/CoordinateMapRendering.h): the texture
 // coordinates cover the map, whose entry is the sample texel shown there (one dependent fetch).
@@ -66,7 +93,11 @@ void main() {
             vec4 p = osgBTF_lightPosition[i];
             vec3 toLight = normalize(p.w == 0.0 ? p.xyz : p.xyz - btfEyePosition);
             vec3 light = vec3(dot(toLight, t), dot(toLight, b), dot(toLight, n));
-            if (light.z > 0.0) color += osgBTF_lightColor[i] * btfEvaluate(texel, view, light);
+            if (!(light.z > 0.0)) continue;
+            float visible = btfTerminatorFactor(i) * btfShadowFactor(i);
+            // Skipped when dark: shadowed lights cost no method evaluation.
+            if (visible > 0.0)
+                color += visible * osgBTF_lightColor[i] * btfEvaluate(texel, view, light);
         }
     }
     gl_FragColor = vec4(color, 1.0);

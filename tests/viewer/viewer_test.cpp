@@ -35,7 +35,10 @@
 #include <osg/ProxyNode>
 #include <osgDB/ReadFile>
 #include <osgDB/WriteFile>
+#include <osgShadow/ShadowMap>
+#include <osgShadow/ShadowedScene>
 
+#include "core/FloatImage.h"
 #include "harness/sample/BlockMap.h"
 #include "scene/MaterialNode.h"
 #include "tests/HandWrittenUbo2014.h"
@@ -501,6 +504,50 @@ TEST(Examples, TheVaseModelIsPlainOsgGeometryReadThroughAProxyNode) {
     }
 }
 
+TEST(Examples, TheShadowedClothSceneAndTheSky) {
+    osg::ref_ptr<osg::Node> root = osgDB::readRefNodeFile(kExamplesDir + "/cloth-shadows.osgt");
+    ASSERT_TRUE(root.valid());
+    auto* scene = dynamic_cast<osgShadow::ShadowedScene*>(root.get());
+    ASSERT_NE(scene, nullptr);
+    EXPECT_NE(dynamic_cast<osgShadow::ShadowMap*>(scene->getShadowTechnique()), nullptr);
+    Collector<osg::LightSource> lights;
+    root->accept(lights);
+    ASSERT_EQ(lights.nodes.size(), 2u);
+    // The key light, last (the one ShadowMap shadows), is the sky's sun: azimuth 210 degrees,
+    // elevation 35 (examples/README.md).
+    const osg::Vec4 key = lights.nodes[1]->getLight()->getPosition();
+    const double azimuth = osg::DegreesToRadians(210.0), elevation = osg::DegreesToRadians(35.0);
+    const osg::Vec3 sun(float(std::cos(elevation) * std::cos(azimuth)),
+                        float(std::cos(elevation) * std::sin(azimuth)), float(std::sin(elevation)));
+    EXPECT_EQ(key.w(), 0.0f);
+    EXPECT_NEAR((osg::Vec3(key.x(), key.y(), key.z()) - sun).length(), 0.0f, 1e-6f);
+    Collector<osgBTF::MaterialNode> materials;
+    root->accept(materials);
+    ASSERT_EQ(materials.nodes.size(), 1u);
+    EXPECT_EQ(materials.nodes[0]->getMaterialFile(), "sample-pca.btfmat");
+    EXPECT_TRUE(materials.nodes[0]->getShadowTerminator());
+    Collector<osg::Geometry> geometries;
+    materials.nodes[0]->accept(geometries);
+    ASSERT_EQ(geometries.nodes.size(), 1u);
+    EXPECT_EQ(geometries.nodes[0]->getVertexArray()->getNumElements(), 57u * 57u);
+    EXPECT_NE(geometries.nodes[0]->getVertexAttribArray(6), nullptr);  // tangents
+
+    // sky.hdr: the lat-long map as written, its brightest texel where the sun is.
+    const osgBTF::FloatImage sky = osgBTF::readFloatImage(kExamplesDir + "/sky.hdr");
+    ASSERT_EQ(sky.width, 512);
+    ASSERT_EQ(sky.height, 256);
+    ASSERT_EQ(sky.channels, 3);
+    EXPECT_EQ(osgBTF::countNonFinite(sky), 0u);
+    std::size_t brightest = 0;
+    for (std::size_t i = 0; i < sky.pixels.size(); i += 3)
+        if (sky.pixels[i] > sky.pixels[brightest]) brightest = i;
+    const int x = int(brightest / 3) % sky.width, y = int(brightest / 3) / sky.width;
+    EXPECT_NEAR(360.0 * (x + 0.5) / sky.width, 210.0, 1.0);
+    EXPECT_NEAR(90.0 - 180.0 * (y + 0.5) / sky.height, 35.0, 1.0);
+    EXPECT_GT(sky.at(x, y, 0), 100.0f);                        // HDR: far above 1
+    EXPECT_LT(sky.at(0, sky.height - 1, 2), sky.at(0, 0, 2));  // ground darker than the zenith
+}
+
 // ---- install -----------------------------------------------------------------------------
 
 TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
@@ -704,6 +751,50 @@ TEST(Btfviewer, CapturesAnExampleScene) {
     const ScreenStats stats = analyse(image);
     EXPECT_TRUE(notBlank(stats)) << describe(stats);
     EXPECT_TRUE(materialColoured(stats)) << describe(stats);
+}
+
+// The terminator itself is tested in tests/gl/shadow_test.cpp; here the scene and the options.
+TEST(Btfviewer, TheShadowedClothShowsItsShadowAndTheKeysOptionsWork) {
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    TempDir out;
+    auto capture = [&](const std::string& options, const std::string& name) {
+        const CommandResult result =
+            runBtfviewer(xvfb.display(), "cloth-shadows.osgt --no-orbit-light --no-hud " + options +
+                                             " --window 0 0 320 240 --frames 3 --capture " +
+                                             shellQuote(out.file(name)));
+        EXPECT_EQ(result.exitCode, 0) << result.output;
+        return readCapture(out.file(name));
+    };
+    const RgbImage shadowed = capture("", "shadows.png");
+    const RgbImage unshadowed = capture("--no-shadows", "no-shadows.png");
+    keepScreenshot(shadowed, "btfviewer-cloth-shadows");
+    ASSERT_EQ(shadowed.width, 320);
+    ASSERT_EQ(unshadowed.width, 320);
+    EXPECT_TRUE(materialColoured(analyse(shadowed))) << describe(analyse(shadowed));
+    // The shadow darkens part of the floor and cloth: many pixels darker with shadows than
+    // without, none brighter by much.
+    auto darker = [](const RgbImage& a, const RgbImage& b) {
+        int count = 0;
+        for (std::size_t i = 0; i + 2 < a.rgb.size(); i += 3) {
+            const int sa = a.rgb[i] + a.rgb[i + 1] + a.rgb[i + 2];
+            const int sb = b.rgb[i] + b.rgb[i + 1] + b.rgb[i + 2];
+            if (sa + 30 < sb) ++count;
+        }
+        return count;
+    };
+    EXPECT_GT(darker(shadowed, unshadowed), 500);
+    EXPECT_LT(darker(unshadowed, shadowed), 50);
+
+    for (const auto& [options, message] :
+         {std::pair<std::string, std::string>{
+              "--terminator-alpha 70", "btfviewer: --terminator-alpha: must be 0..60 degrees"},
+          {"--shadows --no-shadows", "btfviewer: --shadows and --no-shadows: give one of them"}}) {
+        const CommandResult bad = runBtfviewer(":none", "cloth-shadows.osgt " + options);
+        EXPECT_EQ(bad.exitCode, 1) << options;
+        EXPECT_NE(bad.output.find(message), std::string::npos) << bad.output;
+    }
 }
 
 TEST(Btfviewer, ShowsAUbo2014FileAsStored) {

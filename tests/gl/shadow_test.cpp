@@ -1,0 +1,393 @@
+// Seed 004 sec. 4.3 on the GPU: the smooth shadow terminator (GPU factor == CPU reference, no jump
+// along a path of light angles, off and alpha = 0 reproduce the image without it) and cast shadows
+// through osgShadow::ShadowedScene + ShadowMap (a box over the patch: the shadowed light is gone
+// exactly where the box hides it, and nothing else changes). Built twice (EGL and OSMesa).
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+#include <osg/Geode>
+#include <osg/Light>
+#include <osg/LightSource>
+#include <osg/ShapeDrawable>
+#include <osgShadow/ShadowMap>
+#include <osgShadow/ShadowedScene>
+#include <osgShadow/ViewDependentShadowMap>
+
+#include "core/Directions.h"
+#include "harness/sample/SampleBtf.h"
+#include "materials/lambert/Lambert.h"
+#include "materials/pca/Pca.h"
+#include "scene/MaterialNode.h"
+#include "scene/ShadowTerminator.h"
+#include "tests/NotifyCapture.h"
+#include "tests/gl/GlTestEnv.h"
+#include "tests/gl/MaterialGpuCheck.h"
+
+using namespace osgBTF;
+using namespace osgBTF::test;
+
+namespace {
+
+/** A lambert material whose albedo is `rho` everywhere: the pixel is rho * l_z * factor, so the
+ *  image shows the terminator factor itself. */
+osg::ref_ptr<LambertMaterial> constantLambert(float rho) {
+    SampleOptions sample;
+    sample.width = 4;
+    sample.height = 4;
+    osg::ref_ptr<LambertMaterial> material = LambertMaterial::fit(makeSampleBtf(sample), {});
+    std::fill(material->albedo.begin(), material->albedo.end(), rho);
+    return material;
+}
+
+osg::ref_ptr<PcaMaterial> pcaSample() {
+    SampleOptions sample;
+    sample.width = 8;
+    sample.height = 6;
+    return PcaMaterial::fit(makeSampleBtf(sample), FitOptions::parse("components=4 storage=float"));
+}
+
+osg::ref_ptr<osg::LightSource> lightSource(int number, const osg::Vec4& position,
+                                           const osg::Vec3& color = osg::Vec3(1, 1, 1)) {
+    osg::ref_ptr<osg::Light> light = new osg::Light(number);
+    light->setPosition(position);
+    light->setDiffuse(osg::Vec4(color, 1));
+    osg::ref_ptr<osg::LightSource> source = new osg::LightSource;
+    source->setLight(light.get());
+    return source;
+}
+
+/** Directional light at `thetaDeg` from the patch normal (+Z), in the XZ plane. */
+osg::Vec4 directionAt(double thetaDeg) {
+    const double t = osg::DegreesToRadians(thetaDeg);
+    return osg::Vec4(float(std::sin(t)), 0.0f, float(std::cos(t)), 0.0f);
+}
+
+osg::ref_ptr<MaterialNode> patchNode(Material* material) {
+    osg::ref_ptr<MaterialNode> node = new MaterialNode(material);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(createFullScreenQuadGeometry().get());
+    node->addChild(geode.get());
+    return node;
+}
+
+float centre(const osg::Image& image, int channel = 0) {
+    return pixel(image, image.s() / 2, image.t() / 2, channel);
+}
+
+double maxDifference(const osg::Image& a, const osg::Image& b) {
+    const float* pa = reinterpret_cast<const float*>(a.data());
+    const float* pb = reinterpret_cast<const float*>(b.data());
+    double worst = 0;
+    for (int k = 0; k < a.s() * a.t() * 4; ++k)
+        worst = std::max(worst, double(std::abs(pa[k] - pb[k])));
+    return worst;
+}
+
+double maxValue(const osg::Image& a) {
+    const float* pa = reinterpret_cast<const float*>(a.data());
+    return *std::max_element(pa, pa + a.s() * a.t() * 4);
+}
+
+}  // namespace
+
+TEST(ShadowTerminatorGpu, FactorEqualsTheCpuReference) {
+    // A flat patch under a directional light: every vertex has the same u, so each pixel is
+    // rho * l_z * terminatorFactor(u) with no interpolation in between.
+    const float rho = 0.5f;
+    osg::ref_ptr<MaterialNode> node = patchNode(constantLambert(rho).get());
+    const PatchView camera = patchViewFrom(10, 0, 8, 0.3);
+    // Tolerance from the method, not from its output: GLSL acos/cos of float arguments, allowed
+    // here 1e-4 rad, times the steepest slope of the factor in angle (smoothstep 1.5 / softness
+    // in u, u changing by at most 1/2 per radian), plus 8-bit fixed-point filter weights on GPUs
+    // (llvmpipe's are float): the largest step between two texels over 256.
+    const std::vector<float> texels = terminatorTexels(kDefaultTerminatorSoftness);
+    float texelStep = 0;
+    for (std::size_t i = 1; i < texels.size(); ++i)
+        texelStep = std::max(texelStep, std::abs(texels[i] - texels[i - 1]));
+    const double tolerance =
+        rho * (1e-4 * 0.5 * 1.5 / kDefaultTerminatorSoftness + texelStep / 256.0) + 1e-6;
+    int inRamp = 0;
+    for (double theta : {40.0, 68.0, 71.0, 73.5, 75.0, 77.0, 79.0, 82.0, 88.0}) {
+        osg::ref_ptr<osg::Group> root = new osg::Group;
+        root->addChild(lightSource(0, directionAt(theta)).get());
+        root->addChild(node.get());
+        osg::ref_ptr<osg::Image> image = sharedRenderer().render(root.get(), camera.setup);
+        const osg::Vec4 l = directionAt(theta);
+        const glm::vec3 toLight(l.x(), l.y(), l.z());
+        const float u = terminatorCoordinate(glm::vec3(0, 0, 1), glm::normalize(toLight),
+                                             kDefaultTerminatorAlpha);
+        const float factor = terminatorFactor(u, kDefaultTerminatorSoftness);
+        if (factor > 0.01f && factor < 0.99f) ++inRamp;
+        const double expected = rho * toLight.z * factor;
+        EXPECT_NEAR(centre(*image), expected, tolerance) << "theta " << theta << " u " << u;
+    }
+    EXPECT_GE(inRamp, 4);  // the angles above do test the blurred part, not only 0 and 1
+}
+
+TEST(ShadowTerminatorGpu, NoJumpAlongAPathOfLightAngles) {
+    // The light turns from 50 to 95 degrees in 1 degree steps over the pca sample (whose value
+    // near the horizon is far from 0: the measured data stop at 75 degrees). The rendered value is
+    // F(theta) * B(theta) (F the factor, B the BTF, 0 past 90 degrees); per step it may change by
+    // at most step * (max|F'| * max B + max|B'|) + 2 * (GPU - CPU rounding), F' bounded by the
+    // smoothstep's 1.5 / softness times |du/dtheta| <= 1/2, max B and max|B'| taken from the CPU
+    // evaluator over every texel along the same path (B' by differences on a 0.1 degree grid).
+    osg::ref_ptr<PcaMaterial> material = pcaSample();
+    const glm::vec3 view = Direction{10, 0}.toVector();
+    double maxB = 0, maxSlope = 0;
+    for (int y = 0; y < material->height(); ++y)
+        for (int x = 0; x < material->width(); ++x) {
+            glm::vec3 previous(0);
+            for (double theta = 50; theta < 89.95; theta += 0.1) {
+                const osg::Vec4 l = directionAt(theta);
+                const glm::vec3 b = material->evaluate(x, y, view, glm::vec3(l.x(), l.y(), l.z()));
+                for (int c = 0; c < 3; ++c) {
+                    maxB = std::max(maxB, double(std::abs(b[c])));
+                    if (theta > 50)
+                        maxSlope = std::max(maxSlope, std::abs(double(b[c] - previous[c])) /
+                                                          osg::DegreesToRadians(0.1));
+                }
+                previous = b;
+            }
+        }
+    // A finite difference can underestimate the slope between grid points; 1.5x covers a smooth
+    // curve's slope changing within 0.1 degrees.
+    auto bound = [&](double stepDegrees) {
+        return osg::DegreesToRadians(stepDegrees) *
+                   (0.5 * 1.5 / kDefaultTerminatorSoftness * maxB + 1.5 * maxSlope) +
+               2e-4;
+    };
+
+    const PatchView camera = patchViewFrom(10, 0, 8, 0.3);
+    auto sweep = [&](bool terminator, double from, double to, double step) {
+        osg::ref_ptr<MaterialNode> node = patchNode(material.get());
+        node->setShadowTerminator(terminator);
+        std::vector<float> values;
+        for (double theta = from; theta <= to + 1e-9; theta += step) {
+            osg::ref_ptr<osg::Group> root = new osg::Group;
+            root->addChild(lightSource(0, directionAt(theta)).get());
+            root->addChild(node.get());
+            osg::ref_ptr<osg::Image> image = sharedRenderer().render(root.get(), camera.setup);
+            values.push_back(centre(*image, 1));
+        }
+        return values;
+    };
+    const std::vector<float> on = sweep(true, 50, 95, 1.0);
+    double worst = 0;
+    for (std::size_t i = 1; i < on.size(); ++i)
+        worst = std::max(worst, double(std::abs(on[i] - on[i - 1])));
+    EXPECT_LE(worst, bound(1.0)) << "max B " << maxB << " max |B'| " << maxSlope;
+    EXPECT_GT(worst, 0.1 * bound(1.0));  // the value does change along the path
+    EXPECT_EQ(on.back(), 0.0f);
+    // Without the terminator the value jumps at 90 degrees: a jump that no step makes smaller,
+    // so at 0.1 degree steps it exceeds that step's bound many times (the check above can fail).
+    auto largestStep = [](const std::vector<float>& values) {
+        double largest = 0;
+        for (std::size_t i = 1; i < values.size(); ++i)
+            largest = std::max(largest, double(std::abs(values[i] - values[i - 1])));
+        return largest;
+    };
+    EXPECT_GT(largestStep(sweep(false, 89.05, 90.95, 0.1)), 3 * bound(0.1));
+    // With it, the same fine steps there and across the terminator's own band stay in bound.
+    EXPECT_LE(largestStep(sweep(true, 89.05, 90.95, 0.1)), bound(0.1));
+    EXPECT_LE(largestStep(sweep(true, 72.05, 76.95, 0.1)), bound(0.1));
+}
+
+TEST(ShadowTerminatorGpu, OffAndAlphaZeroReproduceTheImageWithoutIt) {
+    // Lights at most 60 degrees from the normal (a directional one, a point light and a coloured
+    // directional one): with alpha = 0 the factor is 1 up to acos(softness) = 84 degrees, with the
+    // default 15 degrees up to 69 degrees, so every image equals the one without the terminator;
+    // the filter's (1 - w) * 1 + w * 1 may round to 1 - 2^-24, hence a relative 1e-6.
+    osg::ref_ptr<PcaMaterial> material = pcaSample();
+    osg::ref_ptr<MaterialNode> node = patchNode(material.get());
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    root->addChild(lightSource(0, directionAt(35)).get());
+    root->addChild(
+        lightSource(1, osg::Vec4(0.3f, 0.9f, 1.1f, 1.0f), osg::Vec3(0.6f, 0.7f, 0.2f)).get());
+    root->addChild(
+        lightSource(2, osg::Vec4(-0.5f, -0.5f, 0.7071f, 0.0f), osg::Vec3(0.2f, 0.4f, 0.9f)).get());
+    root->addChild(node.get());
+    const PatchView camera = patchViewFrom(30, 60, 24, 0.6);
+
+    node->setShadowTerminator(false);
+    osg::ref_ptr<osg::Image> off = sharedRenderer().render(root.get(), camera.setup);
+    node->setShadowTerminator(true);
+    node->setTerminatorAlpha(0);
+    osg::ref_ptr<osg::Image> alphaZero = sharedRenderer().render(root.get(), camera.setup);
+    node->setTerminatorAlpha(kDefaultTerminatorAlpha);
+    osg::ref_ptr<osg::Image> byDefault = sharedRenderer().render(root.get(), camera.setup);
+    const double scale = maxValue(*off);
+    ASSERT_GT(scale, 0.05);
+    EXPECT_LE(maxDifference(*off, *alphaZero), 1e-6 * scale);
+    EXPECT_LE(maxDifference(*off, *byDefault), 1e-6 * scale);
+    // A light beyond 69 degrees does change the default image (the comparison can fail).
+    root->addChild(lightSource(3, directionAt(78)).get());
+    osg::ref_ptr<osg::Image> grazingOn = sharedRenderer().render(root.get(), camera.setup);
+    node->setShadowTerminator(false);
+    osg::ref_ptr<osg::Image> grazingOff = sharedRenderer().render(root.get(), camera.setup);
+    EXPECT_GT(maxDifference(*grazingOn, *grazingOff), 100e-6 * scale);
+}
+
+TEST(ShadowTerminatorGpu, AMaterialsOwnStateSetIsWithoutItAfterANodeDrewIt) {
+    // A GL program keeps the last value given to a uniform: after a MaterialNode drew with the
+    // terminator on, the material's own StateSet (btf eval, btf compare, the GPU checks) must
+    // still render the measured BTF, here at a light angle the terminator would darken to 0.
+    osg::ref_ptr<LambertMaterial> material = constantLambert(0.5f);
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    root->addChild(lightSource(0, directionAt(85)).get());
+    root->addChild(patchNode(material.get()).get());
+    osg::ref_ptr<osg::Image> node =
+        sharedRenderer().render(root.get(), patchViewFrom(10, 0, 8, 0.3).setup);
+    EXPECT_EQ(centre(*node), 0.0f);
+    const osg::Vec4 l = directionAt(85);
+    const test::GpuCpuComparison r =
+        test::compareGpuWithCpu(*material, Direction{10, 0}.toVector(), {l.x(), l.y(), l.z()});
+    EXPECT_GT(r.pixelsCompared, 8);
+    EXPECT_LE(r.maxAbsDifference, 1e-5) << r.worst;
+}
+
+namespace {
+
+// The occluder: an axis-aligned box over the patch.
+const osg::Vec3d kBoxMin(0.4, 0.35, 0.25), kBoxMax(0.6, 0.65, 0.35);
+
+bool rayHitsBox(const osg::Vec3d& origin, const osg::Vec3d& direction) {
+    double t0 = 0, t1 = 1e30;
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(direction[a]) < 1e-12) {
+            if (origin[a] < kBoxMin[a] || origin[a] > kBoxMax[a]) return false;
+            continue;
+        }
+        double ta = (kBoxMin[a] - origin[a]) / direction[a];
+        double tb = (kBoxMax[a] - origin[a]) / direction[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+    }
+    return t0 <= t1;
+}
+
+}  // namespace
+
+/** Two directional lights; ShadowMap shadows the last one (ShadowMap's own choice, and
+ *  MaterialNode's default). Expected per pixel, from the geometry alone: where the ray toward the
+ *  shadowed light hits the box, the image of the scene without that light; elsewhere the image
+ *  of the scene without any shadowing. Pixels within `margin` of the shadow's outline (the shadow
+ *  map's texels and the image's pixels, both under 0.025) are not judged. */
+static void expectBoxShadow(Material* material, double minimumShadowDepth) {
+    const osg::Vec4 free = osg::Vec4(-0.3f, 0.2f, 0.9327f, 0.0f);
+    const osg::Vec4 shadowed = directionAt(35);
+    const osg::Vec3d toShadowed(shadowed.x(), shadowed.y(), shadowed.z());
+    const int size = 48;
+    const double halfExtent = 0.6;
+    const PatchView camera = patchViewFrom(5, 0, size, halfExtent);
+    const osg::Vec3d toEye(camera.toEye.x, camera.toEye.y, camera.toEye.z);
+
+    auto scene = [&](osg::Group* root, bool withShadowedLight) {
+        root->addChild(lightSource(0, free, osg::Vec3(0.3f, 0.6f, 0.9f)).get());
+        if (withShadowedLight) root->addChild(lightSource(1, shadowed).get());
+        root->addChild(patchNode(material).get());
+        osg::ref_ptr<osg::Geode> box = new osg::Geode;
+        const osg::Vec3d c = (kBoxMin + kBoxMax) * 0.5, e = kBoxMax - kBoxMin;
+        box->addDrawable(new osg::ShapeDrawable(new osg::Box(c, e.x(), e.y(), e.z())));
+        box->setStateSet(
+            programStateSet(
+                "",
+                "#version 330 compatibility\nvoid main() { gl_FragColor = vec4(1, 0, 1, 1); }\n")
+                .get());
+        root->addChild(box.get());
+        return root;
+    };
+    osg::ref_ptr<osgShadow::ShadowedScene> shadowedScene = new osgShadow::ShadowedScene;
+    osg::ref_ptr<osgShadow::ShadowMap> technique = new osgShadow::ShadowMap;
+    technique->setTextureSize(osg::Vec2s(512, 512));
+    shadowedScene->setShadowTechnique(technique.get());
+    scene(shadowedScene.get(), true);
+    osg::ref_ptr<osg::Group> unshadowed = scene(new osg::Group, true);
+    osg::ref_ptr<osg::Group> withoutLight = scene(new osg::Group, false);
+
+    HeadlessRenderer& renderer = sharedRenderer();
+    osg::ref_ptr<osg::Image> shadowImage = renderer.render(shadowedScene.get(), camera.setup);
+    osg::ref_ptr<osg::Image> litImage = renderer.render(unshadowed.get(), camera.setup);
+    osg::ref_ptr<osg::Image> darkImage = renderer.render(withoutLight.get(), camera.setup);
+
+    const osg::Matrixd eyeToWorld = osg::Matrixd::inverse(camera.setup.view);
+    const double margin = 0.05;
+    int inShadow = 0, lit = 0;
+    double worstShadow = 0, worstLit = 0, shadowDepth = 1e30;
+    std::string where;
+    for (int j = 0; j < size; ++j)
+        for (int i = 0; i < size; ++i) {
+            const double ex = -halfExtent + (i + 0.5) / size * 2 * halfExtent;
+            const double ey = -halfExtent + (j + 0.5) / size * 2 * halfExtent;
+            const osg::Vec3d origin = osg::Vec3d(ex, ey, 0) * eyeToWorld;
+            const osg::Vec3d p = origin - toEye * (origin.z() / toEye.z());
+            if (p.x() < margin || p.x() > 1 - margin || p.y() < margin || p.y() > 1 - margin)
+                continue;
+            if (rayHitsBox(p, toEye)) continue;  // the box itself is in front
+            int hits = 0;
+            for (const osg::Vec3d& d :
+                 {osg::Vec3d(0, 0, 0), osg::Vec3d(margin, 0, 0), osg::Vec3d(-margin, 0, 0),
+                  osg::Vec3d(0, margin, 0), osg::Vec3d(0, -margin, 0)})
+                hits += rayHitsBox(p + d, toShadowed) ? 1 : 0;
+            if (hits != 0 && hits != 5) continue;
+            const osg::Image& expected = hits == 5 ? *darkImage : *litImage;
+            for (int c = 0; c < 3; ++c) {
+                const double d = std::abs(pixel(*shadowImage, i, j, c) - pixel(expected, i, j, c));
+                double& worst = hits == 5 ? worstShadow : worstLit;
+                if (d > worst) {
+                    worst = d;
+                    std::ostringstream text;
+                    text << (hits == 5 ? "shadow" : "lit") << " pixel (" << i << ", " << j
+                         << ") channel " << c << ": " << pixel(*shadowImage, i, j, c)
+                         << " expected " << pixel(expected, i, j, c);
+                    where = text.str();
+                }
+            }
+            if (hits == 5) {
+                ++inShadow;
+                shadowDepth = std::min(
+                    shadowDepth, double(pixel(*litImage, i, j, 1) - pixel(*darkImage, i, j, 1)));
+            } else {
+                ++lit;
+            }
+        }
+    EXPECT_GE(inShadow, 40);
+    EXPECT_GE(lit, 400);
+    EXPECT_GT(shadowDepth, minimumShadowDepth);
+    EXPECT_LE(worstShadow, 1e-5) << where;
+    EXPECT_LE(worstLit, 1e-5) << where;
+}
+
+TEST(ShadowMapGpu, TheBoxShadowsItsLightAndNothingElse) {
+    // The shadowed light adds 0.5 * cos(35 deg) = 0.41 (green): mistaking lit for shadow would
+    // be an error of 0.4; the shadow test returns exactly 0 or 1 away from the outline.
+    expectBoxShadow(constantLambert(0.5f).get(), 0.3);
+}
+
+TEST(ShadowMapGpu, AMaterialTextureOnTheTechniquesUnitIsKept) {
+    // pca keeps its weights on unit 1, where ShadowMap binds its depth texture with OVERRIDE:
+    // the node binds them again PROTECTED (else the lit pixels would differ).
+    expectBoxShadow(pcaSample().get(), 0.01);
+}
+
+TEST(ShadowMapGpu, AnotherTechniqueIsNamedOnceAndTheNodeDrawsWithoutCastShadows) {
+    osg::ref_ptr<osgShadow::ShadowedScene> scene = new osgShadow::ShadowedScene;
+    scene->setShadowTechnique(new osgShadow::ViewDependentShadowMap);
+    scene->addChild(lightSource(0, directionAt(30)).get());
+    scene->addChild(patchNode(constantLambert(0.5f).get()).get());
+    const PatchView camera = patchViewFrom(10, 0, 8, 0.3);
+    test::ScopedNotifyCapture capture(true);
+    sharedRenderer().render(scene.get(), camera.setup);
+    osg::ref_ptr<osg::Image> image = sharedRenderer().render(scene.get(), camera.setup);
+    const std::string message =
+        "osgBTF::MaterialNode: shadow technique 'ViewDependentShadowMap' is not supported "
+        "(osgShadow::ShadowMap is): no cast shadows\n";
+    const std::size_t first = capture.text().find(message);
+    ASSERT_NE(first, std::string::npos) << capture.text();
+    EXPECT_EQ(capture.text().find(message, first + 1), std::string::npos) << "said twice";
+    EXPECT_GT(centre(*image), 0.0f);
+}
