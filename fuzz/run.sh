@@ -4,7 +4,8 @@
 #   fuzz/run.sh BUILD_FUZZ SEEDS SECONDS [TARGET...]
 # BUILD_FUZZ: a build with -DOSGBTF_BUILD_FUZZERS=ON (fuzz/README.md); SEEDS: the output folder
 # of osgbtf_fuzz_seeds. Corpora grow in fuzz/out/corpus/<target> (kept between runs), findings
-# land in fuzz/out/findings/<target>-*, logs in fuzz/out/logs/<target>.log.
+# land in fuzz/out/findings/<target>-*, logs in fuzz/out/logs/<target>.log. FUZZ_ARGS: more
+# libFuzzer flags (e.g. FUZZ_ARGS=-runs=1000000: stop at a million executions or SECONDS).
 set -euo pipefail
 if [ $# -lt 3 ]; then
   sed -n '2,7p' "$0"
@@ -28,7 +29,7 @@ for t in "${targets[@]}"; do
   set +e
   "$build/bin/fuzz_$t" "$corpus" -dict="$here/dict/$t.dict" -max_total_time="$seconds" \
     -timeout=5 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
-    -artifact_prefix="$out/findings/$t-" >"$out/logs/$t.log" 2>&1
+    -artifact_prefix="$out/findings/$t-" ${FUZZ_ARGS:-} >"$out/logs/$t.log" 2>&1
   status=$?
   set -e
   echo "== $t (exit $status): $(grep -E '^#[0-9]+' "$out/logs/$t.log" | tail -1)"

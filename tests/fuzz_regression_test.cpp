@@ -135,4 +135,23 @@ TEST_F(FuzzFindings, EmbeddedMaterialWithUnknownPixelKindIsRefused) {
         << capture.text();
 }
 
+// OSG's ASCII reader never returns from a string that the stream ends inside; the serializers
+// refuse such a string before handing it to OSG (readWrappedStringChecked). Both inputs ran for
+// minutes before, so the test's timeout is the hang criterion.
+TEST_F(FuzzFindings, SceneEndingInsideAnEmbeddedMaterialIsRefused) {
+    osgDB::ReaderWriter* osgt = osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
+    ASSERT_NE(osgt, nullptr);
+    for (const char* name :
+         {"hang-parameter-count-4000000000.osgt", "hang-texture-count-truncated.osgt"}) {
+        std::ifstream in(input("scene_file", name), std::ios::binary);
+        std::stringstream scene;
+        scene << in.rdbuf();
+        osgBTF::test::ScopedNotifyCapture capture;
+        osgDB::ReaderWriter::ReadResult result = osgt->readNode(scene);
+        EXPECT_FALSE(result.validNode()) << name;
+        EXPECT_EQ(result.message(), "") << name;
+        EXPECT_EQ(capture.text(), "") << name;
+    }
+}
+
 }  // namespace
