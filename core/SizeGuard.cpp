@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include <OpenEXR/openexr.h>
 
@@ -47,6 +48,49 @@ std::int64_t readMemory(exr_const_context_t, void* user, void* buffer, std::uint
 
 std::int64_t memorySize(exr_const_context_t, void* user) {
     return std::int64_t(static_cast<const MemoryStream*>(user)->size);
+}
+
+/** OpenEXR's C++ reader sizes an attribute's value from the size the file gives, before reading
+ *  it: a string attribute claiming 1.8 GB is allocated and zeroed (seconds, and 1 GB of RSS, for
+ *  a 3 KB file: fuzz/regression/fitted_material/), and OpenEXR's C library accepts such headers.
+ *  Walks the attributes of every header in `head` (the file's first bytes) and refuses one that
+ *  claims more bytes than the file (`fileBytes`) has after it. Anything it cannot walk (a header
+ *  beyond `head`, a name without its terminator) is left to OpenEXR's own checks. */
+void checkExrAttributeSizes(const std::string& name, const unsigned char* head,
+                            std::uint64_t headBytes, std::uint64_t fileBytes) {
+    if (headBytes < 8) return;
+    // The version field's flags (OpenEXR file layout): bit 10 long names, bit 12 multi-part.
+    const bool longNames = head[5] & 0x04, multiPart = head[5] & 0x10;
+    const std::size_t maxName = longNames ? 255 : 31;
+    std::uint64_t at = 8;
+    const auto readName = [&](std::string& text) {
+        text.clear();
+        while (at < headBytes && text.size() <= maxName) {
+            const char c = char(head[at++]);
+            if (c == 0) return true;
+            text += c;
+        }
+        return false;
+    };
+    for (;;) {
+        std::string attribute, type;
+        for (;;) {
+            if (!readName(attribute)) return;
+            if (attribute.empty()) break;  // the end of this header
+            if (!readName(type) || headBytes - at < 4) return;
+            std::int32_t size;
+            std::memcpy(&size, head + at, 4);  // little-endian, as every platform osgBTF builds on
+            at += 4;
+            if (size < 0 || std::uint64_t(size) > fileBytes - at)
+                fail(name, "OpenEXR header: attribute '" + attribute + "' (" + type + ") claims " +
+                               std::to_string(size) + " bytes but " +
+                               std::to_string(fileBytes - at) +
+                               " remain in the file (truncated or corrupt file)");
+            at += std::uint64_t(size);
+        }
+        // Multi-part: another header follows unless an empty one ends the list.
+        if (!multiPart || at >= headBytes || head[at] == 0) return;
+    }
 }
 
 /** The headers through an initialised context; `name` starts every message. */
@@ -102,6 +146,11 @@ std::vector<ExrPartSize> readExrPartSizes(const std::string& path) {
     std::error_code ec;
     const std::uint64_t fileBytes = fs::file_size(path, ec);
     if (ec) fail(path, "cannot read its size: " + ec.message());
+    // The headers' attributes are walked in the first MiB (real headers take a few KB).
+    std::vector<unsigned char> head(std::size_t(std::min<std::uint64_t>(fileBytes, 1u << 20)));
+    std::ifstream in(path, std::ios::binary);
+    in.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
+    checkExrAttributeSizes(path, head.data(), std::uint64_t(in.gcount()), fileBytes);
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     return exrPartSizes(path, init, path, fileBytes);
 }
@@ -109,6 +158,7 @@ std::vector<ExrPartSize> readExrPartSizes(const std::string& path) {
 std::vector<ExrPartSize> readExrPartSizes(const std::string& name, const void* bytes,
                                           std::size_t size) {
     MemoryStream stream{static_cast<const unsigned char*>(bytes), size};
+    checkExrAttributeSizes(name, stream.bytes, size, size);
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.user_data = &stream;
     init.read_fn = readMemory;

@@ -16,11 +16,14 @@
 
 #include "NotifyCapture.h"
 #include "TestUtil.h"
+#include "core/CoordinateMap.h"
 #include "core/Error.h"
+#include "core/FittedMaterialFile.h"
 #include "core/MeasuredBtf.h"
 #include "core/Progress.h"
 #include "fuzz/FuzzEntries.h"
 #include "loaders/Ubo2003.h"
+#include "loaders/Ubo2014.h"
 
 namespace fs = std::filesystem;
 
@@ -133,6 +136,38 @@ TEST_F(FuzzFindings, EmbeddedMaterialWithUnknownPixelKindIsRefused) {
                                   "children without the material)"),
               std::string::npos)
         << capture.text();
+}
+
+// The campaign's findings (fuzz/README.md, "Campaign"): each input ran past libFuzzer's 5 s
+// before its fix; now each is refused in milliseconds, so a regression shows as the test's timeout.
+TEST_F(FuzzFindings, ExrAttributeClaimingMoreThanTheFileIsRefusedBeforeOpenExrAllocatesIt) {
+    // A string attribute (the C++ reader zero-fills a std::string of the claimed size) ...
+    const std::string material = input("fitted_material", "hang-string-attribute-claims-1.8GB.exr");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(material); }),
+              material +
+                  ": OpenEXR header: attribute 'osgBTF.method' (string) claims 1836347395 bytes "
+                  "but 1728 remain in the file (truncated or corrupt file)");
+    // ... a known type of fixed size, and an unknown (opaque) type, in each reader's path.
+    const std::string plugin =
+        input("btfmat_plugin", "hang-compression-attribute-claims-906MB.btfmat");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(plugin); }),
+              plugin +
+                  ": OpenEXR header: attribute 'compression' (compression) claims 905969665 "
+                  "bytes but 2402 remain in the file (truncated or corrupt file)");
+    const std::string map = input("coordinate_map", "hang-attribute-claims-1.7GB.exr");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::readCoordinateMap(map); }),
+              map +
+                  ": OpenEXR header: attribute 'lineOrdpression' () claims 1677918208 bytes but "
+                  "319 remain in the file (truncated or corrupt file)");
+}
+
+TEST_F(FuzzFindings, Ubo2014RowsWithNoColumnToKeepAreSkippedNotWalked) {
+    // The FMF header's height map is 0 texels wide and very many rows high: rows of nothing to
+    // keep, which reading walked one by one. Now they are skipped, and the header's next field
+    // is what fails.
+    const std::string path = input("ubo2014", "hang-rows-of-zero-columns.btf");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::readUbo2014(path); }),
+              path + ": FMF: scalar size 15 is not 2 (half), 4 (float) or 8 (double)");
 }
 
 // OSG's ASCII reader never returns from a string that the stream ends inside; the serializers
