@@ -141,19 +141,28 @@ TEST_F(FuzzFindings, EmbeddedMaterialWithUnknownPixelKindIsRefused) {
 // The campaign's findings (fuzz/README.md, "Campaign"): each input ran past libFuzzer's 5 s
 // before its fix; now each is refused in milliseconds, so a regression shows as the test's timeout.
 TEST_F(FuzzFindings, ExrAttributeClaimingMoreThanTheFileIsRefusedBeforeOpenExrAllocatesIt) {
-    // A string attribute (the C++ reader zero-fills a std::string of the claimed size) ...
+    // A string attribute (the C++ reader zero-fills a std::string of the claimed size).
     const std::string material = input("fitted_material", "hang-string-attribute-claims-1.8GB.exr");
     EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(material); }),
               material +
                   ": OpenEXR header: attribute 'osgBTF.method' (string) claims 1836347395 bytes "
                   "but 1728 remain in the file (truncated or corrupt file)");
-    // ... a known type of fixed size, and an unknown (opaque) type, in each reader's path.
+    // A compression attribute whose size field says 905969665: OpenEXR reads its one byte and
+    // takes what follows as the next attribute, an unknown type (allocated from its size).
     const std::string plugin =
-        input("btfmat_plugin", "hang-compression-attribute-claims-906MB.btfmat");
+        input("btfmat_plugin", "hang-attribute-after-compression-claims-1.9GB.btfmat");
     EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(plugin); }),
               plugin +
-                  ": OpenEXR header: attribute 'compression' (compression) claims 905969665 "
-                  "bytes but 2402 remain in the file (truncated or corrupt file)");
+                  ": OpenEXR header: attribute '0,0;30,0;30,120;30,240;60,60' () claims "
+                  "1886220131 bytes but 2367 remain in the file (truncated or corrupt file)");
+    // A channel list whose fields and size field disagree: OpenEXR follows the fields, and the
+    // string that it reads next is the one checked.
+    const std::string channels =
+        input("fitted_material", "oom-string-after-channel-list-read-by-its-fields.exr");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(channels); }),
+              channels +
+                  ": OpenEXR header: attribute 'osgBTF.param.fit.seconds' (string) claims "
+                  "1409286154 bytes but 722 remain in the file (truncated or corrupt file)");
     const std::string map = input("coordinate_map", "hang-attribute-claims-1.7GB.exr");
     EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::readCoordinateMap(map); }),
               map +
