@@ -179,6 +179,27 @@ TEST_F(FuzzFindings, Ubo2014RowsWithNoColumnToKeepAreSkippedNotWalked) {
               path + ": FMF: scalar size 15 is not 2 (half), 4 (float) or 8 (double)");
 }
 
+// A node below itself: every traversal recursed until the stack overflowed (the first being
+// the tangent generation of addChild, while the file was read), and the cycle leaked.
+TEST_F(FuzzFindings, SceneNodeBelowItselfIsLeftOut) {
+    osgDB::ReaderWriter* osgt = osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
+    ASSERT_NE(osgt, nullptr);
+    // MaterialNode 1 > Group 2 > UniqueID 1 again: the group, whose child is the node itself, is
+    // the one left out.
+    std::ifstream in(input("scene_file", "cycle-node-below-itself.osgt"), std::ios::binary);
+    std::stringstream scene;
+    scene << in.rdbuf();
+    osgBTF::test::ScopedNotifyCapture capture;
+    osgDB::ReaderWriter::ReadResult result = osgt->readNode(scene);
+    ASSERT_TRUE(result.validNode()) << result.message();
+    ASSERT_NE(result.getNode()->asGroup(), nullptr);
+    EXPECT_EQ(result.getNode()->asGroup()->getNumChildren(), 0u);
+    EXPECT_NE(capture.text().find("osgBTF::MaterialNode: a child that is the node itself or one "
+                                  "of its parents would make a cycle; it is left out"),
+              std::string::npos)
+        << capture.text();
+}
+
 // OSG's ASCII reader never returns from a string that the stream ends inside; the serializers
 // refuse such a string before handing it to OSG (readWrappedStringChecked). Both inputs ran for
 // minutes before, so the test's timeout is the hang criterion.
