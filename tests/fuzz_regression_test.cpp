@@ -138,6 +138,24 @@ TEST_F(FuzzFindings, EmbeddedMaterialWithUnknownPixelKindIsRefused) {
         << capture.text();
 }
 
+// scene_file's body skips inputs with numbers above 10000 or below 0 (OSG's own unbounded counts,
+// fuzz/README.md); this one it skips is read here directly.
+TEST_F(FuzzFindings, EmbeddedTextureOfNegativeSizeIsRefused) {
+    std::ifstream in(input("scene_file", "negative-size-wraps.osgt"), std::ios::binary);
+    std::stringstream scene;
+    scene << in.rdbuf();
+    osgDB::ReaderWriter* osgt = osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
+    ASSERT_NE(osgt, nullptr);
+    osgBTF::test::ScopedNotifyCapture capture;
+    osgDB::ReaderWriter::ReadResult result = osgt->readNode(scene);
+    ASSERT_TRUE(result.validNode());
+    EXPECT_NE(capture.text().find("osgBTF::MaterialNode: material embedded in the scene: texture "
+                                  "data is damaged (the node draws its children without the "
+                                  "material)"),
+              std::string::npos)
+        << capture.text();
+}
+
 // The campaign's findings (fuzz/README.md, "Campaign"): each input ran past libFuzzer's 5 s
 // before its fix; now each is refused in milliseconds, so a regression shows as the test's timeout.
 TEST_F(FuzzFindings, ExrAttributeClaimingMoreThanTheFileIsRefusedBeforeOpenExrAllocatesIt) {
