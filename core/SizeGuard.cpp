@@ -1,6 +1,7 @@
 #include "core/SizeGuard.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -115,11 +116,26 @@ void checkExrAttributeSizes(const std::string& name, const unsigned char* head,
         return true;
     };
     std::string attribute, type;
+    // Names from a damaged file can hold any byte: control bytes are written as \xNN.
+    const auto printable = [](const std::string& text) {
+        std::string out;
+        for (const char c : text) {
+            if (std::isprint(static_cast<unsigned char>(c))) {
+                out += c;
+            } else {
+                static const char digits[] = "0123456789abcdef";
+                out += "\\x";
+                out += digits[static_cast<unsigned char>(c) >> 4];
+                out += digits[static_cast<unsigned char>(c) & 15];
+            }
+        }
+        return out;
+    };
     const auto check = [&](std::int64_t claim, const char* what) {
         if (claim < 0 || std::uint64_t(claim) > fileBytes - at)
-            fail(name, "OpenEXR header: attribute '" + attribute + "' (" + type + ") claims " +
-                           std::to_string(claim) + " bytes" + what + " but " +
-                           std::to_string(fileBytes - at) +
+            fail(name, "OpenEXR header: attribute '" + printable(attribute) + "' (" +
+                           printable(type) + ") claims " + std::to_string(claim) + " bytes" + what +
+                           " but " + std::to_string(fileBytes - at) +
                            " remain in the file (truncated or corrupt file)");
     };
     for (;;) {
