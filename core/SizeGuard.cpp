@@ -1,8 +1,10 @@
 #include "core/SizeGuard.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include <OpenEXR/openexr.h>
 
@@ -47,6 +49,129 @@ std::int64_t readMemory(exr_const_context_t, void* user, void* buffer, std::uint
 
 std::int64_t memorySize(exr_const_context_t, void* user) {
     return std::int64_t(static_cast<const MemoryStream*>(user)->size);
+}
+
+/** Bytes that OpenEXR 3.1's C++ reader takes for a value of one of these types, whatever the
+ *  attribute's size field says (it reads the type's fields); 0: another type. */
+std::uint64_t fixedExrValueBytes(const std::string& type) {
+    static const std::pair<const char*, std::uint64_t> fixed[] = {{"box2i", 16},
+                                                                  {"box2f", 16},
+                                                                  {"int", 4},
+                                                                  {"float", 4},
+                                                                  {"double", 8},
+                                                                  {"v2i", 8},
+                                                                  {"v2f", 8},
+                                                                  {"v2d", 16},
+                                                                  {"v3i", 12},
+                                                                  {"v3f", 12},
+                                                                  {"v3d", 24},
+                                                                  {"m33f", 36},
+                                                                  {"m33d", 72},
+                                                                  {"m44f", 64},
+                                                                  {"m44d", 128},
+                                                                  {"compression", 1},
+                                                                  {"lineOrder", 1},
+                                                                  {"envmap", 1},
+                                                                  {"deepImageState", 1},
+                                                                  {"tiledesc", 9},
+                                                                  {"chromaticities", 32},
+                                                                  {"keycode", 28},
+                                                                  {"timecode", 8},
+                                                                  {"rational", 8}};
+    for (const auto& [name, bytes] : fixed)
+        if (type == name) return bytes;
+    return 0;
+}
+
+/** OpenEXR's C++ reader sizes some attribute values from the file before reading them: a string
+ *  or an unknown type from the size field (a 3 KB file claiming a 1.8 GB string is allocated and
+ *  zeroed: seconds and 1 GB of RSS, fuzz/regression/fitted_material/), a preview image from its
+ *  width and height. OpenEXR's C library accepts such headers. Walks every header in `head` (the
+ *  file's first bytes) as the C++ reader does (types of fixed size and channel lists by their
+ *  fields, not by their size field, which it ignores for them) and refuses a claim beyond the
+ *  bytes that the file (`fileBytes`) has left. What it cannot walk (a header beyond `head`, a
+ *  name without its terminator) is left to OpenEXR's own checks. */
+void checkExrAttributeSizes(const std::string& name, const unsigned char* head,
+                            std::uint64_t headBytes, std::uint64_t fileBytes) {
+    if (headBytes < 8) return;
+    // The version field's flags (OpenEXR file layout): bit 12 multi-part. Names may take 255
+    // bytes: OpenEXR 3.1's C++ reader accepts those whether or not the long-names flag is set.
+    const bool multiPart = head[5] & 0x10;
+    std::uint64_t at = 8;
+    const auto readName = [&](std::string& text) {
+        text.clear();
+        while (at < headBytes && text.size() <= 255) {
+            const char c = char(head[at++]);
+            if (c == 0) return true;
+            text += c;
+        }
+        return false;
+    };
+    const auto readInt = [&](std::int64_t& value) {
+        if (headBytes - at < 4) return false;
+        std::int32_t v;
+        std::memcpy(&v, head + at, 4);  // little-endian, as every platform osgBTF builds on
+        at += 4;
+        value = v;
+        return true;
+    };
+    std::string attribute, type;
+    // Names from a damaged file can hold any byte: control bytes are written as \xNN.
+    const auto printable = [](const std::string& text) {
+        std::string out;
+        for (const char c : text) {
+            if (std::isprint(static_cast<unsigned char>(c))) {
+                out += c;
+            } else {
+                static const char digits[] = "0123456789abcdef";
+                out += "\\x";
+                out += digits[static_cast<unsigned char>(c) >> 4];
+                out += digits[static_cast<unsigned char>(c) & 15];
+            }
+        }
+        return out;
+    };
+    const auto check = [&](std::int64_t claim, const char* what) {
+        if (claim < 0 || std::uint64_t(claim) > fileBytes - at)
+            fail(name, "OpenEXR header: attribute '" + printable(attribute) + "' (" +
+                           printable(type) + ") claims " + std::to_string(claim) + " bytes" + what +
+                           " but " + std::to_string(fileBytes - at) +
+                           " remain in the file (truncated or corrupt file)");
+    };
+    for (;;) {
+        for (;;) {
+            std::int64_t size = 0;
+            if (!readName(attribute)) return;
+            if (attribute.empty()) break;  // the end of this header
+            if (!readName(type) || !readInt(size)) return;
+            if (const std::uint64_t bytes = fixedExrValueBytes(type)) {
+                at += bytes;
+            } else if (type == "chlist") {
+                std::string channel;
+                while (readName(channel) && !channel.empty()) at += 16;
+            } else if (type == "preview") {
+                std::int64_t width = 0, height = 0;
+                if (!readInt(width) || !readInt(height)) return;
+                check(std::int64_t(std::uint32_t(width)) * std::uint32_t(height) * 4,
+                      " of preview pixels");
+                at += std::uint64_t(std::uint32_t(width)) * std::uint32_t(height) * 4;
+            } else if (type == "stringvector") {
+                check(size, "");
+                for (const std::uint64_t end = at + std::uint64_t(size); at < end;) {
+                    std::int64_t length = 0;
+                    if (!readInt(length)) return;
+                    check(length, " for one string");
+                    at += std::uint64_t(length);
+                }
+            } else {  // string, floatvector, idmanifest, unknown types: sized by the field
+                check(size, "");
+                at += std::uint64_t(size);
+            }
+            if (at > headBytes) return;
+        }
+        // Multi-part: another header follows unless an empty one ends the list.
+        if (!multiPart || at >= headBytes || head[at] == 0) return;
+    }
 }
 
 /** The headers through an initialised context; `name` starts every message. */
@@ -102,6 +227,11 @@ std::vector<ExrPartSize> readExrPartSizes(const std::string& path) {
     std::error_code ec;
     const std::uint64_t fileBytes = fs::file_size(path, ec);
     if (ec) fail(path, "cannot read its size: " + ec.message());
+    // The headers' attributes are walked in the first MiB (real headers take a few KB).
+    std::vector<unsigned char> head(std::size_t(std::min<std::uint64_t>(fileBytes, 1u << 20)));
+    std::ifstream in(path, std::ios::binary);
+    in.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
+    checkExrAttributeSizes(path, head.data(), std::uint64_t(in.gcount()), fileBytes);
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     return exrPartSizes(path, init, path, fileBytes);
 }
@@ -109,6 +239,7 @@ std::vector<ExrPartSize> readExrPartSizes(const std::string& path) {
 std::vector<ExrPartSize> readExrPartSizes(const std::string& name, const void* bytes,
                                           std::size_t size) {
     MemoryStream stream{static_cast<const unsigned char*>(bytes), size};
+    checkExrAttributeSizes(name, stream.bytes, size, size);
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.user_data = &stream;
     init.read_fn = readMemory;

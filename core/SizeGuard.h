@@ -24,7 +24,9 @@ struct ExrPartSize {
 /** Reads the headers of an OpenEXR file, and nothing else, through OpenEXR's C library: its C++
  *  reader allocates (and zeroes) every part's chunk offset table, 8 bytes per chunk counted from
  *  the data window, as it opens a file, before a caller could look at the data window. Throws
- *  Error "PATH: OpenEXR: ..." for unreadable headers and "PATH: the headers announce N chunks,
+ *  Error "PATH: OpenEXR: ..." for unreadable headers, "PATH: OpenEXR header: attribute 'A' (TYPE)
+ *  claims N bytes but M remain in the file ..." for an attribute the C++ reader would allocate
+ *  from that claim, and "PATH: the headers announce N chunks,
  *  whose offset table alone takes ..., but the file holds only B bytes ..." when the tables
  *  could not be in the file. Callers then check exrReadBytes with checkMemory before opening the
  *  file with the C++ API. */

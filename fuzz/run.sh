@@ -4,7 +4,8 @@
 #   fuzz/run.sh BUILD_FUZZ SEEDS SECONDS [TARGET...]
 # BUILD_FUZZ: a build with -DOSGBTF_BUILD_FUZZERS=ON (fuzz/README.md); SEEDS: the output folder
 # of osgbtf_fuzz_seeds. Corpora grow in fuzz/out/corpus/<target> (kept between runs), findings
-# land in fuzz/out/findings/<target>-*, logs in fuzz/out/logs/<target>.log.
+# land in fuzz/out/findings/<target>-*, logs in fuzz/out/logs/<target>.log. FUZZ_ARGS: more
+# libFuzzer flags (e.g. FUZZ_ARGS=-runs=1000000: stop at a million executions or SECONDS).
 set -euo pipefail
 if [ $# -lt 3 ]; then
   sed -n '2,7p' "$0"
@@ -21,17 +22,18 @@ mkdir -p "$out/corpus" "$out/findings" "$out/logs"
 for t in "${targets[@]}"; do
   corpus=$out/corpus/$t
   mkdir -p "$corpus"
-  [ -d "$seeds/$t" ] && cp -n "$seeds/$t"/* "$corpus"/ 2>/dev/null || true
+  if [ -d "$seeds/$t" ]; then cp -n "$seeds/$t"/* "$corpus"/ 2>/dev/null || true; fi
   cp -n "$here/regression/$t"/* "$corpus"/ 2>/dev/null || true
   # -timeout=5: an input over 5 s is a hang (issue 16); -rss_limit_mb: libFuzzer's default,
   # stated; -max_len: large enough for the seeds (fitted materials of a few KB).
   set +e
+  # shellcheck disable=SC2086  # FUZZ_ARGS: separate libFuzzer flags
   "$build/bin/fuzz_$t" "$corpus" -dict="$here/dict/$t.dict" -max_total_time="$seconds" \
     -timeout=5 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
-    -artifact_prefix="$out/findings/$t-" >"$out/logs/$t.log" 2>&1
+    -artifact_prefix="$out/findings/$t-" ${FUZZ_ARGS:-} >"$out/logs/$t.log" 2>&1
   status=$?
   set -e
   echo "== $t (exit $status): $(grep -E '^#[0-9]+' "$out/logs/$t.log" | tail -1)"
   grep -E '^stat::(number_of_executed_units|peak_rss_mb)' "$out/logs/$t.log" || true
-  ls "$out/findings" | grep "^$t-" || true
+  find "$out/findings" -maxdepth 1 -name "$t-*" -printf '%f\n'
 done

@@ -103,10 +103,13 @@ float toFloat(const unsigned char* p, int scalarSize) {
  *  read) it only moves past them and gives an empty matrix of `use` columns. */
 FactorMatrix readMatrix(Reader& in, std::uint64_t rows, std::uint64_t stride, std::uint64_t use,
                         int scalarSize, const std::string& field, bool skip = false) {
-    if (skip) {
+    // Nothing to keep per row (rank 0 factors, an empty height map): the rows are skipped, not
+    // walked; a header can claim billions of them (fuzz/regression/ubo2014/).
+    if (skip || use == 0) {
         in.need((long double)rows * stride * scalarSize, field);
         in.seek(in.position() + rows * stride * std::uint64_t(scalarSize));
-        return FactorMatrix(0, static_cast<Eigen::Index>(use));
+        return FactorMatrix(skip ? 0 : static_cast<Eigen::Index>(rows),
+                            static_cast<Eigen::Index>(use));
     }
     FactorMatrix m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(use));
     const std::uint64_t rowBytes = stride * std::uint64_t(scalarSize);

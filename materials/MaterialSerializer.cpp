@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <istream>
 
 #include <osgDB/ObjectWrapper>
 #include <osgDB/Registry>
@@ -44,6 +45,44 @@ bool fromHex(const std::string& text, std::vector<float>& values) {
     return true;
 }
 
+/** Reaches InputStream's protected iterator: a member pointer formed in a derived class is a
+ *  pointer to InputStream's member, usable on any InputStream (no cast of the object). */
+struct IteratorAccess : osgDB::InputStream {
+    static osgDB::InputIterator* of(osgDB::InputStream& is) {
+        return (is.*(&IteratorAccess::_in)).get();
+    }
+};
+
+/** Whether OSG 3.6.5's AsciiInputIterator::readWrappedString would find the end of the string
+ *  that starts at the stream's position: it skips ' ', '\n', '\r', then reads a quoted string
+ *  up to its closing '"' ('\\' escapes the next character) or a bare word up to ' ', '\n' or
+ *  '\0'. It reads with istream::get, which at the end of the stream leaves the character it was
+ *  given unchanged, so there each of those loops spins forever (the string loops appending that
+ *  character: memory grows too). Looks ahead in the stream buffer and seeks back. */
+bool wrappedStringEnds(std::istream& in) {
+    // A failed or ended stream: get() extracts nothing, OSG then tests an uninitialised char.
+    if (!in.good()) return false;
+    std::streambuf* buffer = in.rdbuf();
+    const std::streampos start = buffer->pubseekoff(0, std::ios::cur, std::ios::in);
+    // A stream that cannot seek back: leave it to OSG's reader (files and string streams can).
+    if (start == std::streampos(std::streamoff(-1))) return true;
+    using Traits = std::char_traits<char>;
+    const Traits::int_type eof = Traits::eof();
+    Traits::int_type c = buffer->sbumpc();
+    while (c == ' ' || c == '\n' || c == '\r') c = buffer->sbumpc();
+    bool ends = false;
+    if (c == '"') {
+        for (c = buffer->sbumpc(); c != eof && c != '"'; c = buffer->sbumpc())
+            if (c == '\\' && (c = buffer->sbumpc()) == eof) break;
+        ends = c == '"';
+    } else if (c != eof) {
+        while (c != eof && c != ' ' && c != '\n' && c != 0) c = buffer->sbumpc();
+        ends = c != eof;
+    }
+    buffer->pubseekpos(start, std::ios::in);
+    return ends;
+}
+
 // Every material class: one property, FittedData, the material's whole FittedMaterial. Reading
 // rebuilds it through the method registry and copies it into the object OSG created.
 bool checkFittedData(const Material& material) {
@@ -67,36 +106,52 @@ bool writeFittedData(osgDB::OutputStream& os, const Material& material) {
 
 }  // namespace
 
+bool readWrappedStringChecked(osgDB::InputStream& is, std::string& text) {
+    text.clear();
+    if (is.getException()) return false;
+    if (!is.isBinary()) {
+        osgDB::InputIterator* iterator = IteratorAccess::of(is);
+        std::istream* in = iterator ? iterator->getStream() : nullptr;
+        if (!in || !wrappedStringEnds(*in)) {
+            is.throwException(
+                "InputStream: the stream ends inside a string (truncated or damaged)");
+            return false;
+        }
+    }
+    is.readWrappedString(text);
+    return !is.getException();
+}
+
 /** Reads what writeFitted wrote. Returns false on a stream error; throws Error for data that
  *  read but make no material. */
 bool readFittedMaterial(osgDB::InputStream& is, FittedMaterial& fitted) {
     fitted.source = "material embedded in the scene";
-    is.readWrappedString(fitted.method);
+    readWrappedStringChecked(is, fitted.method);
     unsigned count = 0;
     is >> count >> is.BEGIN_BRACKET;
     // Counts come from the file: stop at the first stream error or empty name (what reads past
-    // the end give), or a damaged count (e.g. 4000000000, fuzz/open/hang-*)
-    // spins for minutes on reads that all fail. Saved materials never have empty names.
+    // the end give), or a damaged count (e.g. 4000000000) spins for minutes on reads that all
+    // fail. Saved materials never have empty names.
     for (unsigned i = 0; i < count && !is.getException(); ++i) {
         std::string key, value;
-        is.readWrappedString(key);
-        is.readWrappedString(value);
+        readWrappedStringChecked(is, key);
+        readWrappedStringChecked(is, value);
         if (key.empty()) fail(fitted.source, "a parameter has no name (damaged or truncated)");
         fitted.parameters[key] = value;
     }
     is >> is.END_BRACKET;
     std::string views, lights;
-    is.readWrappedString(views);
-    is.readWrappedString(lights);
+    readWrappedStringChecked(is, views);
+    readWrappedStringChecked(is, lights);
     is >> count >> is.BEGIN_BRACKET;
     bool ok = true;
     for (unsigned i = 0; i < count && !is.getException(); ++i) {
         MaterialTexture texture;
         int kind = 0;
         std::string data;
-        is.readWrappedString(texture.name);
+        readWrappedStringChecked(is, texture.name);
         is >> texture.width >> texture.height >> texture.depth >> texture.channels >> kind;
-        is.readWrappedString(data);
+        readWrappedStringChecked(is, data);
         if (texture.name.empty())
             fail(fitted.source, "a texture has no name (damaged or truncated)");
         if (kind < MaterialTexture::Half || kind > MaterialTexture::UNorm8)

@@ -6,6 +6,8 @@
 // registerMethod; MaterialNode's EmbeddedMaterial (scene/Serializers.cpp) uses the same format.
 #pragma once
 
+#include <string>
+
 #include <osgDB/InputStream>
 #include <osgDB/OutputStream>
 
@@ -14,6 +16,13 @@
 namespace osgBTF {
 
 struct MethodInfo;
+
+/** is.readWrappedString(text), except that in an ASCII stream (.osgt) a string the stream ends
+ *  before (truncated or damaged input) is refused first: OSG 3.6.5's own reader
+ *  (AsciiInputIterator::readWrappedString in osgdb_osg) never returns there (fuzz/README.md).
+ *  Returns false, with the stream's exception set, on a refusal or a stream error. For
+ *  serializers: only right after InputStream matched the property name (nothing pre-read). */
+bool readWrappedStringChecked(osgDB::InputStream& is, std::string& text);
 
 /** Reads what writeFittedMaterial wrote. Returns false on a stream error; throws Error for data
  *  that read but make no material. */

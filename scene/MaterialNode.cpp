@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <set>
 #include <system_error>
+#include <vector>
 
 #include <osg/Camera>
 #include <osg/Geometry>
@@ -166,6 +168,16 @@ bool addTangents(osg::Geometry& geometry) {
 class TangentVisitor : public osg::NodeVisitor {
 public:
     TangentVisitor() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+    using osg::NodeVisitor::apply;
+    void apply(osg::Node& node) override {
+        // A scene file can place a node below itself (fuzz/regression/scene_file/), and this
+        // visitor runs while it is read (addChild, setMaterial): a node already on the path is
+        // not entered again, or the traversal recurses until the stack overflows.
+        const osg::NodePath& path = getNodePath();
+        if (!path.empty() && std::find(path.begin(), path.end() - 1, &node) != path.end() - 1)
+            return;
+        traverse(node);
+    }
     void apply(osg::Geometry& geometry) override {
         if (addTangents(geometry)) ++changed;
     }
@@ -435,26 +447,54 @@ unsigned MaterialNode::generateTangents() {
     return osgBTF::generateTangents(*this);
 }
 
+namespace {
+
+/** Whether `child` is `node` or one of its ancestors: below `node` it would close a cycle, which
+ *  every traversal follows until the stack overflows and whose references keep it alive. A
+ *  scene file closes one by naming an enclosing node's UniqueID among its children
+ *  (fuzz/regression/scene_file/). Warns when it would. */
+bool closesCycle(const osg::Node& node, const osg::Node* child) {
+    if (!child) return false;
+    std::vector<const osg::Node*> todo{&node};
+    std::set<const osg::Node*> seen;
+    while (!todo.empty()) {
+        const osg::Node* n = todo.back();
+        todo.pop_back();
+        if (n == child) {
+            OSG_WARN << "osgBTF::MaterialNode: a child that is the node itself or one of its "
+                        "parents would make a cycle; it is left out"
+                     << std::endl;
+            return true;
+        }
+        if (!seen.insert(n).second) continue;
+        for (const osg::Group* parent : n->getParents()) todo.push_back(parent);
+    }
+    return false;
+}
+
+}  // namespace
+
 bool MaterialNode::addChild(osg::Node* child) {
-    if (!osg::Group::addChild(child)) return false;
+    if (closesCycle(*this, child) || !osg::Group::addChild(child)) return false;
     osgBTF::generateTangents(*child);
     return true;
 }
 
 bool MaterialNode::insertChild(unsigned int index, osg::Node* child) {
-    if (!osg::Group::insertChild(index, child)) return false;
+    if (closesCycle(*this, child) || !osg::Group::insertChild(index, child)) return false;
     osgBTF::generateTangents(*child);
     return true;
 }
 
 bool MaterialNode::replaceChild(osg::Node* origChild, osg::Node* newChild) {
-    if (!osg::Group::replaceChild(origChild, newChild)) return false;
+    if (closesCycle(*this, newChild) || !osg::Group::replaceChild(origChild, newChild))
+        return false;
     if (newChild) osgBTF::generateTangents(*newChild);
     return true;
 }
 
 bool MaterialNode::setChild(unsigned int index, osg::Node* node) {
-    if (!osg::Group::setChild(index, node)) return false;
+    if (closesCycle(*this, node) || !osg::Group::setChild(index, node)) return false;
     if (node) osgBTF::generateTangents(*node);
     return true;
 }

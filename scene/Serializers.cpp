@@ -36,7 +36,7 @@ bool checkMaterialFile(const osgBTF::MaterialNode& node) {
 
 bool readMaterialFile(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
     std::string file;
-    is.readWrappedString(file);
+    if (!osgBTF::readWrappedStringChecked(is, file)) return false;
     node.setMaterialFile(file, is.getOptions());
     return true;
 }
@@ -73,7 +73,7 @@ bool checkCoordinateMapFile(const osgBTF::MaterialNode& node) {
 
 bool readCoordinateMapFile(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
     std::string file;
-    is.readWrappedString(file);
+    if (!osgBTF::readWrappedStringChecked(is, file)) return false;
     node.setCoordinateMapFile(file, is.getOptions());
     return true;
 }

@@ -16,11 +16,14 @@
 
 #include "NotifyCapture.h"
 #include "TestUtil.h"
+#include "core/CoordinateMap.h"
 #include "core/Error.h"
+#include "core/FittedMaterialFile.h"
 #include "core/MeasuredBtf.h"
 #include "core/Progress.h"
 #include "fuzz/FuzzEntries.h"
 #include "loaders/Ubo2003.h"
+#include "loaders/Ubo2014.h"
 
 namespace fs = std::filesystem;
 
@@ -133,6 +136,124 @@ TEST_F(FuzzFindings, EmbeddedMaterialWithUnknownPixelKindIsRefused) {
                                   "children without the material)"),
               std::string::npos)
         << capture.text();
+}
+
+// scene_file's body skips inputs with numbers above 10000 or below 0 (OSG's own unbounded counts,
+// fuzz/README.md); this one it skips is read here directly.
+TEST_F(FuzzFindings, EmbeddedTextureOfNegativeSizeIsRefused) {
+    std::ifstream in(input("scene_file", "negative-size-wraps.osgt"), std::ios::binary);
+    std::stringstream scene;
+    scene << in.rdbuf();
+    osgDB::ReaderWriter* osgt = osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
+    ASSERT_NE(osgt, nullptr);
+    osgBTF::test::ScopedNotifyCapture capture;
+    osgDB::ReaderWriter::ReadResult result = osgt->readNode(scene);
+    ASSERT_TRUE(result.validNode());
+    EXPECT_NE(capture.text().find("osgBTF::MaterialNode: material embedded in the scene: texture "
+                                  "data is damaged (the node draws its children without the "
+                                  "material)"),
+              std::string::npos)
+        << capture.text();
+}
+
+// The campaign's findings (fuzz/README.md, "Campaign"): each input ran past libFuzzer's 5 s
+// before its fix; now each is refused in milliseconds, so a regression shows as the test's timeout.
+TEST_F(FuzzFindings, ExrAttributeClaimingMoreThanTheFileIsRefusedBeforeOpenExrAllocatesIt) {
+    // A string attribute (the C++ reader zero-fills a std::string of the claimed size).
+    const std::string material = input("fitted_material", "hang-string-attribute-claims-1.8GB.exr");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(material); }),
+              material +
+                  ": OpenEXR header: attribute 'osgBTF.method' (string) claims 1836347395 bytes "
+                  "but 1728 remain in the file (truncated or corrupt file)");
+    // A compression attribute whose size field says 905969665: OpenEXR reads its one byte and
+    // takes what follows as the next attribute, an unknown type (allocated from its size).
+    const std::string plugin =
+        input("btfmat_plugin", "hang-attribute-after-compression-claims-1.9GB.btfmat");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(plugin); }),
+              plugin +
+                  ": OpenEXR header: attribute '0,0;30,0;30,120;30,240;60,60' () claims "
+                  "1886220131 bytes but 2367 remain in the file (truncated or corrupt file)");
+    // A channel list whose fields and size field disagree: OpenEXR follows the fields, and the
+    // string that it reads next is the one checked.
+    const std::string channels =
+        input("fitted_material", "oom-string-after-channel-list-read-by-its-fields.exr");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(channels); }),
+              channels +
+                  ": OpenEXR header: attribute 'osgBTF.param.fit.seconds' (string) claims "
+                  "1409286154 bytes but 722 remain in the file (truncated or corrupt file)");
+    const std::string map = input("coordinate_map", "hang-attribute-claims-1.7GB.exr");
+    EXPECT_EQ(
+        osgBTF::test::errorOf([&] { osgBTF::readCoordinateMap(map); }),
+        map +
+            ": OpenEXR header: attribute 'lineOrdpression' (\\x01) claims 1677918208 bytes but "
+            "319 remain in the file (truncated or corrupt file)");
+}
+
+TEST_F(FuzzFindings, Ubo2014RowsWithNoColumnToKeepAreSkippedNotWalked) {
+    // The FMF header's height map is 0 texels wide and very many rows high: rows of nothing to
+    // keep, which reading walked one by one. Now they are skipped, and the header's next field
+    // is what fails.
+    const std::string path = input("ubo2014", "hang-rows-of-zero-columns.btf");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::readUbo2014(path); }),
+              path + ": FMF: scalar size 15 is not 2 (half), 4 (float) or 8 (double)");
+}
+
+// A node below itself: every traversal recursed until the stack overflowed (the first being
+// the tangent generation of addChild, while the file was read), and the cycle leaked.
+TEST_F(FuzzFindings, SceneNodeBelowItselfIsLeftOut) {
+    osgDB::ReaderWriter* osgt = osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
+    ASSERT_NE(osgt, nullptr);
+    // MaterialNode 1 > Group 2 > UniqueID 1 again: the group, whose child is the node itself, is
+    // the one left out.
+    std::ifstream in(input("scene_file", "cycle-node-below-itself.osgt"), std::ios::binary);
+    std::stringstream scene;
+    scene << in.rdbuf();
+    osgBTF::test::ScopedNotifyCapture capture;
+    osgDB::ReaderWriter::ReadResult result = osgt->readNode(scene);
+    ASSERT_TRUE(result.validNode()) << result.message();
+    ASSERT_NE(result.getNode()->asGroup(), nullptr);
+    EXPECT_EQ(result.getNode()->asGroup()->getNumChildren(), 0u);
+    EXPECT_NE(capture.text().find("osgBTF::MaterialNode: a child that is the node itself or one "
+                                  "of its parents would make a cycle; it is left out"),
+              std::string::npos)
+        << capture.text();
+}
+
+// OSG's ASCII reader never returns from a string that the stream ends inside; the serializers
+// refuse such a string before handing it to OSG (readWrappedStringChecked). Both inputs ran for
+// minutes before, so the test's timeout is the hang criterion.
+TEST_F(FuzzFindings, SceneEndingInsideAnEmbeddedMaterialIsRefused) {
+    osgDB::ReaderWriter* osgt = osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
+    ASSERT_NE(osgt, nullptr);
+    struct Case {
+        const char* name;
+        std::string message, warning;
+    };
+    const std::string node = " At osgBTF::MaterialNode ";
+    const std::string children = " (the node draws its children without the material)";
+    // The parameter count says 4000000000: names are read on past the list to the stream end.
+    // The texture list ends in whitespace; the refusal's message is then replaced by OSG's for
+    // the sizes read after it, and the empty name is what the material reports.
+    for (const Case& c :
+         {Case{"hang-parameter-count-4000000000.osgt",
+               "InputStream: the stream ends inside a string (truncated or damaged)" + node,
+               "osgBTF::MaterialNode: material embedded in the scene: a parameter has no name "
+               "(damaged or truncated)" +
+                   children},
+          Case{"hang-texture-count-truncated.osgt",
+               "InputStream: Failed to read from stream." + node,
+               "osgBTF::MaterialNode: material embedded in the scene: a texture has no name "
+               "(damaged or truncated)" +
+                   children}}) {
+        std::ifstream in(input("scene_file", c.name), std::ios::binary);
+        std::stringstream scene;
+        scene << in.rdbuf();
+        osgBTF::test::ScopedNotifyCapture capture;
+        osgDB::ReaderWriter::ReadResult result = osgt->readNode(scene);
+        EXPECT_FALSE(result.validNode()) << c.name;
+        EXPECT_EQ(result.message(), c.message) << c.name;
+        EXPECT_NE(capture.text().find(c.warning), std::string::npos) << c.name << capture.text();
+    }
 }
 
 }  // namespace

@@ -14,6 +14,7 @@ PACKAGES=(
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)
   xvfb xauth libglx-mesa0     # X server for the viewer tests and xvfb-run (osgviewer, btfviewer)
   dpkg-dev file               # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
+  clang libclang-rt-14-dev    # CI's sanitizer build and the fuzz targets (libFuzzer, ASan, UBSan)
 )
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
