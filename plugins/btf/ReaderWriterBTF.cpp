@@ -14,6 +14,7 @@
 #include <osgDB/ReadFile>
 
 #include "core/Error.h"
+#include "core/FloatImage.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2003.h"
 #include "materials/Material.h"
@@ -182,6 +183,11 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
             std::error_code error;
             fs::create_directories(cacheFile.parent_path(), error);
             if (error) fail(cacheFile.parent_path().string(), "cannot create: " + error.message());
+            // Temporaries of cache writers that were killed (ENTRY.btfmat.tmp<pid>): one folder
+            // scan per fit, which takes far longer.
+            removeStaleTemporaries(cacheFile.parent_path().string(), [](const std::string& stem) {
+                return stem.size() > 7 && stem.compare(stem.size() - 7, 7, ".btfmat") == 0;
+            });
             saveMaterial(*material, cacheFile.string());  // atomic: temporary name, then rename
             material->sourceFile = cacheFile.string();
         } catch (const Error& e) {
