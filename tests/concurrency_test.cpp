@@ -159,6 +159,9 @@ TEST(Concurrency, DatabasePagerThreadsLoadProxyNodesNamingTheSameFiles) {
         std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
     pager->cancel();
+    // cancel() stops the threads without joining them (a leak to ThreadSanitizer).
+    for (unsigned i = 0; i < pager->getNumDatabaseThreads(); ++i)
+        pager->getDatabaseThread(i)->join();
     for (const auto& proxy : proxies) {
         const auto* node = dynamic_cast<const MaterialNode*>(proxy->getChild(0));
         ASSERT_NE(node, nullptr) << proxy->getFileName(0);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <osg/Geode>
 #include <osg/LightSource>
@@ -24,6 +25,12 @@ using namespace osgBTF;
 using namespace osgBTF::test;
 
 namespace {
+
+#if defined(__SANITIZE_THREAD__)
+// As in tests/concurrency_test.cpp: Debian's TBB hands work between its threads in ways
+// ThreadSanitizer does not see; one TBB thread leaves the races between OSG's threads to find.
+const tbb::global_control oneTbbThread(tbb::global_control::max_allowed_parallelism, 1);
+#endif
 
 constexpr int kImageSize = 48;
 constexpr int kQuadrants = 4;
