@@ -11,6 +11,7 @@
 #include <glm/trigonometric.hpp>
 
 #include "core/Error.h"
+#include "core/FloatImage.h"
 
 namespace osgBTF {
 
@@ -113,14 +114,12 @@ void DirectionSet::writeFile(const std::string& path) const {
     out << "# osgBTF direction set '" << _name << "': theta phi in degrees, one per line\n";
     out << std::setprecision(9);
     for (const Direction& d : _directions) out << d.theta << ' ' << d.phi << '\n';
-    const std::string tmp = path + ".tmp";
-    {
+    writeFileAtomically(path, [&](const std::string& tmp) {
         std::ofstream file(tmp, std::ios::binary);
-        if (!(file << out.str())) fail(path, "cannot write direction file");
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) fail(path, "cannot write direction file: " + ec.message());
+        file << out.str();
+        file.close();
+        if (!file) fail(path, "cannot write direction file");
+    });
 }
 
 std::string DirectionSet::serialize() const {

@@ -1,13 +1,17 @@
 #include "core/FloatImage.h"
 
+#include <signal.h>
 #include <unistd.h>
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <set>
 #include <sstream>
 
@@ -419,8 +423,48 @@ void requireFinite(const FloatImage& image, const std::string& path) {
     fail(path, message.str());
 }
 
+namespace {
+
+/** Threads of one process writing the same path would share its temporary name ("<path>.tmp" +
+ *  the process id): they take turns instead (e.g. two threads filling one fit-cache entry). */
+class PathTurn {
+public:
+    explicit PathTurn(std::string path) : _path(std::move(path)) {
+        std::unique_lock<std::mutex> lock(mutex());
+        changed().wait(lock, [&] { return busy().count(_path) == 0; });
+        busy().insert(_path);
+    }
+    ~PathTurn() {
+        {
+            std::lock_guard<std::mutex> lock(mutex());
+            busy().erase(_path);
+        }
+        changed().notify_all();
+    }
+    PathTurn(const PathTurn&) = delete;
+    PathTurn& operator=(const PathTurn&) = delete;
+
+private:
+    static std::mutex& mutex() {
+        static std::mutex m;
+        return m;
+    }
+    static std::condition_variable& changed() {
+        static std::condition_variable c;
+        return c;
+    }
+    static std::set<std::string>& busy() {
+        static std::set<std::string> paths;
+        return paths;
+    }
+    std::string _path;
+};
+
+}  // namespace
+
 void writeFileAtomically(const std::string& path,
                          const std::function<void(const std::string& temporaryPath)>& write) {
+    const PathTurn turn(fs::absolute(path).lexically_normal().string());
     fs::path folder = fs::path(path).parent_path();
     if (folder.empty()) folder = ".";
     std::error_code ec;
@@ -441,6 +485,27 @@ void writeFileAtomically(const std::string& path,
         fs::remove(temporaryPath, ignored);
         fail(path, "cannot move the finished temporary file into place: " + ec.message());
     }
+}
+
+std::size_t removeStaleTemporaries(const std::string& folder,
+                                   const std::function<bool(const std::string& stem)>& matches) {
+    std::size_t removed = 0;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(folder.empty() ? "." : folder, ec)) {
+        const std::string name = entry.path().filename().string();
+        std::size_t digits = name.size();
+        while (digits > 0 && std::isdigit(static_cast<unsigned char>(name[digits - 1]))) --digits;
+        if (digits == name.size() || digits < 4 || name.size() - digits > 9) continue;
+        const std::string mark = name.substr(digits - 4, 4);
+        if (mark != ".tmp" && mark != ".old") continue;
+        if (!matches(name.substr(0, digits - 4))) continue;
+        const pid_t pid = pid_t(std::stol(name.substr(digits)));
+        // kill(pid, 0) only asks whether the process exists; EPERM means it does (another user).
+        if (pid <= 0 || pid == getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+        std::error_code ignored;
+        if (fs::remove_all(entry.path(), ignored) > 0 && !ignored) ++removed;
+    }
+    return removed;
 }
 
 }  // namespace osgBTF

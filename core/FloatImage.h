@@ -88,4 +88,13 @@ void requireFinite(const FloatImage& image, const std::string& path);
 void writeFileAtomically(const std::string& path,
                          const std::function<void(const std::string& temporaryPath)>& write);
 
+/** Removes what killed writers left in `folder`: entries named "STEM.tmp<pid>" or "STEM.old<pid>"
+ *  (the temporary names of writeFileAtomically and of folders published by rename) for which
+ *  `matches(STEM)` holds and whose process <pid> no longer runs on this machine. A writer killed
+ *  with SIGKILL cannot remove its own temporary; the next run of the same kind cleans it. Errors
+ *  are ignored (a temporary left behind is clutter, never taken for a result: readers only open
+ *  final names). Returns how many entries it removed. */
+std::size_t removeStaleTemporaries(const std::string& folder,
+                                   const std::function<bool(const std::string& stem)>& matches);
+
 }  // namespace osgBTF

@@ -1,9 +1,11 @@
 #include "harness/Compare.h"
 
+#include <fcntl.h>  // AT_FDCWD
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>  // renameat2, RENAME_EXCHANGE (glibc, _GNU_SOURCE)
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -51,6 +53,14 @@ void writeText(const std::string& path, const std::string& text) {
 void publishFolder(const fs::path& temporary, const fs::path& target) {
     std::error_code ec;
     fs::path old;
+    // Swapping the two names in one step leaves no moment without `target` for a reader (or a
+    // kill) to find; the previous results then sit under the temporary name until removed.
+    if (fs::exists(target) &&
+        ::renameat2(AT_FDCWD, temporary.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) == 0) {
+        fs::remove_all(temporary, ec);
+        return;
+    }
+    // A file system without RENAME_EXCHANGE: move the old folder aside first.
     if (fs::exists(target)) {
         old = target;
         old += ".old" + std::to_string(getpid());
@@ -443,6 +453,10 @@ CompareResult runCompare(const CompareOptions& options) {
     std::error_code ec;
     fs::create_directories(parent, ec);
     if (ec) throw Error(parent.string() + ": cannot create the folder: " + ec.message());
+    // Work folders of earlier runs that were killed (a dead process's DIR.tmp<pid>, DIR.old<pid>).
+    removeStaleTemporaries(parent.string(), [&](const std::string& stem) {
+        return stem == finalTarget.filename().string();
+    });
     fs::path work = parent / (finalTarget.filename().string() + ".tmp" + std::to_string(getpid()));
     fs::remove_all(work, ec);
     fs::create_directories(work / "fits", ec);

@@ -88,8 +88,16 @@ FitProcessResult runFitProcess(const FitJob& job) {
     posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
     const auto start = std::chrono::steady_clock::now();
     pid_t pid = 0;
+    // The child dies with this process (tools/btf/main.cpp reads OSGBTF_PARENT_PID).
+    std::vector<std::string> environment;
+    for (char** e = environ; *e; ++e)
+        if (std::strncmp(*e, "OSGBTF_PARENT_PID=", 18) != 0) environment.emplace_back(*e);
+    environment.push_back("OSGBTF_PARENT_PID=" + std::to_string(getpid()));
+    std::vector<char*> envp;
+    for (std::string& e : environment) envp.push_back(e.data());
+    envp.push_back(nullptr);
     const int spawnError =
-        posix_spawn(&pid, job.tool.c_str(), &actions, nullptr, argv.data(), environ);
+        posix_spawn(&pid, job.tool.c_str(), &actions, nullptr, argv.data(), envp.data());
     posix_spawn_file_actions_destroy(&actions);
     if (spawnError != 0) throw Error(job.tool + ": cannot start: " + std::strerror(spawnError));
 

@@ -12,6 +12,7 @@
 #include <Imath/half.h>
 
 #include "core/Error.h"
+#include "core/FloatImage.h"
 
 namespace osgBTF {
 
@@ -548,19 +549,13 @@ void writeUbo2014(const Ubo2014Factors& f, const std::string& path) {
         }
     }
 
-    const std::string tmp = path + ".tmp";
-    {
+    // A temporary name per process: two writers of one path never share (and truncate) one.
+    writeFileAtomically(path, [&](const std::string& tmp) {
         std::ofstream file(tmp, std::ios::binary);
         file.write(out.data(), std::streamsize(out.size()));
-        if (!file) {
-            std::error_code ignored;
-            fs::remove(tmp, ignored);
-            fail(path, "cannot write " + tmp);
-        }
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) fail(path, "cannot rename " + tmp + ": " + ec.message());
+        file.close();
+        if (!file) fail(path, "cannot write " + tmp);
+    });
 }
 
 void writeFactorsAsUbo2014(const FactoredBtf& factors, const std::string& path, int scalarSize,

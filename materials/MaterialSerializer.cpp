@@ -9,6 +9,7 @@
 #include <osgDB/Serializer>
 
 #include "core/Error.h"
+#include "core/Notify.h"
 #include "materials/Material.h"
 
 namespace osgBTF {
@@ -95,7 +96,7 @@ bool readFittedData(osgDB::InputStream& is, Material& material) {
         if (!readFittedMaterial(is, fitted)) return false;
         material.assignFrom(*materialFromFile(fitted));
     } catch (const std::exception& e) {
-        OSG_WARN << "osgBTF::" << material.className() << ": " << e.what() << std::endl;
+        OSGBTF_NOTIFY(osg::WARN, "osgBTF::" << material.className() << ": " << e.what());
     }
     return true;
 }

@@ -22,6 +22,7 @@
 #include <osgUtil/TangentSpaceGenerator>
 
 #include "core/Error.h"
+#include "core/Notify.h"
 #include "materials/CoordinateMapRendering.h"
 #include "scene/OpenMaterial.h"
 #include "scene/ShadowTerminator.h"
@@ -124,8 +125,10 @@ bool addTangents(osg::Geometry& geometry) {
     const unsigned count = vertices->getNumElements();
     const osg::Array* texCoords = geometry.getTexCoordArray(0);
     if (!isPerVertex(texCoords, count)) {
-        OSG_INFO << "osgBTF::MaterialNode: geometry '" << geometry.getName()
-                 << "' has no per-vertex texture coordinates on unit 0: no tangents" << std::endl;
+        OSGBTF_NOTIFY(osg::INFO,
+                      "osgBTF::MaterialNode: geometry '"
+                          << geometry.getName()
+                          << "' has no per-vertex texture coordinates on unit 0: no tangents");
         return false;
     }
     const osg::Array* normals = geometry.getNormalArray();
@@ -342,7 +345,7 @@ void MaterialNode::setMaterial(Material* material) {
             material->sharedStateSet();  // builds the program and textures now, not in cull
         } catch (const std::exception& e) {
             _materialError = e.what();
-            OSG_WARN << "osgBTF::MaterialNode: " << e.what() << std::endl;
+            OSGBTF_NOTIFY(osg::WARN, "osgBTF::MaterialNode: " << e.what());
             _material = nullptr;
         }
     } else {
@@ -381,8 +384,9 @@ bool MaterialNode::setMaterialFile(const std::string& file, const osgDB::Options
     _materialFile = file;
     _materialError = problem;
     updateMapState();
-    OSG_WARN << "osgBTF::MaterialNode: " << problem
-             << " (the node draws its children without the material)" << std::endl;
+    OSGBTF_NOTIFY(osg::WARN, "osgBTF::MaterialNode: "
+                                 << problem
+                                 << " (the node draws its children without the material)");
     return false;
 }
 
@@ -413,8 +417,9 @@ bool MaterialNode::setCoordinateMapFile(const std::string& file, const osgDB::Op
     _mapError = problem;
     if (!map) {
         _mapStateSet = nullptr;
-        OSG_WARN << "osgBTF::MaterialNode: " << problem
-                 << " (the node draws the material without the map)" << std::endl;
+        OSGBTF_NOTIFY(osg::WARN,
+                      "osgBTF::MaterialNode: " << problem
+                                               << " (the node draws the material without the map)");
         return false;
     }
     updateMapState();
@@ -433,8 +438,9 @@ void MaterialNode::updateMapState() {
                                                    sharedMapTexture(_map).get());
     } catch (const std::exception& e) {
         _mapError = e.what();
-        OSG_WARN << "osgBTF::MaterialNode: " << _mapError
-                 << " (the node draws the material without the map)" << std::endl;
+        OSGBTF_NOTIFY(osg::WARN,
+                      "osgBTF::MaterialNode: " << _mapError
+                                               << " (the node draws the material without the map)");
     }
 }
 
@@ -543,8 +549,9 @@ std::vector<EyeLight> MaterialNode::collectLights(osgUtil::CullVisitor& cv) {
             lights.push_back({osg::Vec4(0, 0, 1, 0), osg::Vec3(1, 1, 1)});
     }
     if (lights.size() > std::size_t(kMaxLights)) {
-        OSG_INFO << "osgBTF::MaterialNode: " << lights.size()
-                 << " lights, the shaders use the first " << kMaxLights << std::endl;
+        OSGBTF_NOTIFY(osg::INFO, "osgBTF::MaterialNode: " << lights.size()
+                                                          << " lights, the shaders use the first "
+                                                          << kMaxLights);
         lights.resize(kMaxLights);
     }
     return lights;

@@ -23,6 +23,7 @@
 #include <osgDB/OutputStream>
 #include <osgDB/Registry>
 
+#include "core/Notify.h"
 #include "materials/Material.h"
 #include "materials/MaterialSerializer.h"
 #include "scene/MaterialNode.h"
@@ -57,8 +58,9 @@ bool readEmbeddedMaterial(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
         if (!osgBTF::readFittedMaterial(is, fitted)) return false;
         node.setMaterial(osgBTF::materialFromFile(fitted).get());
     } catch (const std::exception& e) {
-        OSG_WARN << "osgBTF::MaterialNode: " << e.what()
-                 << " (the node draws its children without the material)" << std::endl;
+        OSGBTF_NOTIFY(osg::WARN, "osgBTF::MaterialNode: "
+                                     << e.what()
+                                     << " (the node draws its children without the material)");
     }
     return true;
 }

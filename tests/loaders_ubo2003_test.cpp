@@ -1,4 +1,6 @@
 // UBO2003 / ATRIUM zip and folder loader, and the matching writer.
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -269,7 +271,7 @@ TEST(Ubo2003Writer, RefusesNonIntegerDirections) {
     EXPECT_NE(message.find(zip + ": light 1 has angle 23.5 degrees"), std::string::npos) << message;
     EXPECT_NE(message.find("integer degrees"), std::string::npos) << message;
     EXPECT_FALSE(fs::exists(zip));
-    EXPECT_FALSE(fs::exists(zip + ".tmp"));
+    EXPECT_FALSE(fs::exists(zip + ".tmp" + std::to_string(getpid())));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -533,7 +535,7 @@ TEST(Ubo2003Writer, JpegMembersAreStoredAndWriteIsAtomic) {
     TempDir dir;
     const std::string zip = dir.file("stored.zip");
     writeUbo2003Zip(smallBtf(smooth), zip, Ubo2003ImageFormat::Jpeg);
-    EXPECT_FALSE(fs::exists(zip + ".tmp"));
+    EXPECT_FALSE(fs::exists(zip + ".tmp" + std::to_string(getpid())));
     const auto listing = runCommand("unzip -v " + shellQuote(zip));
     EXPECT_EQ(listing.exitCode, 0);
     EXPECT_NE(listing.output.find("Stored"), std::string::npos) << listing.output;

@@ -1,6 +1,8 @@
 // Writing factorisations as UBO2014 .btf files (issue 11 section 1: `btf fit -m fmf -o out.btf`),
 // checked with a byte-level parser written here from ../shared/docs/formats.md section 2, not
 // with osgBTF's reader: the file must be what the format's reference readers expect.
+#include <unistd.h>
+
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -297,7 +299,7 @@ TEST(Ubo2014Write, RefusesWhatItCannotWrite) {
     EXPECT_EQ(test::errorOf([&] { writeFactorsAsUbo2014(broken, path, 4); }),
               "hand-made: inconsistent factor matrix sizes: U is 36x4, SxV 3x4");
     EXPECT_FALSE(std::filesystem::exists(path));
-    EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+    EXPECT_FALSE(std::filesystem::exists(path + ".tmp" + std::to_string(getpid())));
 }
 
 TEST(Ubo2014Write, FittedFmfMaterialWritesExactlyItsFactors) {

@@ -180,7 +180,8 @@ void writeUbo2003Zip(const MeasuredBtf& btf, const std::string& zipPath, Ubo2003
         encoded[i] = encode(btf, i % nV, i / nV, format, jpegQuality, zipPath, useProxy);
     });
 
-    const std::string tmp = zipPath + ".tmp";
+    // Per process: two writers of one archive never share (and truncate) one temporary.
+    const std::string tmp = zipPath + ".tmp" + std::to_string(::getpid());
     int code = 0;
     zip_t* zip = zip_open(tmp.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &code);
     if (!zip) fail(zipPath, "cannot create " + tmp + ": " + zipErrorText(code));
@@ -219,7 +220,7 @@ void writeUbo2003Folder(const MeasuredBtf& btf, const std::string& folder,
     checkIntegerDirections(btf, folder);
     std::error_code ec;
     if (fs::exists(folder, ec)) fail(folder, "already exists; will not write images into it");
-    const fs::path tmp = folder + ".tmp";
+    const fs::path tmp = folder + ".tmp" + std::to_string(::getpid());
     fs::remove_all(tmp, ec);
     if (!fs::create_directories(tmp, ec) || ec)
         fail(folder, "cannot create " + tmp.string() + ": " + ec.message());

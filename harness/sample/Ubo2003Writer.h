@@ -20,12 +20,12 @@ std::string ubo2003MemberName(int index, const Direction& light, const Direction
  *  lightIndex * viewCount + viewIndex (81 * light + view for the Bonn set). Directions must be
  *  integer degrees (the names hold nothing else). Images are encoded in parallel; JPEG, PNG and
  *  EXR members are stored uncompressed (deflate gains nothing on them), HDR members deflated. The
- *  archive appears atomically: it is written to zipPath + ".tmp" and renamed. */
+ *  archive appears atomically: it is written to zipPath + ".tmp<pid>" and renamed. */
 void writeUbo2003Zip(const MeasuredBtf& btf, const std::string& zipPath,
                      Ubo2003ImageFormat format = Ubo2003ImageFormat::Jpeg, int jpegQuality = 95);
 
-/** The same images as files in a new folder (written as folder + ".tmp", then renamed; an existing
- *  folder is an error rather than being merged into). */
+/** The same images as files in a new folder (written as folder + ".tmp<pid>", then renamed; an
+ * existing folder is an error rather than being merged into). */
 void writeUbo2003Folder(const MeasuredBtf& btf, const std::string& folder,
                         Ubo2003ImageFormat format = Ubo2003ImageFormat::Jpeg, int jpegQuality = 95);
 

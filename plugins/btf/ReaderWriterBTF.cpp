@@ -14,6 +14,8 @@
 #include <osgDB/ReadFile>
 
 #include "core/Error.h"
+#include "core/FloatImage.h"
+#include "core/Notify.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2003.h"
 #include "materials/Material.h"
@@ -155,22 +157,23 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
                 osg::ref_ptr<Material> material = loadSharedMaterial(cacheFile.string());
                 const auto it = material->fitInfo.find("cacheKey");
                 if (it != material->fitInfo.end() && it->second == key) {
-                    OSG_NOTICE << "osgBTF: " << path << ": using the cached fit "
-                               << cacheFile.string() << std::endl;
+                    OSGBTF_NOTIFY(osg::NOTICE, "osgBTF: " << path << ": using the cached fit "
+                                                          << cacheFile.string());
                     return material;
                 }
-                OSG_NOTICE << "osgBTF: " << cacheFile.string()
-                           << " was fitted from something else; fitting again" << std::endl;
+                OSGBTF_NOTIFY(osg::NOTICE,
+                              "osgBTF: " << cacheFile.string()
+                                         << " was fitted from something else; fitting again");
             } catch (const Error& e) {
-                OSG_WARN << "osgBTF: ignoring the damaged cache file " << e.what() << std::endl;
+                OSGBTF_NOTIFY(osg::WARN, "osgBTF: ignoring the damaged cache file " << e.what());
             }
         }
     }
-    OSG_NOTICE << "osgBTF: " << path << ": fitting method '" << method.name << "'"
-               << (optionText.empty() ? std::string() : " (" + optionText + ")")
-               << (cacheFile.empty() ? std::string(", cache off")
-                                     : ", then caching it in " + cacheFile.string())
-               << std::endl;
+    OSGBTF_NOTIFY(osg::NOTICE,
+                  "osgBTF: " << path << ": fitting method '" << method.name << "'"
+                             << (optionText.empty() ? std::string() : " (" + optionText + ")")
+                             << (cacheFile.empty() ? std::string(", cache off")
+                                                   : ", then caching it in " + cacheFile.string()));
     osg::ref_ptr<Material> material;
     {
         // A UBO2014 file is fitted from its factors, decoded block by block, never whole.
@@ -182,10 +185,15 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
             std::error_code error;
             fs::create_directories(cacheFile.parent_path(), error);
             if (error) fail(cacheFile.parent_path().string(), "cannot create: " + error.message());
+            // Temporaries of cache writers that were killed (ENTRY.btfmat.tmp<pid>): one folder
+            // scan per fit, which takes far longer.
+            removeStaleTemporaries(cacheFile.parent_path().string(), [](const std::string& stem) {
+                return stem.size() > 7 && stem.compare(stem.size() - 7, 7, ".btfmat") == 0;
+            });
             saveMaterial(*material, cacheFile.string());  // atomic: temporary name, then rename
             material->sourceFile = cacheFile.string();
         } catch (const Error& e) {
-            OSG_WARN << "osgBTF: cannot cache the fit: " << e.what() << std::endl;
+            OSGBTF_NOTIFY(osg::WARN, "osgBTF: cannot cache the fit: " << e.what());
         }
     }
     return material;
@@ -211,12 +219,13 @@ osg::ref_ptr<Material> openStored(const std::string& path, const Settings& setti
                 break;
             }
     }
-    OSG_NOTICE << "osgBTF: " << path
-               << ": opening its stored factorisation as an fmf material (method=NAME fits a "
-                  "method instead)"
-               << (ignored.empty() ? std::string()
-                                   : "; fit options without method= ignored:" + ignored)
-               << std::endl;
+    OSGBTF_NOTIFY(
+        osg::NOTICE,
+        "osgBTF: " << path
+                   << ": opening its stored factorisation as an fmf material (method=NAME fits a "
+                      "method instead)"
+                   << (ignored.empty() ? std::string()
+                                       : "; fit options without method= ignored:" + ignored));
     return loadSharedMaterial(path, storage);
 }
 

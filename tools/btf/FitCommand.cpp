@@ -8,6 +8,7 @@
 
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
+#include "core/FloatImage.h"
 #include "core/Progress.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
@@ -77,6 +78,11 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         if (options->components) fit.set("components", std::to_string(options->components));
         if (options->clusters) fit.set("clusters", std::to_string(options->clusters));
         validateOptions(method, fit);  // before the (long) load; the fit validates them again
+        // What an earlier run killed while writing the same output left (OUTPUT.tmp<pid>).
+        const std::filesystem::path outputPath(options->output);
+        removeStaleTemporaries(outputPath.parent_path().string(), [&](const std::string& stem) {
+            return stem == outputPath.filename().string();
+        });
         std::string extension = std::filesystem::path(options->output).extension().string();
         for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
         const bool btfOutput = extension == ".btf";

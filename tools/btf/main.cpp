@@ -1,8 +1,13 @@
 // btf: inspect, generate and (later) fit and compare measured BTFs. `btf --help` and
 // `btf <command> --help` document every option.
+#include <sys/prctl.h>
 #include <unistd.h>
+
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
+#include <string>
 
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
@@ -34,8 +39,24 @@ void addLoadOptions(CLI::App& command, CommonOptions& common) {
 
 }  // namespace osgBTF::tool
 
+namespace {
+
+/** A fit that `btf compare` runs dies with it: SIGKILL gives compare no chance to stop its
+ *  children, and an orphaned fit would go on for as long as the fit takes, writing into a work
+ *  folder nobody reads. Compare names itself in OSGBTF_PARENT_PID (harness/FitRunner.cpp). */
+void dieWithParent() {
+    const char* parent = std::getenv("OSGBTF_PARENT_PID");
+    if (!parent || !*parent) return;
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    // The parent may have died before prctl: then this process already has a new parent.
+    if (std::to_string(getppid()) != parent) _exit(1);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
     using namespace osgBTF;
+    dieWithParent();
     CLI::App app{
         "btf: measured Bidirectional Texture Functions for OpenSceneGraph.\n"
         "Reads UBO2003/ATRIUM zips or folders, UBO2014 .btf files; writes the built-in sample."};

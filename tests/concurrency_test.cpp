@@ -1,0 +1,171 @@
+// Several threads reading the same .btfmat, .zip (fitted, through the fit cache) and UBO2014
+// .btf at once through osgDB: from std::threads calling osgDB::readRefNodeFile, and through an
+// osgDB::DatabasePager whose threads load ProxyNodes naming the same files (issue 16 section 3).
+// These run in the ThreadSanitizer build too (ctest label "concurrency", README "Reliability").
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <osg/FrameStamp>
+#include <osg/ProxyNode>
+#include <osgDB/DatabasePager>
+#include <osgDB/ReadFile>
+
+#include "harness/sample/SampleBtf.h"
+#include "harness/sample/Ubo2003Writer.h"
+#include "loaders/Ubo2014.h"
+#include "materials/Material.h"
+#include "materials/fmf/Fmf.h"
+#include "tests/PluginTestUtil.h"
+#include "tests/SmallSample.h"
+#include "tests/TestUtil.h"
+
+using namespace osgBTF;
+using namespace osgBTF::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+#if defined(__SANITIZE_THREAD__)
+// TBB (Debian's, uninstrumented) hands work between its threads with atomics ThreadSanitizer does
+// not see, so every task would look like a race with the thread that started it. With one TBB
+// thread each std::thread and pager thread runs its own loops: the races looked for here are
+// between those threads, in osgBTF and osgDB.
+const tbb::global_control oneTbbThread(tbb::global_control::max_allowed_parallelism, 1);
+#endif
+
+/** A sample zip, its lambert fit (.btfmat) and its fmf fit written as a UBO2014 .btf, made once
+ *  for all tests of this process. */
+struct Files {
+    TempDir dir;
+    std::string zip, btfmat, btf, cache;
+    Files() {
+        zip = dir.file("sample.zip");
+        btfmat = dir.file("sample.btfmat");
+        btf = dir.file("sample.btf");
+        cache = dir.file("cache");
+        // In this process, not with the btf tool: the ThreadSanitizer build builds no tool.
+        const MeasuredBtf sample = smallSampleBtf();
+        writeUbo2003Zip(sample, zip, Ubo2003ImageFormat::Png);
+        saveMaterial(*findMethod("lambert").fit(sample, {}), btfmat);
+        const osg::ref_ptr<Material> fmf = findMethod("fmf").fit(sample, {});
+        writeFactorsAsUbo2014(dynamic_cast<const FmfMaterial&>(*fmf).factors(), btf, 2);
+    }
+    std::vector<std::string> all() const { return {btfmat, zip, btf}; }
+    /** The option string each file is read with: the zip fitted (lambert) into a fresh cache. */
+    osg::ref_ptr<osgDB::Options> options() const {
+        return new osgDB::Options("method=lambert cache=" + cache);
+    }
+};
+
+const Files& files() {
+    static const Files f;
+    return f;
+}
+
+/** The cache holds one complete entry per measured file (the zip and the .btf, both fitted with
+ *  lambert) and no temporaries. */
+void expectCompleteCacheEntries(const std::string& cache) {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(cache)) names.push_back(e.path().string());
+    ASSERT_EQ(names.size(), 2u);
+    for (const std::string& name : names) {
+        EXPECT_EQ(fs::path(name).extension(), ".btfmat");
+        EXPECT_EQ(errorOf([&] { loadMaterial(name); }), "no error");
+    }
+}
+
+}  // namespace
+
+TEST(Concurrency, ThreadsReadTheSameFilesThroughOsgDB) {
+    const Files& f = files();
+    usePluginsFromBuild();
+    fs::remove_all(f.cache);
+    constexpr int kThreads = 6, kRounds = 2;
+    const osg::ref_ptr<osgDB::Options> options = f.options();
+    std::atomic<int> nodes{0};
+    std::vector<std::string> problems(kThreads);
+    const std::vector<std::string> all = f.all();
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t)
+        threads.emplace_back([&, t] {
+            for (int round = 0; round < kRounds; ++round)
+                for (std::size_t i = 0; i < all.size(); ++i) {
+                    // Each thread starts at another file, so every pair of files overlaps.
+                    const std::string& file = all[(i + std::size_t(t)) % all.size()];
+                    osg::ref_ptr<osg::Node> node = osgDB::readRefNodeFile(file, options.get());
+                    auto* material = dynamic_cast<MaterialNode*>(node.get());
+                    if (material && material->getMaterial())
+                        ++nodes;
+                    else
+                        problems[std::size_t(t)] += " " + file;
+                }
+        });
+    for (std::thread& t : threads) t.join();
+    EXPECT_EQ(nodes.load(), kThreads * kRounds * 3);
+    for (const std::string& p : problems) EXPECT_EQ(p, "") << "not read as a MaterialNode";
+    expectCompleteCacheEntries(f.cache);
+}
+
+TEST(Concurrency, DatabasePagerThreadsLoadProxyNodesNamingTheSameFiles) {
+    const Files& f = files();
+    usePluginsFromBuild();
+    fs::remove_all(f.cache);
+    osg::ref_ptr<osgDB::DatabasePager> pager = new osgDB::DatabasePager;
+    pager->setUpThreads(5, 1);      // four threads read local files
+    pager->setDoPreCompile(false);  // no GL context here
+    pager->setAcceptNewDatabaseRequests(true);
+    pager->setDatabasePagerThreadPause(false);
+
+    constexpr int kCopies = 4;  // proxies per file
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    std::vector<osg::ref_ptr<osg::ProxyNode>> proxies;
+    for (int copy = 0; copy < kCopies; ++copy)
+        for (const std::string& file : f.all()) {
+            osg::ref_ptr<osg::ProxyNode> proxy = new osg::ProxyNode;
+            proxy->setFileName(0, file);
+            proxy->setDatabaseOptions(f.options());
+            root->addChild(proxy.get());
+            proxies.push_back(proxy);
+        }
+
+    // What a viewer's cull and update traversals do each frame: request what is missing (the
+    // requests stay current only while asked for every frame), then merge what was loaded.
+    osg::ref_ptr<osg::FrameStamp> stamp = new osg::FrameStamp;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    std::size_t loaded = 0;
+    for (unsigned frame = 0; loaded < proxies.size(); ++frame) {
+        ASSERT_LT(std::chrono::steady_clock::now(), deadline) << loaded << " proxies loaded";
+        stamp->setFrameNumber(frame);
+        pager->signalBeginFrame(stamp.get());
+        for (osg::ref_ptr<osg::ProxyNode>& proxy : proxies) {
+            if (proxy->getNumChildren() > 0) continue;
+            osg::NodePath path{root.get(), proxy.get()};
+            pager->requestNodeFile(proxy->getFileName(0), path, 1.0f, stamp.get(),
+                                   proxy->getDatabaseRequest(0), proxy->getDatabaseOptions());
+        }
+        pager->signalEndFrame();
+        pager->updateSceneGraph(*stamp);
+        loaded = 0;
+        for (const auto& proxy : proxies) loaded += proxy->getNumChildren() > 0 ? 1 : 0;
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    pager->cancel();
+    // cancel() stops the threads without joining them (a leak to ThreadSanitizer).
+    for (unsigned i = 0; i < pager->getNumDatabaseThreads(); ++i)
+        pager->getDatabaseThread(i)->join();
+    for (const auto& proxy : proxies) {
+        const auto* node = dynamic_cast<const MaterialNode*>(proxy->getChild(0));
+        ASSERT_NE(node, nullptr) << proxy->getFileName(0);
+        EXPECT_NE(node->getMaterial(), nullptr) << proxy->getFileName(0);
+    }
+    expectCompleteCacheEntries(f.cache);
+}
