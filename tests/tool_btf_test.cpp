@@ -128,10 +128,12 @@ TEST(BtfTool, EvalWithAnEnvironment) {
     EXPECT_NE(r.output.find("environment " + sky), std::string::npos) << r.output;
     EXPECT_LT(std::atof(r.output.c_str() + at + key.size()), 1e-4) << r.output;
     EXPECT_TRUE(std::filesystem::exists(dir.file("e.exr")));
-    r = btfWithGl("eval " + shellQuote(fitted) + " --env " + shellQuote(dir.file("none.hdr")) +
-                  " -o " + shellQuote(dir.file("x.exr")));
+    // A missing map (eval and btfviewer say the same): compare checks it before any fit.
+    r = btf("compare " + shellQuote(zip) + " --out " + shellQuote(dir.file("cmp")) + " --env " +
+            shellQuote(dir.file("none.hdr")));
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("--env: " + dir.file("none.hdr") + ": file not found"),
               std::string::npos)
         << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("cmp")));
 }
