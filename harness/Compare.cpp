@@ -18,6 +18,7 @@
 #include "harness/Pictures.h"
 #include "harness/Report.h"
 #include "loaders/LoadBtf.h"
+#include "scene/EnvironmentLight.h"
 
 namespace osgBTF {
 
@@ -186,6 +187,51 @@ void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& resul
     }
 }
 
+/** pictures/environment.png: the sample patch lit by options.envFile, a column per method, a row
+ *  per view (harness/MaterialImage.h: renderEnvironmentImage). */
+void environmentPicture(const CompareOptions& options, HeadlessRenderer& renderer,
+                        const fs::path& work, CompareResult& result,
+                        const std::vector<osg::ref_ptr<Material>>& materials) {
+    osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+    light->setFile(options.envFile);
+    if (!light->hasMap()) throw Error("--env: " + light->getError());
+    light->setRotation(options.envRotation);
+    const EnvironmentMap map = light->projectionMap();
+    const Direction views[] = {{0.0f, 0.0f}, {60.0f, 0.0f}};
+    Progress progress("environment renders", std::size(views) * materials.size());
+    std::vector<std::vector<FloatImage>> rows(std::size(views));
+    std::vector<std::string> labels;
+    int cell = 0;
+    for (std::size_t i = 0; i < materials.size(); ++i) {
+        if (!materials[i]) continue;
+        labels.push_back(result.methods[i].method);
+        const std::vector<glm::vec3> g = projectPatchEnvironment(*materials[i], map);
+        const int factor = std::max(1, 128 / std::max(1, materials[i]->width()));
+        for (std::size_t v = 0; v < std::size(views); ++v) {
+            rows[v].push_back(
+                enlarge(renderEnvironmentImage(renderer, *materials[i], g, views[v].toVector(),
+                                               options.envExposure),
+                        factor));
+            cell = std::max(cell, rows[v].back().width);
+            progress.advance();
+        }
+    }
+    constexpr int kGap = 4, kBand = 22;
+    FloatImage sheet = addTopBand(tileImages(rows, kGap, 0.0f), kBand, 0.0f);
+    result.labelsDrawn &= labelColumns(sheet, labels, cell, kGap, kBand);
+    writeFloatImage(sheet, (work / "pictures/environment.png").string(), false, true);
+    result.pictures.push_back(
+        {"pictures/environment.png",
+         "The sample patch (normal +Z, nothing occluding it) lit by the environment " +
+             fs::path(options.envFile).filename().string() + " (rotation " +
+             formatNumber(options.envRotation, 3) + " degrees, exposure " +
+             formatNumber(options.envExposure, 3) +
+             "), one column per method, rows: view from above, view 60 degrees from +X. pca, fmf "
+             "and lpca through their folded environment programs (exact); the others as the sum "
+             "of their point-light images at the measured light directions weighted by the "
+             "projected environment (scene/README.md). sRGB-encoded preview of linear values."});
+}
+
 void gpuStage(const CompareOptions& options, const BtfSource& btf, const fs::path& work,
               CompareResult& result, const std::vector<osg::ref_ptr<Material>>& materials) {
     std::unique_ptr<HeadlessRenderer> renderer;
@@ -277,6 +323,7 @@ void gpuStage(const CompareOptions& options, const BtfSource& btf, const fs::pat
                    formatNumber(options.sphereTextureScale, 3) + " times.";
         result.pictures.push_back({"pictures/spheres.png", caption});
     }
+    if (!options.envFile.empty()) environmentPicture(options, *renderer, work, result, materials);
 }
 
 void pictureStage(const BtfSource& btf, const fs::path& work, CompareResult& result,

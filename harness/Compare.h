@@ -40,6 +40,10 @@ struct CompareOptions {
     PassSettings pass;
     int sphereSize = 192;
     float sphereTextureScale = 4;
+    /** An HDR lat-long environment (scene/EnvironmentLight.h): adds pictures/environment.png, the
+     *  sample patch lit by it with every method (GPU). Empty: none. */
+    std::string envFile;
+    float envExposure = 1, envRotation = 0;
     double maxBytesPerTexel = 0;  ///< 0: no budget
     double maxMsPerPass = 0;      ///< 0: no budget
     /** Texels the error tables compare (a random subsample, all pairs each); 0 = all; -1 = all

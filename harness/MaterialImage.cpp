@@ -7,10 +7,23 @@
 
 #include "core/Error.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/EnvironmentState.h"
 
 namespace osgBTF {
 
 namespace {
+
+/** The read-back RGBA float image (rows bottom-up) as a top-down RGB FloatImage. */
+FloatImage toFloatImage(const osg::Image& image, int w, int h) {
+    FloatImage out(w, h, 3);
+    out.channelNames = {"R", "G", "B"};
+    const float* rgba = reinterpret_cast<const float*>(image.data());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                out.at(x, h - 1 - y, c) = rgba[(std::size_t(y) * w + x) * 4 + c];
+    return out;
+}
 
 /** One pixel per texel of a w x h grid: `stateSet` (the material's) over `mapState` (none or the
  *  coordinate-map program and texture) over the render uniforms. */
@@ -49,17 +62,64 @@ FloatImage renderImage(HeadlessRenderer& renderer, osg::StateSet* stateSet, osg:
     }
 
     osg::ref_ptr<osg::Image> image = renderer.render(root.get(), orthoUnitSquare(w, h));
-    FloatImage out(w, h, 3);
-    out.channelNames = {"R", "G", "B"};
-    const float* rgba = reinterpret_cast<const float*>(image->data());
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            for (int c = 0; c < 3; ++c)
-                out.at(x, h - 1 - y, c) = rgba[(std::size_t(y) * w + x) * 4 + c];
-    return out;
+    return toFloatImage(*image, w, h);
 }
 
 }  // namespace
+
+std::vector<glm::vec3> projectPatchEnvironment(const Material& material,
+                                               const EnvironmentMap& map) {
+    return projectEnvironment(visibleEnvironment(map, SurfaceFrame{}),
+                              DirectionInterpolator(material.lights()));
+}
+
+FloatImage evaluateEnvironmentImage(const Material& material, const std::vector<glm::vec3>& g,
+                                    const glm::vec3& view, float exposure) {
+    const int w = material.width(), h = material.height();
+    FloatImage out(w, h, 3);
+    out.channelNames = {"R", "G", "B"};
+    if (view.z <= 0.0f) return out;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const glm::vec3 value = exposure * evaluateProjected(material, x, y, view, g);
+            for (int c = 0; c < 3; ++c) out.at(x, h - 1 - y, c) = value[c];
+        }
+    return out;
+}
+
+FloatImage renderEnvironmentImage(HeadlessRenderer& renderer, const Material& material,
+                                  const std::vector<glm::vec3>& g, const glm::vec3& view,
+                                  float exposure) {
+    const int w = material.width(), h = material.height();
+    if (!foldsEnvironment(material)) {
+        FloatImage sum(w, h, 3);
+        sum.channelNames = {"R", "G", "B"};
+        for (std::size_t i = 0; i < g.size(); ++i) {
+            if (g[i] == glm::vec3(0.0f)) continue;
+            const FloatImage one =
+                renderMaterialImage(renderer, material, view, material.lights().vector(i));
+            for (std::size_t p = 0; p < sum.pixels.size(); ++p)
+                sum.pixels[p] += exposure * g[i][int(p % 3)] * one.pixels[p];
+        }
+        return sum;
+    }
+    const std::vector<std::vector<float>> folded(4, foldEnvironment(material, g));
+    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
+    osg::ref_ptr<osg::Vec4Array> tangents =
+        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
+    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
+    quad->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(quad.get());
+    osg::ref_ptr<osg::StateSet> state = environmentStateSet(material, folded, exposure);
+    state->addUniform(new osg::Uniform("osgBTF_fixedView", osg::Vec4(view.x, view.y, view.z, 1)));
+    geode->setStateSet(state.get());
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    root->setStateSet(material.createStateSet().get());
+    root->addChild(geode.get());
+    osg::ref_ptr<osg::Image> image = renderer.render(root.get(), orthoUnitSquare(w, h));
+    return toFloatImage(*image, w, h);
+}
 
 FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,
                                const glm::vec3& view, const glm::vec3& light) {

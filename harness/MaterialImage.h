@@ -2,11 +2,14 @@
 // per texel, seen from above with the given view direction used for shading.
 #pragma once
 
+#include <vector>
+
 #include <glm/vec3.hpp>
 
 #include "core/CoordinateMap.h"
 #include "core/FloatImage.h"
 #include "harness/headless/HeadlessRenderer.h"
+#include "materials/EnvironmentLighting.h"
 #include "materials/Material.h"
 
 namespace osgBTF {
@@ -32,6 +35,25 @@ FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& mater
 /** CPU path through a map: pixel (x, y) is Material::evaluate at texel map(x, y). */
 FloatImage evaluateMaterialImage(const Material& material, const CoordinateMap& map,
                                  const glm::vec3& view, const glm::vec3& light);
+
+/** Environment lighting of the patch (normal +Z, tangent +X, nothing occluding it; seed 004
+ *  section 5): the map projected onto the material's measured light directions, g_i = sum over
+ *  the upper hemisphere's texels of w_i(d) L Omega (materials/EnvironmentLighting.h). */
+std::vector<glm::vec3> projectPatchEnvironment(const Material& material, const EnvironmentMap& map);
+
+/** CPU path: sum_i g_i BTF(x, v, l_i) per texel (evaluateProjected: exact for the linear
+ *  methods, the projection's approximation for the others, see scene/README.md), times
+ *  `exposure`; layout as evaluateMaterialImage. */
+FloatImage evaluateEnvironmentImage(const Material& material, const std::vector<glm::vec3>& g,
+                                    const glm::vec3& view, float exposure = 1.0f);
+
+/** GPU path: methods with folded environment lighting (foldsEnvironment: pca, fmf, lpca)
+ *  through their environment program with the same data at the patch's 4 vertices; the others
+ *  as sum_i g_i x the point-light image at l_i (one render per light with g_i != 0), the same sum
+ *  as the CPU path. */
+FloatImage renderEnvironmentImage(HeadlessRenderer& renderer, const Material& material,
+                                  const std::vector<glm::vec3>& g, const glm::vec3& view,
+                                  float exposure = 1.0f);
 
 /** The largest absolute difference between two images of the same size (Error otherwise). */
 double maxAbsDifference(const FloatImage& a, const FloatImage& b);

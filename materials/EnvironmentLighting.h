@@ -34,6 +34,8 @@
 
 namespace osgBTF {
 
+class FmfMaterial;
+class LpcaMaterial;
 class Material;
 class PcaMaterial;
 
@@ -121,6 +123,32 @@ std::vector<float> foldPca(const PcaMaterial& material, const std::vector<glm::v
  *  w_j (gamma*_cj + sum_k gamma*_kj E_kj(x)). What the per-vertex shader path computes. */
 glm::vec3 evaluateFoldedPca(const PcaMaterial& material, const std::vector<float>& folded, int x,
                             int y, const glm::vec3& view);
+
+/** Whether fmf's factors render linearly in the light weights (model Fmf without dynamic-range
+ *  reduction; the cosine flag is a per-light factor and folds into g). */
+bool fmfFoldable(const FmfMaterial& material);
+
+/** FMF environment folding for one vertex (U folded per view, channel by channel): per measured
+ *  view j and component q, u*_jq[c] = sum_i g_i[c] s_i U[(j, i, c), q] with s_i the cosine
+ *  division at l_i (1 without the cosine flag). Layout: ((j * K) + q) * 3, K the components.
+ *  Throws Error for factors that fmfFoldable rejects (the message says why). */
+std::vector<float> foldFmf(const FmfMaterial& material, const std::vector<glm::vec3>& g);
+
+/** Renders folded FMF data: sum over the view's neighbours j of w_j sum_q u*_jq SxV_q(x). */
+glm::vec3 evaluateFoldedFmf(const FmfMaterial& material, const std::vector<float>& folded, int x,
+                            int y, const glm::vec3& view);
+
+/** LPCA's per-vertex environment data are g itself (lights x RGB): folding into every cluster's
+ *  Eigen-BRDFs would store clusters x components x views RGB values per vertex (20 736 for
+ *  32 x 8 x 81, 256 times g's 81), and a triangle spans texels of many clusters, so the fragment
+ *  folds g into its own cluster's Eigen-BRDFs (evaluateFoldedLpca; g blended across the triangle
+ *  first, which equals blending folded data because folding is linear). */
+std::vector<float> foldLpca(const LpcaMaterial& material, const std::vector<glm::vec3>& g);
+
+/** sum over the view's neighbours j of w_j sum_q alpha_q(x) sum_i g_i E_{q,k(x)}(j, i): the
+ *  shaders/environment/lpca.frag loops. */
+glm::vec3 evaluateFoldedLpca(const LpcaMaterial& material, const std::vector<float>& folded, int x,
+                             int y, const glm::vec3& view);
 
 /** A representative light: a directional light standing for one region of the environment. */
 struct RepresentativeLight {

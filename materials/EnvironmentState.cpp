@@ -12,6 +12,8 @@
 #include "materials/Material.h"
 #include "materials/MaterialState.h"
 #include "materials/ShaderInterface.h"
+#include "materials/fmf/Fmf.h"
+#include "materials/lpca/Lpca.h"
 #include "materials/pca/Pca.h"
 
 namespace osgBTF {
@@ -28,17 +30,38 @@ constexpr int kDataWidth = 4096;
 }  // namespace
 
 bool hasFoldedEnvironment(const std::string& method) {
-    return method == "pca";
+    return method == "pca" || method == "fmf" || method == "lpca";
+}
+
+bool foldsEnvironment(const Material& material) {
+    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material)) return fmfFoldable(*fmf);
+    return hasFoldedEnvironment(material.methodName());
 }
 
 std::vector<float> foldEnvironment(const Material& material, const std::vector<glm::vec3>& g) {
     if (const auto* pca = dynamic_cast<const PcaMaterial*>(&material)) return foldPca(*pca, g);
+    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material)) return foldFmf(*fmf, g);
+    if (const auto* lpca = dynamic_cast<const LpcaMaterial*>(&material)) return foldLpca(*lpca, g);
+    noFolding(material.methodName());
+}
+
+glm::vec3 evaluateFolded(const Material& material, const std::vector<float>& folded, int x, int y,
+                         const glm::vec3& view) {
+    if (const auto* pca = dynamic_cast<const PcaMaterial*>(&material))
+        return evaluateFoldedPca(*pca, folded, x, y, view);
+    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material))
+        return evaluateFoldedFmf(*fmf, folded, x, y, view);
+    if (const auto* lpca = dynamic_cast<const LpcaMaterial*>(&material))
+        return evaluateFoldedLpca(*lpca, folded, x, y, view);
     noFolding(material.methodName());
 }
 
 std::size_t foldedStride(const Material& material) {
     if (const auto* pca = dynamic_cast<const PcaMaterial*>(&material))
         return pca->views().size() * std::size_t(pca->components() + 1) * 3;
+    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material))
+        return fmf->views().size() * std::size_t(fmf->factors().factors[0].U.cols()) * 3;
+    if (dynamic_cast<const LpcaMaterial*>(&material)) return material.lights().size() * 3;
     noFolding(material.methodName());
 }
 
@@ -95,6 +118,11 @@ osg::ref_ptr<osg::StateSet> environmentStateSet(const Material& material,
     addTexture(*stateSet, createFloatTexture(data).get(), "osgBTF_envData", kEnvironmentDataUnit);
     stateSet->addUniform(new osg::Uniform("osgBTF_envStride", int(texelsPerVertex)));
     stateSet->addUniform(new osg::Uniform("osgBTF_envExposure", exposure));
+    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material))
+        stateSet->addUniform(
+            new osg::Uniform("fmfComponents", int(fmf->factors().factors[0].U.cols())));
+    if (dynamic_cast<const LpcaMaterial*>(&material))
+        stateSet->addUniform(new osg::Uniform("lpcaLights", int(material.lights().size())));
     return stateSet;
 }
 

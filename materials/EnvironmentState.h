@@ -31,9 +31,19 @@ constexpr int kEnvironmentDataUnit = 12;
  *  with representative lights. */
 bool hasFoldedEnvironment(const std::string& method);
 
-/** Folded data of one vertex (pca: foldPca). Throws Error "environment: method 'X' has no
- *  folded environment lighting" for the others. */
+/** Whether this material's environment lighting folds (hasFoldedEnvironment, and for fmf the
+ *  plain model: fmfFoldable). */
+bool foldsEnvironment(const Material& material);
+
+/** Folded data of one vertex (pca: foldPca, fmf: foldFmf, lpca: foldLpca). Throws Error
+ * "environment: method 'X' has no folded environment lighting" for the others. */
 std::vector<float> foldEnvironment(const Material& material, const std::vector<glm::vec3>& g);
+
+/** What the method's environment shader draws from one vertex's folded data (no blending across
+ *  the triangle): evaluateFoldedPca, evaluateFoldedFmf or evaluateFoldedLpca. Throws Error as
+ *  foldEnvironment. */
+glm::vec3 evaluateFolded(const Material& material, const std::vector<float>& folded, int x, int y,
+                         const glm::vec3& view);
 
 /** RGB values per vertex in foldEnvironment's result. */
 std::size_t foldedStride(const Material& material);

@@ -197,6 +197,8 @@ std::size_t applyEnvironmentLighting(osg::Node& lit, const osg::Node* occluders,
     if (!hasFoldedEnvironment(material.methodName()))
         throw Error("environment: method '" + material.methodName() +
                     "' has no folded environment lighting");
+    // Variants a method cannot fold (fmf with log values) fail here, before the projection.
+    foldEnvironment(material, std::vector<glm::vec3>(material.lights().size(), glm::vec3(0.0f)));
     std::vector<GeometryEnvironment> lighting =
         computeVertexEnvironment(lit, occluders, material.lights(), light.projectionMap(), options);
     for (GeometryEnvironment& entry : lighting) {

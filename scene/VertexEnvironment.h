@@ -77,7 +77,7 @@ std::vector<GeometryEnvironment> computeVertexEnvironment(const osg::Node& lit,
 class EnvironmentLight;
 class Material;
 
-/** Environment lighting for a linear method (hasFoldedEnvironment: pca), put into the scene:
+/** Environment lighting for a linear method (hasFoldedEnvironment: pca, fmf, lpca), in the scene:
  *  computeVertexEnvironment for every geometry below `lit`, folded per vertex on worker threads,
  *  and each geometry's StateSet replaced by environmentStateSet (materials/EnvironmentState.h)
  *  plus the light's exposure uniform (shared: setExposure is real-time). The material's own

@@ -11,8 +11,11 @@
 #include "core/Error.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/EnvironmentLighting.h"
+#include "materials/EnvironmentState.h"
 #include "materials/IlluminationPca.h"
 #include "materials/Material.h"
+#include "materials/fmf/Fmf.h"
+#include "materials/lpca/Lpca.h"
 #include "materials/pca/Pca.h"
 #include "tests/TestUtil.h"
 
@@ -221,6 +224,51 @@ TEST(Environment, FoldedPcaEqualsTheBruteForceSum) {
     }
     EXPECT_EQ(errorOf([&] { foldPca(pca, std::vector<glm::vec3>(3)); }),
               "environment: 3 projected values for 81 measured light directions");
+}
+
+TEST(Environment, FoldedFmfAndLpcaEqualTheProjectedSum) {
+    // The exact CPU path (evaluateProjected: sum_i g_i BTF(x, v, l_i) through evaluate()) against
+    // what the fmf and lpca environment shaders compute from their per-vertex data. fmf with the
+    // cosine flag: evaluate() divides by cos(theta_i), which the fold puts into g_i.
+    SampleOptions options;
+    options.width = options.height = 4;
+    const MeasuredBtf btf = makeSampleBtf(options);
+    const osg::ref_ptr<FmfMaterial> fmf =
+        FmfMaterial::fit(btf, FitOptions::parse("components=6 storage=float"));
+    FactoredBtf withCosine = fmf->factors();
+    withCosine.cosine = true;
+    const osg::ref_ptr<FmfMaterial> fmfCosine =
+        FmfMaterial::fromFactors(withCosine, MaterialTexture::Float);
+    const osg::ref_ptr<LpcaMaterial> lpca =
+        LpcaMaterial::fit(btf, FitOptions::parse("clusters=2 components=3"));
+    const std::vector<EnvironmentSample> samples =
+        visibleEnvironment(randomMap(32, 16, 5), SurfaceFrame{});
+    for (const Material* m :
+         {static_cast<const Material*>(fmf.get()), static_cast<const Material*>(fmfCosine.get()),
+          static_cast<const Material*>(lpca.get())}) {
+        const std::vector<glm::vec3> g =
+            projectEnvironment(samples, DirectionInterpolator(m->lights()));
+        const std::vector<float> folded = foldEnvironment(*m, g);
+        ASSERT_EQ(folded.size(), foldedStride(*m)) << m->methodName();
+        for (const glm::vec3& view :
+             {glm::vec3(0, 0, 1), glm::normalize(glm::vec3(-0.4f, 0.5f, 0.6f))})
+            for (int y : {0, 3}) {
+                const glm::vec3 exact = evaluateProjected(*m, 1, y, view, g);
+                // Float sums of 81 x (K or 3 c) products regrouped: ~1e-6 of the magnitude;
+                // factor values of either sign can cancel, hence the margin of 100.
+                EXPECT_GT(glm::length(exact), 1e-3f) << m->methodName();
+                expectClose(evaluateFolded(*m, folded, 1, y, view), exact, glm::length(exact),
+                            1e-4);
+            }
+    }
+    FactoredBtf logValues = fmf->factors();
+    logValues.dynamicRangeReduction = 1;
+    EXPECT_EQ(errorOf([&] {
+                  foldEnvironment(*FmfMaterial::fromFactors(logValues, MaterialTexture::Float),
+                                  std::vector<glm::vec3>(81));
+              }),
+              "environment: fmf with dynamic-range reduction (log values) is not linear in the "
+              "light and has no folded environment lighting");
 }
 
 TEST(Environment, OccludedDirectionsContributeNothing) {

@@ -1,5 +1,7 @@
 // The `btf` tool end to end: what a user types, on files the test makes.
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include <gtest/gtest.h>
 
@@ -99,4 +101,39 @@ TEST(BtfTool, FitThenEvalMatchesTheCpuReference) {
                   shellQuote(dir.file("bad.exr")));
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("--view: theta 95"), std::string::npos) << r.output;
+}
+
+TEST(BtfTool, EvalWithAnEnvironment) {
+    // A white environment (radiance 1, RGBE 128 128 128 129, flat 8 x 4 Radiance file), pca
+    // through its folded program against the CPU's sum_i g_i BTF(x, v, l_i): float sums of ~81
+    // terms of values <= ~1, 1e-4. (The other methods' GPU path: tests/gl/environment_test.cpp.)
+    TempDir dir;
+    const std::string zip = dir.file("s.zip"), sky = dir.file("white.hdr");
+    const std::string fitted = dir.file("pca.btfmat");
+    {
+        std::ofstream out(sky, std::ios::binary);
+        out << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4 +X 8\n";
+        for (int i = 0; i < 32; ++i) out.write("\x80\x80\x80\x81", 4);
+    }
+    ASSERT_EQ(btf("sample --size 4 --format png -o " + shellQuote(zip)).exitCode, 0);
+    CommandResult r =
+        btf("fit " + shellQuote(zip) + " -m pca --components 4 -o " + shellQuote(fitted));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    r = btfWithGl("eval " + shellQuote(fitted) + " --env " + shellQuote(sky) +
+                  " --exposure 0.5 --rotation 30 --view 30,0 -o " + shellQuote(dir.file("e.exr")));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const std::string key = "largest GPU-CPU difference ";
+    const std::size_t at = r.output.find(key);
+    ASSERT_NE(at, std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("environment " + sky), std::string::npos) << r.output;
+    EXPECT_LT(std::atof(r.output.c_str() + at + key.size()), 1e-4) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(dir.file("e.exr")));
+    // A missing map (eval and btfviewer say the same): compare checks it before any fit.
+    r = btf("compare " + shellQuote(zip) + " --out " + shellQuote(dir.file("cmp")) + " --env " +
+            shellQuote(dir.file("none.hdr")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("--env: " + dir.file("none.hdr") + ": file not found"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("cmp")));
 }

@@ -40,6 +40,7 @@
 
 #include "core/Error.h"
 #include "examples/ExampleScenes.h"
+#include "examples/btfviewer/EnvironmentControl.h"
 #include "scene/MaterialNode.h"
 #include "scene/ShadowTerminator.h"
 
@@ -63,6 +64,9 @@ constexpr const char* kKeyHelp =
     "  x                cast shadows on / off (a scene's osgShadow::ShadowedScene, or --shadows)\n"
     "  s                statistics: frame rate, then frame/event/update/cull/draw/GPU times,\n"
     "                   then scene counts (press again to cycle, off at the end)\n"
+    "  , / .            --env: turn the environment -/+ 15 degrees about Z (recomputed in the\n"
+    "                   background; the HUD shows the progress)\n"
+    "  - / + (=)        --env: exposure / or x sqrt(2) (real time)\n"
     "  h                OSG's help overlay;  f  full screen / window;  Space  home view\n"
     "  Esc              quit\n"
     "Mouse (without Shift): the trackball: left rotates, middle pans, right zooms.\n";
@@ -136,6 +140,7 @@ public:
     bool shadowsOn = true;
 
     osg::ref_ptr<osgText::Text> hud;
+    osg::ref_ptr<btfviewer::EnvironmentControl> environment;  // --env
 
     void applyTerminator() {
         terminatorAlpha = std::clamp(terminatorAlpha, 0.0, 60.0);
@@ -158,6 +163,7 @@ public:
         for (std::size_t i = 0; i < nodes.size(); ++i)
             nodes[i]->setMaterial(current == 0 ? ownMaterials[i].get()
                                                : choices[std::size_t(current - 1)].material.get());
+        if (environment) environment->request();  // folded for the new method
         updateHud();
     }
     void cycleMaterial(int step) {
@@ -210,6 +216,7 @@ public:
                                         : "off")
              << "  [x]"
              << "   stats [s]  help [h]";
+        if (environment) text << "\n" << environment->status();
         hud->setText(text.str());
     }
 
@@ -264,6 +271,8 @@ public:
         usage.addKeyboardMouseBinding("t", "Smooth shadow terminator on/off");
         usage.addKeyboardMouseBinding("[ / ]", "Terminator alpha -/+ 5 degrees");
         usage.addKeyboardMouseBinding("x", "Cast shadows on/off");
+        usage.addKeyboardMouseBinding(", .", "--env: turn the environment -/+ 15 degrees");
+        usage.addKeyboardMouseBinding("- +", "--env: exposure / or x sqrt(2)");
     }
 
 protected:
@@ -298,6 +307,10 @@ private:
             _state->applyTerminator();
         } else if (key == 'x')
             _state->toggleShadows();
+        else if (_state->environment && (key == ',' || key == '.'))
+            _state->environment->rotate(key == ',' ? -15.0f : 15.0f);
+        else if (_state->environment && (key == '-' || key == '+' || key == '='))
+            _state->environment->scaleExposure(key == '-' ? std::sqrt(0.5f) : std::sqrt(2.0f));
         else
             return false;
         return true;
@@ -386,10 +399,13 @@ osg::ref_ptr<osg::Geode> createSurfaceModel(float size) {
     }
     geometry->setVertexArray(vertices.get());
     geometry->setTexCoordArray(0, texCoords.get());
-    osg::ref_ptr<osg::Vec3Array> normals = new osg::Vec3Array(1);
-    (*normals)[0] = osg::Vec3(0, 0, 1);
-    geometry->setNormalArray(normals.get(), osg::Array::BIND_OVERALL);
-    geometry->addPrimitiveSet(new osg::DrawArrays(GL_QUADS, 0, 4));
+    // Per-vertex normals and triangles: what --env's per-vertex program needs.
+    osg::ref_ptr<osg::Vec3Array> normals = new osg::Vec3Array(4);
+    std::fill(normals->begin(), normals->end(), osg::Vec3(0, 0, 1));
+    geometry->setNormalArray(normals.get(), osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::DrawElementsUShort> triangles = new osg::DrawElementsUShort(GL_TRIANGLES);
+    for (unsigned short i : {0, 1, 2, 0, 2, 3}) triangles->push_back(i);
+    geometry->addPrimitiveSet(triangles.get());
     geometry->setName("btfviewer surface");
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(geometry.get());
@@ -498,6 +514,15 @@ int run(osg::ArgumentParser& arguments) {
         "--capture FILE",
         "Write the last of --frames frames (default 3) to FILE (.png, .jpg, ... by the "
         "extension) and exit; runs single-threaded");
+    usage->addCommandLineOption(
+        "--env FILE",
+        "Light every BTF material by this HDR lat-long environment (.hdr, .exr; +Z up, top row "
+        "the zenith): pca, fmf and lpca per vertex with the scene's self-shadowing (recomputed "
+        "in the background when the environment turns or the material changes), the other "
+        "methods by 8 median-cut lights; the orbit and scene lights start off");
+    usage->addCommandLineOption("--exposure E", "--env: exposure (default 1)");
+    usage->addCommandLineOption("--env-rotation DEG",
+                                "--env: turn the environment about Z (degrees, default 0)");
     usage->addCommandLineOption("-O \"OPTIONS\"", "osgDB options for the plugins");
     usage->addCommandLineOption("-h, --help", "This text and the keys");
 
@@ -510,7 +535,8 @@ int run(osg::ArgumentParser& arguments) {
         return 0;
     }
 
-    std::string modelFile, captureFile, pluginOptions, mapFile;
+    std::string modelFile, captureFile, pluginOptions, mapFile, envFile;
+    float exposure = 1, envRotation = 0;
     float textureScale = 4, surfaceSize = 0;
     int firstMaterial = 0, frames = -1;
     double azimuth = -30, elevation = 40;
@@ -531,6 +557,12 @@ int run(osg::ArgumentParser& arguments) {
     while (arguments.read("--capture", captureFile)) {
     }
     while (arguments.read("-O", pluginOptions)) {
+    }
+    while (arguments.read("--env", envFile)) {
+    }
+    while (arguments.read("--exposure", exposure)) {
+    }
+    while (arguments.read("--env-rotation", envRotation)) {
     }
     const bool noOrbitLight = arguments.read("--no-orbit-light");
     const bool noSceneLights = arguments.read("--no-scene-lights");
@@ -596,7 +628,11 @@ int run(osg::ArgumentParser& arguments) {
                           << map.sampleHeight << " sample, " << textureScale
                           << " repeat(s) per texture coordinate unit\n";
             }
-            material->addChild(model.get());
+            // --env puts per-vertex data into the geometries' StateSets: one copy per object.
+            material->addChild(envFile.empty()
+                                   ? model.get()
+                                   : osg::clone(model.get(), osg::CopyOp::DEEP_COPY_NODES |
+                                                                 osg::CopyOp::DEEP_COPY_DRAWABLES));
         }
         inputs.push_back(node);
     }
@@ -699,6 +735,15 @@ int run(osg::ArgumentParser& arguments) {
         state->terminatorAlpha = state->nodes.front()->getTerminatorAlpha();
         state->updateHud();
     }
+    if (!envFile.empty()) {
+        state->environment = new btfviewer::EnvironmentControl(envFile, exposure, envRotation,
+                                                               sceneRoot.get(), state->nodes);
+        state->environment->changed = [s = state.get()] { s->updateHud(); };
+        root->insertChild(0, state->environment->node());
+        if (!noOrbitLight) state->toggleOrbitLight();
+        if (!noSceneLights && !state->sceneLights.empty()) state->toggleSceneLights();
+        state->environment->request();
+    }
 
     viewer.setSceneData(root.get());
     osg::ref_ptr<osgGA::TrackballManipulator> manipulator = new osgGA::TrackballManipulator;
@@ -741,6 +786,8 @@ int run(osg::ArgumentParser& arguments) {
         pressStatsKeys();
         return viewer.run();
     }
+    // A fixed number of frames shows the finished environment lighting.
+    if (state->environment) state->environment->finish();
     for (int frame = 0; frame < frames && !viewer.done(); ++frame) {
         if (frame == 1) pressStatsKeys();
         if (capture && frame == frames - 1) capture->armed = true;

@@ -1,5 +1,5 @@
-// Environment lighting on the GPU (materials/EnvironmentState.h): per-vertex folded pca data,
-// blended across the triangles, against the CPU's evaluateFoldedPca at every pixel, and the
+// Environment lighting on the GPU (materials/EnvironmentState.h): per-vertex folded pca, fmf and
+// lpca data, blended across the triangles, against the CPU's evaluateFolded at every pixel, and the
 // white environment against the brute-force integral of the point-light rendering.
 #include <gtest/gtest.h>
 
@@ -10,10 +10,13 @@
 #include <osg/Geometry>
 #include <osg/Group>
 
+#include "harness/MaterialImage.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/EnvironmentLighting.h"
 #include "materials/EnvironmentState.h"
 #include "materials/ShaderInterface.h"
+#include "materials/fmf/Fmf.h"
+#include "materials/lpca/Lpca.h"
 #include "materials/pca/Pca.h"
 #include "scene/EnvironmentLight.h"
 #include "scene/MaterialNode.h"
@@ -31,6 +34,24 @@ const PcaMaterial& pca() {
         return PcaMaterial::fit(makeSampleBtf(options),
                                 FitOptions::parse("components=5 storage=unorm8"));
     }();
+    return *m;
+}
+
+MeasuredBtf sample4() {
+    SampleOptions options;
+    options.width = options.height = 4;
+    return makeSampleBtf(options);
+}
+
+const FmfMaterial& fmf() {
+    static osg::ref_ptr<FmfMaterial> m =
+        FmfMaterial::fit(sample4(), FitOptions::parse("components=6 storage=half"));
+    return *m;
+}
+
+const LpcaMaterial& lpca() {
+    static osg::ref_ptr<LpcaMaterial> m =
+        LpcaMaterial::fit(sample4(), FitOptions::parse("clusters=2 components=3"));
     return *m;
 }
 
@@ -71,13 +92,13 @@ struct Rendered {
     int size;
 };
 
-Rendered render(const std::vector<std::vector<float>>& folded, const glm::vec3& view,
-                float exposure) {
+Rendered render(const Material& material, const std::vector<std::vector<float>>& folded,
+                const glm::vec3& view, float exposure) {
     osg::ref_ptr<osg::Group> root = new osg::Group;
-    root->setStateSet(pca().sharedStateSet());
+    root->setStateSet(material.sharedStateSet());
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(square());
-    geode->setStateSet(environmentStateSet(pca(), folded, exposure));
+    geode->setStateSet(environmentStateSet(material, folded, exposure));
     geode->getStateSet()->addUniform(
         new osg::Uniform(shader::kFixedView, osg::Vec4(view.x, view.y, view.z, 1.0f)));
     root->addChild(geode);
@@ -86,8 +107,9 @@ Rendered render(const std::vector<std::vector<float>>& folded, const glm::vec3& 
 }
 
 /** Largest |GPU - CPU| over the image relative to the largest CPU value. */
-double compare(const Rendered& r, const std::vector<std::vector<float>>& folded,
-               const glm::vec3& view, float exposure, double* largest) {
+double compare(const Material& material, const Rendered& r,
+               const std::vector<std::vector<float>>& folded, const glm::vec3& view, float exposure,
+               double* largest) {
     double worst = 0;
     *largest = 0;
     for (int y = 0; y < r.size; ++y)
@@ -98,7 +120,7 @@ double compare(const Rendered& r, const std::vector<std::vector<float>>& folded,
             const int tx = int(u * 4), ty = int(v * 4);
             for (int k = 0; k < 4; ++k)
                 if (b[k] > 0.0f)
-                    expected += b[k] * evaluateFoldedPca(pca(), folded[k], tx, ty, view);
+                    expected += b[k] * evaluateFolded(material, folded[k], tx, ty, view);
             expected *= exposure;
             for (int ch = 0; ch < 3; ++ch) {
                 worst = std::max(worst,
@@ -125,12 +147,38 @@ TEST(EnvironmentGpu, FoldedPcaBlendedAcrossTrianglesMatchesTheCpu) {
     }
     for (const glm::vec3& view : {glm::vec3(0, 0, 1), glm::normalize(glm::vec3(0.5f, -0.3f, 0.6f))})
         for (float exposure : {1.0f, 0.25f}) {
-            const Rendered r = render(folded, view, exposure);
+            const Rendered r = render(pca(), folded, view, exposure);
             double largest = 0;
-            const double worst = compare(r, folded, view, exposure, &largest);
+            const double worst = compare(pca(), r, folded, view, exposure, &largest);
             EXPECT_GT(largest, 0.01);
             EXPECT_LE(worst, 1e-4 * largest) << "view " << view.x << " exposure " << exposure;
         }
+}
+
+TEST(EnvironmentGpu, FoldedFmfAndLpcaMatchTheCpu) {
+    // fmf (u* per view, dotted with SxV) and lpca (g per vertex folded into the cluster's
+    // Eigen-BRDFs per fragment), four vertices with different environments, against the CPU
+    // evaluateFolded blended with the same barycentric weights; evaluateFolded equals the exact
+    // evaluateProjected (tests/environment_test.cpp). Float sums of ~100-250 products in another
+    // order (lpca: light-outer): 1e-4 of the largest value.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> uniform(0.0f, 0.05f);
+    for (const Material* m :
+         {static_cast<const Material*>(&fmf()), static_cast<const Material*>(&lpca())}) {
+        std::vector<std::vector<float>> folded;
+        for (int v = 0; v < 4; ++v) {
+            std::vector<glm::vec3> g(m->lights().size());
+            for (glm::vec3& x : g) x = glm::vec3(uniform(rng), uniform(rng), uniform(rng));
+            g[std::size_t(v) * 9 + 2] *= 40.0f;
+            folded.push_back(foldEnvironment(*m, g));
+        }
+        const glm::vec3 view = glm::normalize(glm::vec3(0.4f, 0.2f, 0.7f));
+        const Rendered r = render(*m, folded, view, 0.5f);
+        double largest = 0;
+        const double worst = compare(*m, r, folded, view, 0.5f, &largest);
+        EXPECT_GT(largest, 0.01) << m->methodName();
+        EXPECT_LE(worst, 1e-4 * largest) << m->methodName();
+    }
 }
 
 TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
@@ -145,7 +193,7 @@ TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
         foldEnvironment(pca(), projectEnvironment(samples, DirectionInterpolator(pca().lights())));
     const std::vector<std::vector<float>> folded(4, f);
     const glm::vec3 view = glm::normalize(glm::vec3(-0.2f, 0.4f, 0.7f));
-    const Rendered r = render(folded, view, 1.0f);
+    const Rendered r = render(pca(), folded, view, 1.0f);
     double largest = 0;
     for (int ty = 0; ty < 4; ++ty)
         for (int tx = 0; tx < 4; ++tx) {
@@ -179,7 +227,7 @@ TEST(EnvironmentGpu, OneBrightTexelDrawsThePointLightImage) {
                                                         DirectionInterpolator(pca().lights()));
     const std::vector<std::vector<float>> folded(4, foldEnvironment(pca(), g));
     const glm::vec3 view = glm::normalize(glm::vec3(0.3f, 0.3f, 0.8f));
-    const Rendered r = render(folded, view, 1.0f);
+    const Rendered r = render(pca(), folded, view, 1.0f);
     const float omega = float(map.solidAngle(row));
     for (int ty = 0; ty < 4; ++ty)
         for (int tx = 0; tx < 4; ++tx) {
@@ -230,5 +278,30 @@ TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
                                 1e-4 * expected[ch] + 1e-6)
                         << "exposure " << exposure << " texel " << tx << ", " << ty;
             }
+    }
+}
+
+TEST(EnvironmentGpu, PatchImagesOfFoldedAndOtherMethodsMatchTheCpu) {
+    // btf eval --env's images (harness/MaterialImage.h): fmf through its folded program, lambert
+    // (no folding) as the g-weighted sum of its point-light renders, both against the CPU's
+    // sum_i g_i BTF(x, v, l_i) times the exposure. Float sums of ~81 terms: 1e-4 of the largest.
+    EnvironmentMap sky;
+    sky.width = 16;
+    sky.height = 8;
+    sky.rgb.assign(16 * 8 * 3, 0.2f);
+    for (int c = 0; c < 4; ++c)
+        for (int ch = 0; ch < 3; ++ch) sky.rgb[(6 * 16 + c) * 3 + ch] = 5.0f * float(ch + 1);
+    const osg::ref_ptr<Material> lambert =
+        findMethod("lambert").fit(sample4(), FitOptions::parse(""));
+    const glm::vec3 view = glm::normalize(glm::vec3(0.2f, 0.3f, 0.9f));
+    for (const Material* m :
+         {static_cast<const Material*>(&fmf()), static_cast<const Material*>(lambert.get())}) {
+        const std::vector<glm::vec3> g = projectPatchEnvironment(*m, sky);
+        const FloatImage cpu = evaluateEnvironmentImage(*m, g, view, 0.5f);
+        const FloatImage gpu = renderEnvironmentImage(test::sharedRenderer(), *m, g, view, 0.5f);
+        float largest = 0;
+        for (float v : cpu.pixels) largest = std::max(largest, std::abs(v));
+        EXPECT_GT(largest, 0.01f) << m->methodName();
+        EXPECT_LE(maxAbsDifference(gpu, cpu), 1e-4 * largest) << m->methodName();
     }
 }

@@ -723,10 +723,15 @@ TEST(Btfviewer, BadInputFailsWithAClearMessage) {
     EXPECT_NE(result.output.find("nosuch.btfmat: no such file"), std::string::npos)
         << result.output;
 
+    result = runBtfviewer(":none", "sample-pca.btfmat --env nosuch.hdr");
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(result.output.find("btfviewer: --env: nosuch.hdr: file not found"), std::string::npos)
+        << result.output;
+
     result = runBtfviewer(":none", "--help");
     EXPECT_EQ(result.exitCode, 0) << result.output;
-    for (const char* documented :
-         {"--capture FILE", "--frames N", "--material N", "Shift + drag", "GL_ARB_timer_query"})
+    for (const char* documented : {"--capture FILE", "--frames N", "--material N", "Shift + drag",
+                                   "GL_ARB_timer_query", "--env FILE", "--env: exposure"})
         EXPECT_NE(result.output.find(documented), std::string::npos) << documented;
 }
 

@@ -7,6 +7,7 @@
 
 #include "core/Error.h"
 #include "harness/Compare.h"
+#include "scene/EnvironmentLight.h"
 #include "tools/btf/Commands.h"
 
 namespace osgBTF::tool {
@@ -145,8 +146,23 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
     command->add_flag("--refit", options->noReuse, "Fit every method again, even when DIR has it");
     command->add_flag("--no-gpu", options->noGpu,
                       "Skip the OpenGL part (GPU spot check, pass times, sphere renders)");
+    command->add_option("--env", options->compare.envFile,
+                        "Also draw pictures/environment.png: the sample patch lit by this HDR "
+                        "lat-long environment (.hdr, .exr) with every method (GPU)");
+    command->add_option("--exposure", options->compare.envExposure, "--env: factor on the result")
+        ->capture_default_str();
+    command
+        ->add_option("--rotation", options->compare.envRotation,
+                     "--env: turns the environment about +Z (degrees)")
+        ->capture_default_str();
     addLoadOptions(*command, common);
     return [&common, options] {
+        if (!options->compare.envFile.empty()) {
+            // Before the fits: a missing map must not cost their time.
+            osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+            light->setFile(options->compare.envFile);
+            if (!light->hasMap()) throw Error("--env: " + light->getError());
+        }
         CompareOptions compare = options->compare;
         compare.input = options->input;
         compare.outputDir = options->output;

@@ -1,4 +1,5 @@
 // btf eval FITTED --view T,P --light T,P -o img: one (view, light) image through the GPU path.
+// With --env FILE the patch is lit by an HDR environment instead (harness/MaterialImage.h).
 // FITTED may be a UBO2014 .btf: its stored factors render as an fmf material (nothing decoded).
 #include <iostream>
 #include <memory>
@@ -9,6 +10,7 @@
 #include "harness/MaterialImage.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
+#include "scene/EnvironmentLight.h"
 #include "scene/OpenMaterial.h"
 #include "tools/btf/Commands.h"
 
@@ -36,7 +38,8 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
         "oriented like the input images; also evaluates it on the CPU and reports the largest "
         "GPU-CPU difference");
     struct Options {
-        std::string input, output, view = "0,0", light = "0,0", storage = "half";
+        std::string input, output, view = "0,0", light = "0,0", storage = "half", env;
+        float exposure = 1.0f, rotation = 0.0f;
         bool cpu = false;
     };
     auto options = std::make_shared<Options>();
@@ -49,7 +52,21 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
         ->required();
     command->add_option("--view", options->view, "View direction THETA,PHI (degrees)")
         ->capture_default_str();
-    command->add_option("--light", options->light, "Light direction THETA,PHI (degrees)")
+    auto* lightOption =
+        command->add_option("--light", options->light, "Light direction THETA,PHI (degrees)")
+            ->capture_default_str();
+    command
+        ->add_option("--env", options->env,
+                     "Light the patch (normal +Z, unoccluded) by this HDR lat-long environment "
+                     "(.hdr, .exr; +Z up, top row the zenith) instead of --light: the map "
+                     "projected onto the measured light directions (scene/README.md)")
+        ->excludes(lightOption);
+    command->add_option("--exposure", options->exposure, "--env: factor on the result")
+        ->capture_default_str();
+    command
+        ->add_option("--rotation", options->rotation,
+                     "--env: turns the environment about +Z (degrees, counter-clockwise from "
+                     "above)")
         ->capture_default_str();
     command->add_flag("--cpu", options->cpu, "Write the CPU reference instead of the GPU image");
     command
@@ -61,15 +78,31 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
     return [options] {
         const glm::vec3 view = parseDirection(options->view, "--view").toVector();
         const glm::vec3 light = parseDirection(options->light, "--light").toVector();
+        osg::ref_ptr<EnvironmentLight> environment;
+        if (!options->env.empty()) {
+            environment = new EnvironmentLight;
+            environment->setFile(options->env);
+            if (!environment->hasMap()) throw Error("--env: " + environment->getError());
+            environment->setRotation(options->rotation);
+        }
         osg::ref_ptr<Material> material =
             openMaterial(options->input, options->storage == "float" ? MaterialTexture::Float
                                                                      : MaterialTexture::Half);
-        const FloatImage cpu = evaluateMaterialImage(*material, view, light);
         HeadlessRenderer renderer;
-        const FloatImage gpu = renderMaterialImage(renderer, *material, view, light);
+        FloatImage cpu, gpu;
+        if (environment) {
+            const std::vector<glm::vec3> g =
+                projectPatchEnvironment(*material, environment->projectionMap());
+            cpu = evaluateEnvironmentImage(*material, g, view, options->exposure);
+            gpu = renderEnvironmentImage(renderer, *material, g, view, options->exposure);
+        } else {
+            cpu = evaluateMaterialImage(*material, view, light);
+            gpu = renderMaterialImage(renderer, *material, view, light);
+        }
         writeFloatImage(options->cpu ? cpu : gpu, options->output);
         std::cout << "wrote " << options->output << " (" << material->methodName() << ", "
                   << material->width() << "x" << material->height() << ", "
+                  << (environment ? "environment " + options->env + ", " : "")
                   << (options->cpu ? "CPU reference" : "GPU: " + renderer.glRenderer())
                   << "); largest GPU-CPU difference " << maxAbsDifference(gpu, cpu) << "\n";
     };
