@@ -20,6 +20,8 @@ uniform vec4 osgBTF_fixedView = vec4(0.0);
  *  surface, z > 0). Measured values include the cosine term: nothing multiplies by n.l again. */
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light);
 
+#pragma include "common/surface_frame.glsl"
+
 // Smooth shadow terminator (btf.vert computes u per vertex and light; scene/ShadowTerminator.h is
 // the CPU reference): the light's term times the blurred step at u.
 uniform bool osgBTF_terminator = false;
@@ -63,29 +65,14 @@ ivec2 btfTexel(vec2 uv) {
 }
 #else
 ivec2 btfTexel(vec2 uv) {
-    // Nearest texel with wrap-around tiling; texelFetch keeps the GPU equal to the CPU reference.
-    vec2 f = fract(uv);
-    return clamp(ivec2(floor(f * vec2(osgBTF_size))), ivec2(0), osgBTF_size - ivec2(1));
+    return btfNearestTexel(uv);
 }
 #endif
 
 void main() {
-    vec3 n = normalize(btfEyeNormal);
-    vec3 t = btfEyeTangent.xyz - n * dot(n, btfEyeTangent.xyz);
-    if (dot(t, t) < 1e-12) {
-        // No tangent attribute: any frame around the normal (anisotropy is then arbitrary).
-        t = abs(n.x) < 0.9 ? cross(vec3(1.0, 0.0, 0.0), n) : cross(vec3(0.0, 1.0, 0.0), n);
-    }
-    t = normalize(t);
-    vec3 b = cross(n, t) * (btfEyeTangent.w < 0.0 ? -1.0 : 1.0);
-    // The centre of projection in homogeneous eye coordinates, P^-1 (0, 0, -1, 0): the eye point
-    // (w > 0) of a perspective projection, the direction toward the eye (w = 0) of an
-    // orthographic one. No test of a matrix entry against an exact value: a projection is only
-    // defined up to a positive factor, and products or inverses of matrices round.
-    vec4 centre = -gl_ProjectionMatrixInverse[2];
-    vec3 toEye = normalize(centre.xyz - centre.w * btfEyePosition);
-    vec3 view = vec3(dot(toEye, t), dot(toEye, b), dot(toEye, n));
-    if (osgBTF_fixedView.w > 0.5) view = normalize(osgBTF_fixedView.xyz);
+    vec3 t, b, n;
+    btfSurfaceFrame(t, b, n);
+    vec3 view = btfLocalView(t, b, n);
     ivec2 texel = btfTexel(btfTexCoord);
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {

@@ -1,7 +1,7 @@
 // Shared fragment stage of environment lighting (materials/EnvironmentState.h): builds the local
-// frame and view direction as btf_main.glsl does (same arithmetic, so the environment image
-// lines up with the point-light one) and calls the method's btfEnvironmentEvaluate, which reads
-// the folded per-vertex data through btfEnvData. Included after the #version line.
+// frame and view direction with btf_main.glsl's functions (surface_frame.glsl, so the environment
+// image lines up with the point-light one) and calls the method's btfEnvironmentEvaluate, which
+// reads the folded per-vertex data through btfEnvData. Included after the #version line.
 
 in vec2 btfTexCoord;
 in vec3 btfEyePosition;
@@ -21,6 +21,8 @@ uniform int osgBTF_envStride;
 
 vec3 btfEnvironmentEvaluate(ivec2 texel, vec3 view);
 
+#pragma include "common/surface_frame.glsl"
+
 vec3 btfEnvFetch(int vertex, int slot) {
     int a = vertex * osgBTF_envStride + slot;
     int w = textureSize(osgBTF_envData, 0).x;
@@ -36,19 +38,10 @@ vec3 btfEnvData(int slot) {
 }
 
 void main() {
-    vec3 n = normalize(btfEyeNormal);
-    vec3 t = btfEyeTangent.xyz - n * dot(n, btfEyeTangent.xyz);
-    if (dot(t, t) < 1e-12) {
-        t = abs(n.x) < 0.9 ? cross(vec3(1.0, 0.0, 0.0), n) : cross(vec3(0.0, 1.0, 0.0), n);
-    }
-    t = normalize(t);
-    vec3 b = cross(n, t) * (btfEyeTangent.w < 0.0 ? -1.0 : 1.0);
-    vec4 centre = -gl_ProjectionMatrixInverse[2];
-    vec3 toEye = normalize(centre.xyz - centre.w * btfEyePosition);
-    vec3 view = vec3(dot(toEye, t), dot(toEye, b), dot(toEye, n));
-    if (osgBTF_fixedView.w > 0.5) view = normalize(osgBTF_fixedView.xyz);
-    vec2 f = fract(btfTexCoord);
-    ivec2 texel = clamp(ivec2(floor(f * vec2(osgBTF_size))), ivec2(0), osgBTF_size - ivec2(1));
+    vec3 t, b, n;
+    btfSurfaceFrame(t, b, n);
+    vec3 view = btfLocalView(t, b, n);
+    ivec2 texel = btfNearestTexel(btfTexCoord);
     vec3 color = vec3(0.0);
     if (view.z > 0.0) color = osgBTF_envExposure * btfEnvironmentEvaluate(texel, view);
     gl_FragColor = vec4(color, 1.0);

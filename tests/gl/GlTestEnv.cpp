@@ -7,6 +7,8 @@
 #include <osg/Program>
 #include <osg/Shader>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <iostream>
 #include <memory>
@@ -96,6 +98,15 @@ float pixel(const osg::Image& image, int x, int y, int channel) {
     return data[4 * (static_cast<size_t>(y) * static_cast<size_t>(image.s()) +
                      static_cast<size_t>(x)) +
                 static_cast<size_t>(channel)];
+}
+
+double maxDifference(const osg::Image& a, const osg::Image& b) {
+    const float* pa = reinterpret_cast<const float*>(a.data());
+    const float* pb = reinterpret_cast<const float*>(b.data());
+    double worst = 0;
+    for (int k = 0; k < a.s() * a.t() * 4; ++k)
+        worst = std::max(worst, double(std::abs(pa[k] - pb[k])));
+    return worst;
 }
 
 PatchView patchViewFrom(float thetaDeg, float phiDeg, int imageSize, double halfExtent) {

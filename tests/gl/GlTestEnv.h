@@ -36,6 +36,9 @@ osg::ref_ptr<osg::Texture2D> floatTexture2D(int width, int height, const std::ve
 /** Pixel (x, y) channel c of a GL_RGBA/GL_FLOAT image as OSG gives it (bottom-up rows). */
 float pixel(const osg::Image& image, int x, int y, int channel);
 
+/** The largest absolute difference between two GL_RGBA/GL_FLOAT images of the same size. */
+double maxDifference(const osg::Image& a, const osg::Image& b);
+
 /** An orthographic camera looking at the centre of the unit patch (z = 0) from (theta, phi) in
  *  degrees, theta > 0 (up vector +Z), with an image of `imageSize` squared pixels showing
  *  [-halfExtent, halfExtent] around the centre. `toEye` is the world (= patch-local) direction

@@ -108,15 +108,6 @@ Comparison compareWithCpu(const osg::Image& image, const Material& material, con
     return result;
 }
 
-double maxDifference(const osg::Image& a, const osg::Image& b) {
-    const float* pa = reinterpret_cast<const float*>(a.data());
-    const float* pb = reinterpret_cast<const float*>(b.data());
-    double worst = 0;
-    for (int k = 0; k < a.s() * a.t() * 4; ++k)
-        worst = std::max(worst, double(std::abs(pa[k] - pb[k])));
-    return worst;
-}
-
 std::vector<osg::Texture*> texturesOf(osg::StateSet& stateSet) {
     std::vector<osg::Texture*> textures;
     for (unsigned unit = 0; unit < stateSet.getTextureAttributeList().size(); ++unit)

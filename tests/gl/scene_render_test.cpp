@@ -237,15 +237,6 @@ osg::Vec3 squarePixel(const osg::Image& image, const Camera& camera) {
     return osg::Vec3(-1, -1, -1);
 }
 
-double maxDifference(const osg::Image& a, const osg::Image& b) {
-    const float* pa = reinterpret_cast<const float*>(a.data());
-    const float* pb = reinterpret_cast<const float*>(b.data());
-    double worst = 0;
-    for (int k = 0; k < a.s() * a.t() * 4; ++k)
-        worst = std::max(worst, double(std::abs(pa[k] - pb[k])));
-    return worst;
-}
-
 osg::ref_ptr<MaterialNode> materialNodeNaming(const std::string& file) {
     osg::ref_ptr<MaterialNode> node = new MaterialNode;
     node->setMaterialFile(file);

@@ -133,15 +133,6 @@ Rendered render(osgViewer::ViewerBase::ThreadingModel model, int churn,
     return out;
 }
 
-double maxDifference(const osg::Image& a, const osg::Image& b) {
-    const float* pa = reinterpret_cast<const float*>(a.data());
-    const float* pb = reinterpret_cast<const float*>(b.data());
-    double worst = 0;
-    for (int k = 0; k < a.s() * a.t() * 4; ++k)
-        worst = std::max(worst, double(std::abs(pa[k] - pb[k])));
-    return worst;
-}
-
 int litPixels(const osg::Image& image) {
     int lit = 0;
     for (int y = 0; y < image.t(); ++y)

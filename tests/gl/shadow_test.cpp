@@ -78,15 +78,6 @@ float centre(const osg::Image& image, int channel = 0) {
     return pixel(image, image.s() / 2, image.t() / 2, channel);
 }
 
-double maxDifference(const osg::Image& a, const osg::Image& b) {
-    const float* pa = reinterpret_cast<const float*>(a.data());
-    const float* pb = reinterpret_cast<const float*>(b.data());
-    double worst = 0;
-    for (int k = 0; k < a.s() * a.t() * 4; ++k)
-        worst = std::max(worst, double(std::abs(pa[k] - pb[k])));
-    return worst;
-}
-
 double maxValue(const osg::Image& a) {
     const float* pa = reinterpret_cast<const float*>(a.data());
     return *std::max_element(pa, pa + a.s() * a.t() * 4);
