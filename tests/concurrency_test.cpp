@@ -158,10 +158,14 @@ TEST(Concurrency, DatabasePagerThreadsLoadProxyNodesNamingTheSameFiles) {
         for (const auto& proxy : proxies) loaded += proxy->getNumChildren() > 0 ? 1 : 0;
         std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
-    pager->cancel();
-    // cancel() stops the threads without joining them (a leak to ThreadSanitizer).
+    // One thread at a time. DatabaseThread::cancel() joins its thread only if it still runs when
+    // it looks, and DatabasePager::cancel() first tells every thread to stop: a thread that ends
+    // before its turn is never joined (a leak to ThreadSanitizer), and joining the threads again
+    // afterwards joins the others twice (a crash under clang's ASan). A thread not yet told to
+    // stop is still running, so this way each is joined exactly once.
     for (unsigned i = 0; i < pager->getNumDatabaseThreads(); ++i)
-        pager->getDatabaseThread(i)->join();
+        pager->getDatabaseThread(i)->cancel();
+    pager->cancel();
     for (const auto& proxy : proxies) {
         const auto* node = dynamic_cast<const MaterialNode*>(proxy->getChild(0));
         ASSERT_NE(node, nullptr) << proxy->getFileName(0);
