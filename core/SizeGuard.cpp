@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include <OpenEXR/openexr.h>
 
@@ -152,9 +153,13 @@ void checkExrAttributeSizes(const std::string& name, const unsigned char* head,
             } else if (type == "preview") {
                 std::int64_t width = 0, height = 0;
                 if (!readInt(width) || !readInt(height)) return;
-                check(std::int64_t(std::uint32_t(width)) * std::uint32_t(height) * 4,
-                      " of preview pixels");
-                at += std::uint64_t(std::uint32_t(width)) * std::uint32_t(height) * 4;
+                // Up to (2^32 - 1)^2 pixels of 4 bytes: the count is bounded before it is scaled.
+                const std::uint64_t pixels =
+                    std::uint64_t(std::uint32_t(width)) * std::uint32_t(height);
+                const std::uint64_t most =
+                    std::uint64_t(std::numeric_limits<std::int64_t>::max()) / 4;
+                check(std::int64_t(std::min(pixels, most) * 4), " of preview pixels");
+                at += pixels * 4;
             } else if (type == "stringvector") {
                 check(size, "");
                 for (const std::uint64_t end = at + std::uint64_t(size); at < end;) {

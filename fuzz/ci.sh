@@ -24,10 +24,14 @@ run_target() {
   mkdir -p "$corpus" "$work/findings/$t"
   cp "$seeds/$t"/* "$corpus"/
   cp "$here/regression/$t"/* "$corpus"/  # the same name as a seed: the same seed
+  # -detect_leaks=0: the first CI runs found two leaks that are not osgBTF's (fuzz/README.md
+  # "Open"): OSG's reader keeps a scene whose UniqueIDs make a cycle of ref_ptrs, and a 31-byte
+  # string from an uninstrumented image library on a damaged PNG. osgBTF's own leaks are checked by
+  # the unit tests, which run with LeakSanitizer on.
   # -timeout=5: an input over 5 s is a hang (issue 16). The new inputs go to the temporary corpus
   # (the first folder), never into the source tree.
-  "$build/bin/fuzz_$t" "$corpus" -dict="$here/dict/$t.dict" -max_total_time="$seconds" \
-    -timeout=5 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+  ASAN_OPTIONS="detect_leaks=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}" "$build/bin/fuzz_$t" "$corpus" -dict="$here/dict/$t.dict" -max_total_time="$seconds" \
+    -timeout=5 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 -detect_leaks=0 \
     -artifact_prefix="$work/findings/$t/" >"$work/$t.log" 2>&1
 }
 
