@@ -8,12 +8,27 @@
 #include "core/Error.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/EnvironmentState.h"
+#include "materials/ShaderInterface.h"
 
 namespace osgBTF {
 
 namespace {
 
 /** The read-back RGBA float image (rows bottom-up) as a top-down RGB FloatImage. */
+/** The full-screen quad every rectified image is drawn on, with its tangent along +s (the
+ *  patch's local frame is the measured one). */
+osg::ref_ptr<osg::Geode> rectifiedPatch() {
+    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
+    osg::ref_ptr<osg::Vec4Array> tangents =
+        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
+    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
+    quad->setVertexAttribArray(shader::kTangentAttribute, tangents.get(),
+                               osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(quad.get());
+    return geode;
+}
+
 FloatImage toFloatImage(const osg::Image& image, int w, int h) {
     FloatImage out(w, h, 3);
     out.channelNames = {"R", "G", "B"};
@@ -42,13 +57,7 @@ FloatImage renderImage(HeadlessRenderer& renderer, osg::StateSet* stateSet, osg:
     color->setElement(0, osg::Vec3(1, 1, 1));
     render->addUniform(color.get());
 
-    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
-    osg::ref_ptr<osg::Vec4Array> tangents =
-        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
-    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
-    quad->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
-    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(quad.get());
+    osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
     geode->setStateSet(render.get());
     osg::ref_ptr<osg::Group> root = new osg::Group;
     root->setStateSet(stateSet);
@@ -104,13 +113,7 @@ FloatImage renderEnvironmentImage(HeadlessRenderer& renderer, const Material& ma
         return sum;
     }
     const std::vector<std::vector<float>> folded(4, foldEnvironment(material, g));
-    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
-    osg::ref_ptr<osg::Vec4Array> tangents =
-        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
-    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
-    quad->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
-    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(quad.get());
+    osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
     osg::ref_ptr<osg::StateSet> state = environmentStateSet(material, folded, exposure);
     state->addUniform(new osg::Uniform("osgBTF_fixedView", osg::Vec4(view.x, view.y, view.z, 1)));
     geode->setStateSet(state.get());
