@@ -90,9 +90,13 @@ void validate(const FittedMaterial& material, const std::string& path) {
                            std::to_string(t.channels) + " channels");
         if (std::int64_t(t.height) * t.depth > INT32_MAX / 2)
             fail(path, what + " is too tall for an EXR file");
-        if (t.data.size() != t.valueCount())
-            fail(path, what + " has " + std::to_string(t.data.size()) + " values, " +
+        if (t.storedCount() != t.valueCount())
+            fail(path, what + " has " + std::to_string(t.storedCount()) + " values, " +
                            std::to_string(t.valueCount()) + " expected");
+        if (!t.bytes.empty() && !t.data.empty())
+            fail(path, what + " holds both float values and bytes");
+        if (!t.bytes.empty() && t.kind != MaterialTexture::UNorm8)
+            fail(path, what + " holds bytes but is not stored as 8-bit");
         if (t.kind == MaterialTexture::UNorm8) {
             const auto bad = std::find_if(t.data.begin(), t.data.end(), [](float v) {
                 return !(v >= 0.0f && v <= 1.0f) ||
@@ -159,8 +163,14 @@ void writeTexture(Imf::MultiPartOutputFile& file, int part, const MaterialTextur
             // File row r (top-down over all slices) is texture row y (bottom-up) of slice z.
             const std::size_t z = r / std::size_t(t.height);
             const std::size_t y = std::size_t(t.height) - 1 - r % std::size_t(t.height);
-            const float* source = t.data.data() + (z * std::size_t(t.height) + y) * rowValues;
+            const std::size_t row = (z * std::size_t(t.height) + y) * rowValues;
             const std::size_t at = (r - first) * rowValues;
+            if (!t.bytes.empty()) {
+                for (std::size_t i = 0; i < rowValues; ++i)  // integers are exact in half
+                    halves[at + i] = Imath::half(float(t.bytes[row + i]));
+                continue;
+            }
+            const float* source = t.data.data() + row;
             if (!half)
                 std::copy_n(source, rowValues, floats.data() + at);
             else if (t.kind == MaterialTexture::UNorm8)

@@ -13,6 +13,7 @@
 //     "osgBTF.version" (= 1), and its own int attribute "osgBTF.depth".
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -43,11 +44,20 @@ struct MaterialTexture {
      *  with the part attribute osgBTF.storage = "unorm8", and GPUs get GL_RGBA8-style textures. */
     PixelKind kind = Float;
     std::vector<float> data;
+    /** A UNorm8 texture may hold its values here instead, as the integers 0..255 (value = byte /
+     *  255.0f, what loadFittedMaterial gives in `data`): a quarter of the memory, for models of
+     *  gigabytes (PCA of a full-size UBO2014 file holds 1.2 GB instead of 4.6). At most one of
+     *  `data` and `bytes` is non-empty; saveFittedMaterial and the GPU upload take either. */
+    std::vector<std::uint8_t> bytes = {};  // "= {}": aggregate initialisers may leave it out
 
     std::size_t valueCount() const {
         return std::size_t(width) * std::size_t(height) * std::size_t(depth) *
                std::size_t(channels);
     }
+    /** Values held, in `data` or in `bytes`. */
+    std::size_t storedCount() const { return bytes.empty() ? data.size() : bytes.size(); }
+    /** Value i, from `data` or `bytes`. */
+    float value(std::size_t i) const { return bytes.empty() ? data[i] : float(bytes[i]) / 255.0f; }
 };
 
 /** Everything a compression method fitted for one material. */

@@ -30,9 +30,13 @@ MaterialTexture remapTexture(const MaterialTexture& t, int width, int height,
     MaterialTexture out = t;
     out.width = tilesX * map.width;
     out.height = tilesY * map.height;
-    checkMemory(std::uint64_t(out.valueCount()) * sizeof(float),
+    const bool bytes = !t.bytes.empty();
+    checkMemory(std::uint64_t(out.valueCount()) * (bytes ? 1 : sizeof(float)),
                 "texture '" + t.name + "' remapped to " + sizeText(out.width, out.height));
-    out.data.assign(out.valueCount(), 0.0f);
+    if (bytes)
+        out.bytes.assign(out.valueCount(), 0);
+    else
+        out.data.assign(out.valueCount(), 0.0f);
     const std::size_t channels = std::size_t(t.channels);
     for (int z = 0; z < t.depth; ++z)
         for (int ty = 0; ty < tilesY; ++ty)
@@ -48,8 +52,12 @@ MaterialTexture remapTexture(const MaterialTexture& t, int width, int height,
                             std::size_t(z) * out.height + std::size_t(ty) * map.height + y;
                         const std::size_t dst =
                             (dstRow * out.width + std::size_t(tx) * map.width + x) * channels;
-                        std::copy_n(t.data.begin() + std::ptrdiff_t(src), channels,
-                                    out.data.begin() + std::ptrdiff_t(dst));
+                        if (bytes)
+                            std::copy_n(t.bytes.begin() + std::ptrdiff_t(src), channels,
+                                        out.bytes.begin() + std::ptrdiff_t(dst));
+                        else
+                            std::copy_n(t.data.begin() + std::ptrdiff_t(src), channels,
+                                        out.data.begin() + std::ptrdiff_t(dst));
                     }
     return out;
 }

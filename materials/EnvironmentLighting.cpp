@@ -287,11 +287,9 @@ glm::vec3 evaluateFoldedPca(const PcaMaterial& material, const std::vector<float
         const std::size_t j = std::size_t(wv.index[m]);
         const float* gamma = folded.data() + j * slots * 3;
         glm::vec3 value(gamma[c * 3], gamma[c * 3 + 1], gamma[c * 3 + 2]);
-        for (int k = 0; k < c; ++k) {
-            const float* e = material.eigenTextures.data.data() + material.eigenIndex(j, k, x, y);
+        for (int k = 0; k < c; ++k)
             value += glm::vec3(gamma[k * 3], gamma[k * 3 + 1], gamma[k * 3 + 2]) *
-                     glm::vec3(e[0], e[1], e[2]);
-        }
+                     material.eigenTexel(j, k, x, y);
         sum += wv.weight[m] * value;
     }
     return sum;

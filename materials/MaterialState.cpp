@@ -48,7 +48,12 @@ osg::ref_ptr<osg::Image> sliceImage(const MaterialTexture& t, int z, int depthFo
                          bytes ? GL_UNSIGNED_BYTE : GL_FLOAT);
     image->setInternalTextureFormat(internalFormat(t));
     const std::size_t count = std::size_t(t.width) * t.height * depthForImage * t.channels;
-    const float* src = t.data.data() + std::size_t(z) * t.width * t.height * t.channels;
+    const std::size_t first = std::size_t(z) * t.width * t.height * t.channels;
+    if (!t.bytes.empty()) {
+        std::copy_n(t.bytes.data() + first, count, image->data());
+        return image;
+    }
+    const float* src = t.data.data() + first;
     if (bytes) {
         unsigned char* dst = image->data();
         for (std::size_t i = 0; i < count; ++i)
@@ -99,7 +104,7 @@ osg::ref_ptr<osg::Texture2DArray> newTexture2DArray() {
 }
 
 osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t) {
-    if (t.data.size() != t.valueCount())
+    if (t.storedCount() != t.valueCount())
         throw Error("texture '" + t.name + "': data size does not match its dimensions");
     if (t.depth == 1) {
         osg::ref_ptr<osg::Texture2D> texture = new osg::Texture2D(sliceImage(t, 0, 1));
@@ -111,7 +116,7 @@ osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t) {
 }
 
 osg::ref_ptr<osg::Texture2DArray> createFloatTextureArray(const MaterialTexture& t) {
-    if (t.data.size() != t.valueCount())
+    if (t.storedCount() != t.valueCount())
         throw Error("texture '" + t.name + "': data size does not match its dimensions");
     osg::ref_ptr<osg::Texture2DArray> array = newTexture2DArray();
     array->setTextureSize(t.width, t.height, t.depth);

@@ -197,6 +197,55 @@ TEST(FittedMaterial, FileShowsEachSliceUprightInViewers) {
     for (int row = 0; row < 6; ++row) EXPECT_EQ(file.at(1, row, 0), expected[row]) << row;
 }
 
+TEST(FittedMaterial, EightBitTextureHeldAsBytesIsWrittenAsItsIntegers) {
+    TempDir dir;
+    FittedMaterial m;
+    m.method = "test";
+    MaterialTexture t;
+    t.name = "q";
+    t.width = 2;
+    t.height = 3;
+    t.depth = 2;
+    t.channels = 1;
+    t.kind = MaterialTexture::UNorm8;
+    // byte = 100 * slice + 10 * row + column, rows counted from the bottom.
+    for (int z = 0; z < 2; ++z)
+        for (int y = 0; y < 3; ++y)
+            for (int x = 0; x < 2; ++x) t.bytes.push_back(std::uint8_t(100 * z + 10 * y + x));
+    m.textures.push_back(t);
+    const std::string path = dir.file("q.exr");
+    saveFittedMaterial(m, path);
+    // The file as any EXR reader sees it: the integers, slices one below the other, each upright.
+    const FloatImage file = readFloatImage(path);
+    ASSERT_EQ(file.width, 2);
+    ASSERT_EQ(file.height, 6);
+    for (int row = 0; row < 6; ++row)
+        for (int x = 0; x < 2; ++x)
+            EXPECT_EQ(file.at(x, row, 0), float(100 * (row / 3) + 10 * (2 - row % 3) + x)) << row;
+    const FittedMaterial back = loadFittedMaterial(path);
+    const MaterialTexture& q = back.texture("q");
+    EXPECT_EQ(q.kind, MaterialTexture::UNorm8);
+    ASSERT_EQ(q.data.size(), t.bytes.size());
+    for (std::size_t i = 0; i < t.bytes.size(); ++i) {
+        EXPECT_EQ(q.data[i], float(t.bytes[i]) / 255.0f) << i;
+        EXPECT_EQ(q.value(i), t.value(i)) << i;
+    }
+
+    const std::string bad = dir.file("bad.exr");
+    m.textures[0].data.assign(t.valueCount(), 0.0f);
+    EXPECT_EQ(errorOf([&] { saveFittedMaterial(m, bad); }),
+              bad + ": texture 'q' holds both float values and bytes");
+    m.textures[0] = t;
+    m.textures[0].kind = MaterialTexture::Half;
+    EXPECT_EQ(errorOf([&] { saveFittedMaterial(m, bad); }),
+              bad + ": texture 'q' holds bytes but is not stored as 8-bit");
+    m.textures[0] = t;
+    m.textures[0].bytes.pop_back();
+    EXPECT_EQ(errorOf([&] { saveFittedMaterial(m, bad); }),
+              bad + ": texture 'q' has 11 values, 12 expected");
+    EXPECT_FALSE(fs::exists(bad));
+}
+
 TEST(FittedMaterial, ExrheaderAndOiiotoolReadTheFile) {
     TempDir dir;
     const std::string path = dir.file("m.exr");

@@ -212,6 +212,14 @@ TEST(Pca, SaveLoadRoundTripIsExact) {
         EXPECT_EQ(back.components(), 5);
         EXPECT_EQ(back.eigenTextures.kind, m->eigenTextures.kind);
         EXPECT_EQ(back.eigenTextures.data, m->eigenTextures.data) << storage;
+        EXPECT_EQ(back.eigenTextures.bytes, m->eigenTextures.bytes) << storage;
+        // 8-bit Eigen-Textures are held as bytes (a quarter of the memory), fitted and loaded.
+        EXPECT_EQ(m->eigenTextures.bytes.size(),
+                  storage == "unorm8" ? m->eigenTextures.valueCount() : 0u)
+            << storage;
+        EXPECT_EQ(m->eigenTextures.data.size(),
+                  storage == "unorm8" ? 0u : m->eigenTextures.valueCount())
+            << storage;
         EXPECT_EQ(back.weights.data, m->weights.data) << storage;
         EXPECT_EQ(back.fitInfo.at("storage"), storage);
         const glm::vec3 view = Direction{33, 71}.toVector(), light = Direction{52, 200}.toVector();

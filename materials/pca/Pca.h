@@ -81,12 +81,23 @@ public:
         const std::size_t col = std::size_t(k % _tileColumns) * _width + x;
         return ((view * eigenTextures.height + row) * eigenTextures.width + col) * 3;
     }
+    /** Stored RGB of texel (x, y) of component k of view v, from eigenTextures' data or bytes. */
+    glm::vec3 eigenTexel(std::size_t view, int k, int x, int y) const {
+        const std::size_t i = eigenIndex(view, k, x, y);
+        if (!eigenTextures.bytes.empty())
+            return glm::vec3(eigenTextures.bytes[i], eigenTextures.bytes[i + 1],
+                             eigenTextures.bytes[i + 2]) /
+                   255.0f;
+        return glm::vec3(eigenTextures.data[i], eigenTextures.data[i + 1],
+                         eigenTextures.data[i + 2]);
+    }
     /** Index of weight slot k (k == components: the bias) of (view, light) in weights.data. */
     std::size_t weightIndex(std::size_t view, std::size_t light, int k) const {
         return ((view * _lights.size() + light) * std::size_t(_components + 1) + k) * 3;
     }
 
-    /** Stored Eigen-Textures: q in [0, 1] for unorm8, E itself for half and float. RGB. */
+    /** Stored Eigen-Textures: q in [0, 1] for unorm8 (held as bytes, 0..255), E itself for half
+     *  and float. RGB. */
     MaterialTexture eigenTextures;
     /** Float RGB weights: (components + 1) x lights per view layer; slot `components` = bias. */
     MaterialTexture weights;
