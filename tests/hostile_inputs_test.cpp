@@ -18,6 +18,7 @@
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
 #include <gtest/gtest.h>
 
 #include "core/CoordinateMap.h"
@@ -492,6 +493,57 @@ TEST(HostileInputs, ExrWhoseChunkTableIsLargerThanTheFileIsRefused) {
                              "alone takes 8.0 GiB, but the file holds only " +
                              size + " bytes (truncated or corrupt file)");
     expectSmall(r, "EXR member with a 2^30-row window in a UBO2003 zip");
+}
+
+TEST(HostileInputs, ExrAttributeClaimingTwoGiBIsRefusedBeforeOpenExrAllocatesIt) {
+    TempDir dir;
+    const std::string path = dir.file("note.exr");
+    {
+        Imf::Header header(1, 1);
+        header.compression() = Imf::NO_COMPRESSION;
+        header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+        header.insert("note", Imf::StringAttribute("abcd"));
+        float value = 0.5f;
+        Imf::FrameBuffer frame;
+        frame.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&value), 4, 4));
+        Imf::OutputFile file(path.c_str(), header);
+        file.setFrameBuffer(frame);
+        file.writePixels(1);
+    }
+    // An attribute is name\0 type\0 size(int32 LE) value: the string's size 4 becomes 2^31 - 16.
+    // OpenEXR's C++ reader resizes a std::string to the claim before reading it (the fuzz
+    // campaign's finding, fuzz/README.md).
+    std::string bytes = readBytes(path);
+    const std::string field = std::string("note") + '\0' + "string" + '\0';
+    const std::size_t at = bytes.find(field);
+    ASSERT_NE(at, std::string::npos);
+    const std::size_t sizeAt = at + field.size();
+    ASSERT_EQ(bytes.substr(sizeAt, 4), std::string("\x04\0\0\0", 4));
+    bytes.replace(sizeAt, 4, std::string("\xf0\xff\xff\x7f", 4));
+    writeBytes(path, bytes);
+    const std::string remain = std::to_string(bytes.size() - sizeAt - 4);
+    const std::string expected = path +
+                                 ": OpenEXR header: attribute 'note' (string) claims 2147483632 "
+                                 "bytes but " +
+                                 remain + " remain in the file (truncated or corrupt file)";
+    MemoryLimit limit(kLimit);
+    Refusal r = refusalOf([&] { readFloatImage(path); });
+    EXPECT_EQ(r.message, expected);
+    expectSmall(r, "EXR image with a string attribute claiming 2 GiB");
+    r = refusalOf([&] { loadFittedMaterial(path); });
+    EXPECT_EQ(r.message, expected);
+    expectSmall(r, "fitted material with a string attribute claiming 2 GiB");
+
+    // An attribute of a type OpenEXR does not know is read as opaque bytes of the claimed size.
+    std::string opaque = bytes;
+    opaque.replace(at + 5, 6, "strinx");
+    writeBytes(path, opaque);
+    r = refusalOf([&] { loadFittedMaterial(path); });
+    EXPECT_EQ(r.message, path +
+                             ": OpenEXR header: attribute 'note' (strinx) claims 2147483632 "
+                             "bytes but " +
+                             remain + " remain in the file (truncated or corrupt file)");
+    expectSmall(r, "fitted material with an attribute of unknown type claiming 2 GiB");
 }
 
 TEST(HostileInputs, FittedMaterialWithAbsurdWindowOrDepthIsRefused) {
