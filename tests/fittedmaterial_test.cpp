@@ -61,6 +61,19 @@ MaterialTexture makeTexture(const std::string& name, int width, int height, int 
     return t;
 }
 
+/** A single-channel texture of 2 slices of 2x3 texels, no values yet: small enough to write
+ *  the file's expected rows by hand. */
+MaterialTexture twoSlicesOfTwoByThree(const std::string& name, MaterialTexture::PixelKind kind) {
+    MaterialTexture t;
+    t.name = name;
+    t.width = 2;
+    t.height = 3;
+    t.depth = 2;
+    t.channels = 1;
+    t.kind = kind;
+    return t;
+}
+
 FittedMaterial makeMaterial() {
     FittedMaterial m;
     m.method = "lpca";
@@ -176,12 +189,7 @@ TEST(FittedMaterial, FileShowsEachSliceUprightInViewers) {
     TempDir dir;
     FittedMaterial m;
     m.method = "test";
-    MaterialTexture t;
-    t.name = "v";
-    t.width = 2;
-    t.height = 3;
-    t.depth = 2;
-    t.channels = 1;
+    MaterialTexture t = twoSlicesOfTwoByThree("v", MaterialTexture::Float);
     // value = 10 * slice + row, rows counted from the bottom.
     for (int z = 0; z < 2; ++z)
         for (int y = 0; y < 3; ++y)
@@ -201,13 +209,7 @@ TEST(FittedMaterial, EightBitTextureHeldAsBytesIsWrittenAsItsIntegers) {
     TempDir dir;
     FittedMaterial m;
     m.method = "test";
-    MaterialTexture t;
-    t.name = "q";
-    t.width = 2;
-    t.height = 3;
-    t.depth = 2;
-    t.channels = 1;
-    t.kind = MaterialTexture::UNorm8;
+    MaterialTexture t = twoSlicesOfTwoByThree("q", MaterialTexture::UNorm8);
     // byte = 100 * slice + 10 * row + column, rows counted from the bottom.
     for (int z = 0; z < 2; ++z)
         for (int y = 0; y < 3; ++y)

@@ -153,6 +153,22 @@ std::string readBytes(const std::string& path) {
     return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+/** A valid uncompressed 1x1 float EXR written by OpenEXR, its header first passed to `edit`: the
+ *  file the hostile EXR cases patch. */
+void writeOnePixelExr(const std::string& path,
+                      const std::function<void(Imf::Header&)>& edit = nullptr) {
+    Imf::Header header(1, 1);
+    header.compression() = Imf::NO_COMPRESSION;
+    header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+    if (edit) edit(header);
+    float value = 0.5f;
+    Imf::FrameBuffer frame;
+    frame.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&value), 4, 4));
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(frame);
+    file.writePixels(1);
+}
+
 /** CRC-32 (ISO-HDLC), as PNG chunks and zip entries store it; table-driven because the tests
  *  checksum megabytes of member data. */
 std::uint32_t crc32(const std::string& bytes) {
@@ -457,17 +473,7 @@ TEST(HostileInputs, ExrClaiming100000x100000PixelsIsRefusedBeforeReading) {
 TEST(HostileInputs, ExrWhoseChunkTableIsLargerThanTheFileIsRefused) {
     TempDir dir;
     const std::string path = dir.file("tall.exr");
-    {
-        Imf::Header header(1, 1);
-        header.compression() = Imf::NO_COMPRESSION;
-        header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
-        float value = 0.5f;
-        Imf::FrameBuffer frame;
-        frame.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&value), 4, 4));
-        Imf::OutputFile file(path.c_str(), header);
-        file.setFrameBuffer(frame);
-        file.writePixels(1);
-    }
+    writeOnePixelExr(path);
     // One row per chunk: 1073741001 chunks, an 8 GiB offset table that OpenEXR's C++ reader
     // would allocate (and zero) on opening the file.
     patchDataWindow(path, 0, 1073741000);
@@ -498,18 +504,8 @@ TEST(HostileInputs, ExrWhoseChunkTableIsLargerThanTheFileIsRefused) {
 TEST(HostileInputs, ExrAttributeClaimingTwoGiBIsRefusedBeforeOpenExrAllocatesIt) {
     TempDir dir;
     const std::string path = dir.file("note.exr");
-    {
-        Imf::Header header(1, 1);
-        header.compression() = Imf::NO_COMPRESSION;
-        header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
-        header.insert("note", Imf::StringAttribute("abcd"));
-        float value = 0.5f;
-        Imf::FrameBuffer frame;
-        frame.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&value), 4, 4));
-        Imf::OutputFile file(path.c_str(), header);
-        file.setFrameBuffer(frame);
-        file.writePixels(1);
-    }
+    writeOnePixelExr(
+        path, [](Imf::Header& header) { header.insert("note", Imf::StringAttribute("abcd")); });
     // An attribute is name\0 type\0 size(int32 LE) value: the string's size 4 becomes 2^31 - 16.
     // OpenEXR's C++ reader resizes a std::string to the claim before reading it (the fuzz
     // campaign's finding, fuzz/README.md).
