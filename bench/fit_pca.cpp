@@ -4,32 +4,20 @@
 //   Generates the built-in sample (makeSampleBtf) of NxN texels in half storage (2.6 GB at 256),
 //   fits PCA, prints the fit time, the memory footprint and the process's peak resident memory;
 //   --error also computes the per-texel error over all 81 x 81 measured pairs.
-#include <sys/resource.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
+#include "bench/ProcessUsage.h"
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/pca/Pca.h"
 
-namespace {
-double cpuSeconds() {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-           1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
-
-double peakResidentGiB() {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return double(usage.ru_maxrss) / (1024.0 * 1024.0);  // ru_maxrss is in KiB on Linux
-}
-}  // namespace
+using osgBTF::bench::cpuSeconds;
+using osgBTF::bench::peakResidentGiB;
 
 int main(int argc, char** argv) {
     int size = 256, components = 16;

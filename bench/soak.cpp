@@ -5,7 +5,6 @@
 // Usage: bench_soak [--frames N] [--size TEXELS] [--warmup FRAMES] [--rss-tolerance MIB]
 //   The materials (lambert, pca, laf) are fitted to the built-in sample of TEXELS x TEXELS texels
 //   (default 32) and saved into a temporary folder first. OSGBTF_HEADLESS picks the back end.
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -17,6 +16,7 @@
 
 #include <osgDB/Registry>
 
+#include "bench/ProcessUsage.h"
 #include "core/Error.h"
 #include "harness/Soak.h"
 #include "harness/headless/HeadlessRenderer.h"
@@ -25,14 +25,7 @@
 
 namespace fs = std::filesystem;
 
-namespace {
-double cpuSeconds() {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-           1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
-}  // namespace
+using osgBTF::bench::cpuSeconds;
 
 int main(int argc, char** argv) {
     osgBTF::SoakOptions options;
