@@ -29,6 +29,14 @@ osg::ref_ptr<osg::Geode> rectifiedPatch() {
     return geode;
 }
 
+/** One pixel per base texel: a mip-mapped material's texels also hold its coarser levels, which
+ *  a rectified image at the base's size never shows (its level of detail is 0). */
+void rectifiedSize(const Material& material, int& w, int& h) {
+    const bool mip = material.mipLayout().mipMapped();
+    w = mip ? material.mipLayout().baseWidth() : material.width();
+    h = mip ? material.mipLayout().baseHeight() : material.height();
+}
+
 FloatImage toFloatImage(const osg::Image& image, int w, int h) {
     FloatImage out(w, h, 3);
     out.channelNames = {"R", "G", "B"};
@@ -84,7 +92,8 @@ std::vector<glm::vec3> projectPatchEnvironment(const Material& material,
 
 FloatImage evaluateEnvironmentImage(const Material& material, const std::vector<glm::vec3>& g,
                                     const glm::vec3& view, float exposure) {
-    const int w = material.width(), h = material.height();
+    int w, h;
+    rectifiedSize(material, w, h);
     FloatImage out(w, h, 3);
     out.channelNames = {"R", "G", "B"};
     if (view.z <= 0.0f) return out;
@@ -99,7 +108,8 @@ FloatImage evaluateEnvironmentImage(const Material& material, const std::vector<
 FloatImage renderEnvironmentImage(HeadlessRenderer& renderer, const Material& material,
                                   const std::vector<glm::vec3>& g, const glm::vec3& view,
                                   float exposure) {
-    const int w = material.width(), h = material.height();
+    int w, h;
+    rectifiedSize(material, w, h);
     if (!foldsEnvironment(material)) {
         FloatImage sum(w, h, 3);
         sum.channelNames = {"R", "G", "B"};
@@ -127,8 +137,9 @@ FloatImage renderEnvironmentImage(HeadlessRenderer& renderer, const Material& ma
 FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,
                                const glm::vec3& view, const glm::vec3& light) {
     osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
-    return renderImage(renderer, stateSet.get(), nullptr, material.width(), material.height(), view,
-                       light);
+    int w, h;
+    rectifiedSize(material, w, h);
+    return renderImage(renderer, stateSet.get(), nullptr, w, h, view, light);
 }
 
 FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,
@@ -161,7 +172,8 @@ FloatImage evaluateMaterialImage(const Material& material, const CoordinateMap& 
 
 FloatImage evaluateMaterialImage(const Material& material, const glm::vec3& view,
                                  const glm::vec3& light) {
-    const int w = material.width(), h = material.height();
+    int w, h;
+    rectifiedSize(material, w, h);
     FloatImage out(w, h, 3);
     out.channelNames = {"R", "G", "B"};
     if (light.z <= 0.0f || view.z <= 0.0f) return out;  // as the shader: below the horizon is dark

@@ -96,6 +96,11 @@ std::vector<std::string> sharedTextures(const std::string& method) {
 
 void checkCoordinateMapMatches(const Material& material, const CoordinateMap& map,
                                const std::string& mapName) {
+    // The map's entries are base texels; the levels' averages do not follow a map's layout.
+    if (material.mipLayout().mipMapped())
+        throw Error(mapName + ": material '" +
+                    (material.sourceFile.empty() ? material.methodName() : material.sourceFile) +
+                    "' is mip-mapped; a coordinate map needs a material fitted without mip levels");
     if (map.sampleWidth == material.width() && map.sampleHeight == material.height()) return;
     const std::string name =
         material.sourceFile.empty() ? material.methodName() : material.sourceFile;
@@ -107,6 +112,9 @@ void checkCoordinateMapMatches(const Material& material, const CoordinateMap& ma
 FittedMaterial remapFittedMaterial(const FittedMaterial& file, const CoordinateMap& map) {
     validateCoordinateMap(map, "coordinate map");
     const int width = intParameter(file, "width"), height = intParameter(file, "height");
+    if (file.parameters.count("mip.base"))
+        throw Error("coordinate map: fitted material '" + file.method +
+                    "' is mip-mapped; a coordinate map needs a material fitted without mip levels");
     if (map.sampleWidth != width || map.sampleHeight != height)
         throw Error("coordinate map: made for a " + sizeText(map.sampleWidth, map.sampleHeight) +
                     " sample, but fitted material '" + file.method + "' is " +

@@ -1,11 +1,13 @@
 #include "materials/Material.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <mutex>
 #include <sstream>
 #include <tuple>
 
+#include <glm/common.hpp>
 #include <osg/Shader>
 
 #include "core/Error.h"
@@ -15,6 +17,11 @@
 #include "materials/ShaderInterface.h"
 
 namespace osgBTF {
+
+namespace {
+// The base size of a mip-mapped material's atlas; the layout follows from it.
+constexpr const char* kMipBaseParameter = "mip.base";
+}  // namespace
 
 // ---- FitOptions ------------------------------------------------------------------------------
 
@@ -42,7 +49,8 @@ Material::Material(const Material& other, const osg::CopyOp& copyop)
       _width(other._width),
       _height(other._height),
       _views(other._views),
-      _lights(other._lights) {}
+      _lights(other._lights),
+      _mipLayout(other._mipLayout) {}
 
 void Material::evaluateMeasured(std::size_t texel, float* abrdf) const {
     const int x = int(texel % std::size_t(_width)), y = int(texel / std::size_t(_width));
@@ -55,6 +63,39 @@ void Material::evaluateMeasured(std::size_t texel, float* abrdf) const {
             *abrdf++ = value.b;
         }
     }
+}
+
+void Material::setMipLayout(const MipLayout& layout) {
+    if (layout.mipMapped() && (layout.atlasWidth() != _width || layout.atlasHeight() != _height))
+        throw Error("a mip pyramid of a " + std::to_string(layout.baseWidth()) + "x" +
+                    std::to_string(layout.baseHeight()) + " base needs " +
+                    std::to_string(layout.atlasWidth()) + "x" +
+                    std::to_string(layout.atlasHeight()) + " texels, the material has " +
+                    std::to_string(_width) + "x" + std::to_string(_height));
+    _mipLayout = layout.mipMapped() ? layout : MipLayout();
+    _sharedStateSet = nullptr;
+}
+
+glm::vec3 Material::evaluateFiltered(float u, float v, float lod, const glm::vec3& view,
+                                     const glm::vec3& light) const {
+    int x, y;
+    if (!_mipLayout.mipMapped()) {
+        const MipLayout base = MipLayout::forBase(_width, _height);
+        base.texelAt(u, v, 0, x, y);
+        return evaluate(x, y, view, light);
+    }
+    const int last = _mipLayout.levelCount() - 1;
+    // As the shader: NaN or negative (magnification) clamps to level 0.
+    const float clamped = std::clamp(std::isnan(lod) ? 0.0f : lod, 0.0f, float(last));
+    const int a = int(std::floor(clamped)), b = std::min(a + 1, last);
+    const float blend = clamped - float(a);
+    _mipLayout.texelAt(u, v, a, x, y);
+    glm::vec3 value = evaluate(x, y, view, light);
+    if (blend > 0.0f) {
+        _mipLayout.texelAt(u, v, b, x, y);
+        value = glm::mix(value, evaluate(x, y, view, light), blend);
+    }
+    return value;
 }
 
 void Material::throwMethodMismatch(const Material& other) const {
@@ -91,6 +132,22 @@ void Material::readCommon(const FittedMaterial& file) {
     _lights = file.lights;
     for (const auto& [key, value] : file.parameters)
         if (key.rfind("fit.", 0) == 0) fitInfo[key.substr(4)] = value;
+    _mipLayout = MipLayout();
+    const auto mip = file.parameters.find(kMipBaseParameter);
+    if (mip != file.parameters.end()) {
+        int baseWidth = 0, baseHeight = 0;
+        char x = 0, extra = 0;
+        std::istringstream in(mip->second);
+        if (!(in >> baseWidth >> x >> baseHeight) || x != 'x' || in >> extra || baseWidth <= 0 ||
+            baseHeight <= 0 || baseWidth > _width || baseHeight > _height)
+            fail(file.source, std::string(kMipBaseParameter) + " '" + mip->second +
+                                  "' is not a base size WxH within the material's texels");
+        try {
+            setMipLayout(MipLayout::forBase(baseWidth, baseHeight));
+        } catch (const Error& e) {
+            fail(file.source, e.what());
+        }
+    }
 }
 
 FittedMaterial Material::writeCommon() const {
@@ -101,6 +158,9 @@ FittedMaterial Material::writeCommon() const {
     file.parameters["width"] = std::to_string(_width);
     file.parameters["height"] = std::to_string(_height);
     for (const auto& [key, value] : fitInfo) file.parameters["fit." + key] = value;
+    if (_mipLayout.mipMapped())
+        file.parameters[kMipBaseParameter] =
+            std::to_string(_mipLayout.baseWidth()) + "x" + std::to_string(_mipLayout.baseHeight());
     return file;
 }
 

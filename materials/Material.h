@@ -20,6 +20,7 @@
 
 #include "core/FittedMaterialFile.h"
 #include "core/MeasuredBtf.h"
+#include "core/MipPyramid.h"
 #include "materials/MethodOptions.h"
 #include "materials/ShaderCost.h"
 
@@ -79,6 +80,19 @@ public:
      *  data override it to skip interpolation. */
     virtual void evaluateMeasured(std::size_t texel, float* abrdf) const;
 
+    /** A material fitted on a mip-map atlas (core/MipPyramid.h; `btf fit --mipmap`): its texels
+     *  are the atlas's, every level's averaged data. Empty (not mip-mapped) otherwise. */
+    const MipLayout& mipLayout() const { return _mipLayout; }
+    /** Marks this material as fitted on `layout`'s atlas; throws Error when the atlas is not
+     *  this material's texel size. */
+    void setMipLayout(const MipLayout& layout);
+    /** CPU reference of the shader's texture lookup at texture coordinate uv and level of detail
+     *  `lod` (log2 of base texels per pixel, as GL computes it): a material without levels
+     *  evaluates its nearest texel; a mip-mapped one blends levels floor(lod) and floor(lod) + 1
+     *  (clamped to its levels) as GL_LINEAR_MIPMAP_LINEAR does, each level's nearest texel. */
+    glm::vec3 evaluateFiltered(float u, float v, float lod, const glm::vec3& view,
+                               const glm::vec3& light) const;
+
     virtual MemoryFootprint memory() const = 0;
     virtual FittedMaterial toFittedMaterial() const = 0;
     /** toFittedMaterial for a material's last use (saving a fit): a method whose arrays can be
@@ -125,6 +139,7 @@ protected:
         _lights = other._lights;
         fitInfo = other.fitInfo;
         sourceFile = other.sourceFile;
+        _mipLayout = other._mipLayout;
         _sharedStateSet = nullptr;
         return *same;
     }
@@ -133,6 +148,7 @@ protected:
     DirectionSet _views, _lights;
 
 private:
+    MipLayout _mipLayout;
     [[noreturn]] void throwMethodMismatch(const Material& other) const;
     mutable osg::ref_ptr<osg::StateSet> _sharedStateSet;
 };

@@ -139,9 +139,23 @@ void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::strin
     stateSet.addUniform(new osg::Uniform(sampler.c_str(), unit));
 }
 
-void addCommonState(osg::StateSet& stateSet, const std::string& method, int width, int height) {
-    stateSet.setAttributeAndModes(methodProgram(method).get(), osg::StateAttribute::ON);
-    stateSet.addUniform(new osg::Uniform(shader::kSize, width, height));
+void addCommonState(osg::StateSet& stateSet, const Material& material) {
+    stateSet.setAttributeAndModes(methodProgram(material.methodName()).get(),
+                                  osg::StateAttribute::ON);
+    stateSet.addUniform(new osg::Uniform(shader::kSize, material.width(), material.height()));
+    const MipLayout layout = material.mipLayout().mipMapped()
+                                 ? material.mipLayout()
+                                 : MipLayout::forBase(material.width(), material.height());
+    const int levels = material.mipLayout().mipMapped() ? layout.levelCount() : 1;
+    static_assert(MipLayout::kMaxLevels == shader::kMaxMipLevels, "one limit for both");
+    osg::ref_ptr<osg::Uniform> rectangles =
+        new osg::Uniform(osg::Uniform::INT_VEC4, shader::kMipLevel, shader::kMaxMipLevels);
+    for (int i = 0; i < levels; ++i) {
+        const MipLevel& l = layout.levels()[std::size_t(i)];
+        rectangles->setElement(unsigned(i), l.x, l.y, l.width, l.height);
+    }
+    stateSet.addUniform(rectangles.get());
+    stateSet.addUniform(new osg::Uniform(shader::kMipLevels, levels));
     stateSet.addUniform(new osg::Uniform(shader::kTextureScale, 1.0f));
     // Off unless a MaterialNode's StateSet (applied after this one) turns it on. Set here, not
     // left to the GLSL default: a program keeps the last value any StateSet gave a uniform, so

@@ -33,7 +33,10 @@ osg::ref_ptr<osg::Texture2DArray> newTexture2DArray();
 void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::string& sampler,
                 int unit);
 
-/** The uniforms every material sets: osgBTF_size and osgBTF_textureScale (= 1), and the program. */
-void addCommonState(osg::StateSet& stateSet, const std::string& method, int width, int height);
+class Material;
+
+/** The uniforms every material sets: osgBTF_size, osgBTF_textureScale (= 1), its mip levels (one
+ *  for a material without), the terminator's defaults, and the method's program. */
+void addCommonState(osg::StateSet& stateSet, const Material& material);
 
 }  // namespace osgBTF

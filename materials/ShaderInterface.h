@@ -23,6 +23,11 @@ constexpr const char* kLightColor = "osgBTF_lightColor";        ///< vec3[kMaxLi
 constexpr const char* kSize = "osgBTF_size";                    ///< ivec2, texels of the material
 constexpr const char* kFixedView = "osgBTF_fixedView";          ///< vec4, w = 1: fixed local view
 constexpr const char* kTextureScale = "osgBTF_textureScale";    ///< float, tiling
+/** Mip-mapped materials (core/MipPyramid.h): the level count (1: not mip-mapped) and each level's
+ *  rectangle (x, y, width, height) in the material's texels; level 0 is the base. */
+constexpr const char* kMipLevels = "osgBTF_mipLevels";  ///< int
+constexpr const char* kMipLevel = "osgBTF_mipLevel";    ///< ivec4[kMaxMipLevels]
+constexpr int kMaxMipLevels = 16;  ///< surface_frame.glsl's `const int osgBTF_maxMipLevels`
 
 /** The coordinate-map variant of every program (btf_main.glsl): the define coordinateMapProgram
  * adds, and the integer sampler it then reads (R32I, (sample row << 16) | sample column). */

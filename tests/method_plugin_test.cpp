@@ -68,7 +68,7 @@ public:
     }
     osg::ref_ptr<osg::StateSet> createStateSet() const override {
         osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-        addCommonState(*stateSet, methodName(), _width, _height);
+        addCommonState(*stateSet, *this);
         addTexture(
             *stateSet,
             createFloatTexture({"value", _width, _height, 1, 3, MaterialTexture::Float, value})

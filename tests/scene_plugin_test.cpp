@@ -243,6 +243,25 @@ TEST(ScenePlugins, MeasuredBtfIsFittedOnceThenReadFromTheCache) {
     EXPECT_EQ(filesIn(cache).size(), 3u);
 }
 
+TEST(ScenePlugins, MipmapOptionFitsLevelsAndIsItsOwnCacheEntry) {
+    TempDir dir;
+    const std::string zip = writeSampleZip(dir);
+    const std::string cache = "cache=" + dir.file("cache");
+    ReadResult result = readNode(zip, "method=lambert mipmap=yes " + cache);
+    EXPECT_EQ(result.status(), ReadResult::ERROR_IN_READING_FILE);
+    EXPECT_EQ(result.message(), "option mipmap=yes: expected on or off");
+    result = readNode(zip, "method=lambert mipmap=on " + cache);
+    ASSERT_NE(asMaterialNode(result), nullptr) << result.message();
+    const Material& mip = *asMaterialNode(result)->getMaterial();
+    EXPECT_TRUE(mip.mipLayout().mipMapped());
+    EXPECT_EQ(mip.width(), mip.mipLayout().baseWidth() * 3 / 2);
+    // The plain fit of the same file and method is another entry, without levels.
+    result = readNode(zip, "method=lambert mipmap=off " + cache);
+    ASSERT_NE(asMaterialNode(result), nullptr) << result.message();
+    EXPECT_FALSE(asMaterialNode(result)->getMaterial()->mipLayout().mipMapped());
+    EXPECT_EQ(filesIn(dir.file("cache")).size(), 2u);
+}
+
 TEST(ScenePlugins, CacheOffFitsWithoutWriting) {
     TempDir dir;
     const std::string zip = writeSampleZip(dir);

@@ -103,6 +103,31 @@ TEST(BtfTool, FitThenEvalMatchesTheCpuReference) {
     EXPECT_NE(r.output.find("--view: theta 95"), std::string::npos) << r.output;
 }
 
+TEST(BtfTool, MipMappedFitEvaluatesItsBaseLevel) {
+    TempDir dir;
+    const std::string zip = dir.file("s.zip"), fitted = dir.file("m.btfmat");
+    ASSERT_EQ(btf("sample --size 8 --format png -o " + shellQuote(zip)).exitCode, 0);
+    CommandResult r =
+        btf("fit " + shellQuote(zip) + " -m lambert --mipmap -o " + shellQuote(fitted));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    // 8x8: levels of 4x4, 2x2 and 1x1 in a column of 4 beside the base.
+    EXPECT_NE(r.output.find("(8x8 texels, 4 mip levels in 12x8, 81x81 directions)"),
+              std::string::npos)
+        << r.output;
+    r = btfWithGl("eval " + shellQuote(fitted) + " --view 45,0 --light 60,90 -o " +
+                  shellQuote(dir.file("gpu.exr")));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("(lambert, 8x8 base of 4 mip levels, "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("largest GPU-CPU difference 0"), std::string::npos) << r.output;
+    r = btf("fit " + shellQuote(zip) + " -m fmf --mipmap -o " + shellQuote(dir.file("m.btf")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("m.btf: a UBO2014 .btf file has no mip levels; save a --mipmap fit "
+                            "as .btfmat or .exr"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("m.btf")));
+}
+
 TEST(BtfTool, EvalWithAnEnvironment) {
     // A white environment (radiance 1, RGBE 128 128 128 129, flat 8 x 4 Radiance file), pca
     // through its folded program against the CPU's sum_i g_i BTF(x, v, l_i): float sums of ~81

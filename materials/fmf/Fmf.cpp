@@ -422,7 +422,7 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(const FittedMaterial& file) {
 
 osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     // Arrays even with one layer (rank <= 4, one view): fmf.frag samples sampler2DArrays.
     addTexture(*stateSet, createFloatTextureArray(uTexture()).get(), "fmfU", 0);
     addTexture(*stateSet, createFloatTextureArray(sxvTexture()).get(), "fmfSxV", 1);

@@ -69,7 +69,7 @@ osg::ref_ptr<LafMaterial> LafMaterial::fromFile(const FittedMaterial& file) {
 
 osg::ref_ptr<osg::StateSet> LafMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     addLobeState(*stateSet, "laf");
     return stateSet;
 }

@@ -76,7 +76,7 @@ osg::ref_ptr<LambertMaterial> LambertMaterial::fromFile(const FittedMaterial& fi
 
 osg::ref_ptr<osg::StateSet> LambertMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     addTexture(
         *stateSet,
         createFloatTexture({"albedo", _width, _height, 1, 3, MaterialTexture::Half, albedo}).get(),

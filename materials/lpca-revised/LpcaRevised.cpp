@@ -305,7 +305,7 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromFile(const FittedMate
 
 osg::ref_ptr<osg::StateSet> LpcaRevisedMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     addTexture(*stateSet, createFloatTexture(lpcaClusterTexture(_width, _height, clusterOf)).get(),
                "lpcaRevisedCluster", 0);
     addTexture(

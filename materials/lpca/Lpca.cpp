@@ -251,7 +251,7 @@ osg::ref_ptr<LpcaMaterial> LpcaMaterial::fromFile(const FittedMaterial& file) {
 
 osg::ref_ptr<osg::StateSet> LpcaMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     const FittedMaterial file = toFittedMaterial();
     addTexture(*stateSet, createFloatTexture(file.texture("cluster")).get(), "lpcaCluster", 0);
     addTexture(*stateSet, createTextureArray(file.texture("weights")).get(), "lpcaWeights", 1);

@@ -360,7 +360,7 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(const FittedMaterial& file) {
 
 osg::ref_ptr<osg::StateSet> PcaMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     addTexture(*stateSet, createFloatTexture(eigenTextures).get(), "pcaEigenTextures", 0);
     addTexture(*stateSet, createFloatTexture(weights).get(), "pcaWeights", 1);
     _viewLookup.addToStateSet(*stateSet, "pcaViewTable", 2);

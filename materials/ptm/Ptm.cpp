@@ -412,7 +412,7 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(const FittedMaterial& file) {
 
 osg::ref_ptr<osg::StateSet> PtmMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     addTexture(*stateSet,
                createFloatTextureArray({"coefficients", _width, _height, _slots * layersPerSlot(),
                                         3, _shape.storage, coefficients})

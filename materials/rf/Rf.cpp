@@ -724,7 +724,7 @@ osg::ref_ptr<RfMaterial> RfMaterial::fromFile(const FittedMaterial& file) {
 
 osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     int unit = 0;
     if (!_variant.diffuse) {
         // The shader samples rfRhoD either way (one program for every variant); without the

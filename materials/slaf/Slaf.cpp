@@ -111,7 +111,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fromFile(const FittedMaterial& file) {
 
 osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, methodName(), _width, _height);
+    addCommonState(*stateSet, *this);
     addLobeState(*stateSet, "slaf");
     // T as a 2D array, one layer per measured view (81 or 151 layers, well below GL's 2048).
     addTexture(*stateSet,

@@ -19,6 +19,7 @@
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2003.h"
 #include "materials/Material.h"
+#include "materials/MipMapping.h"
 #include "scene/MaterialNode.h"
 
 namespace fs = std::filesystem;
@@ -37,6 +38,7 @@ struct Settings {
     float textureScale = 1.0f;
     std::string cacheDir;  // empty: caching off
     std::string mapFile;   // a coordinate map to draw the material through; empty: none
+    bool mipmap = false;   // fit a mip-mapped material (materials/MipMapping.h)
 };
 
 std::string defaultCacheDir() {
@@ -68,6 +70,10 @@ Settings parseSettings(const osgDB::Options* options, const std::string& extra =
         } else if (key == "map") {
             if (value.empty()) throw Error("option map=: expected a coordinate map file");
             settings.mapFile = value;
+        } else if (key == "mipmap") {
+            if (value != "on" && value != "off")
+                throw Error("option mipmap=" + value + ": expected on or off");
+            settings.mipmap = value == "on";
         } else if (key == "cache") {
             settings.cacheDir = value == "off" ? std::string() : value;
         } else if (key == "scale") {
@@ -111,8 +117,8 @@ std::uint64_t fnv1a64(const std::string& text) {
 }
 
 /** Everything a fit depends on, as one line (stored in the fitted file to detect collisions). */
-std::string cacheKey(const std::string& path, const std::string& method,
-                     const FitOptions& options) {
+std::string cacheKey(const std::string& path, const std::string& method, const FitOptions& options,
+                     bool mipmap) {
     std::error_code error;
     const fs::path absolute = fs::absolute(path, error);
     std::ostringstream key;
@@ -132,7 +138,7 @@ std::string cacheKey(const std::string& path, const std::string& method,
         key << fs::file_size(path, error) << "|"
             << fs::last_write_time(path, error).time_since_epoch().count();
     }
-    key << "|" << method;
+    key << "|" << method << (mipmap ? "|mipmap" : "");
     for (const auto& [name, value] : options.values()) key << "|" << name << "=" << value;
     return key.str();
 }
@@ -144,7 +150,7 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
     std::string optionText;
     for (const auto& [name, value] : fitOptions.values())
         optionText += (optionText.empty() ? "" : " ") + name + "=" + value;
-    const std::string key = cacheKey(path, method.name, fitOptions);
+    const std::string key = cacheKey(path, method.name, fitOptions, settings.mipmap);
 
     fs::path cacheFile;
     if (!settings.cacheDir.empty()) {
@@ -177,7 +183,9 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
     osg::ref_ptr<Material> material;
     {
         // A UBO2014 file is fitted from its factors, decoded block by block, never whole.
-        material = method.fit(*openBtfSource(path), fitOptions);
+        const std::unique_ptr<BtfSource> source = openBtfSource(path);
+        material = settings.mipmap ? fitMipMapped(method, *source, fitOptions)
+                                   : method.fit(*source, fitOptions);
     }
     material->fitInfo["cacheKey"] = key;
     if (!cacheFile.empty()) {
@@ -219,6 +227,7 @@ osg::ref_ptr<Material> openStored(const std::string& path, const Settings& setti
                 break;
             }
     }
+    if (settings.mipmap) ignored += " mipmap=on";
     OSGBTF_NOTIFY(
         osg::NOTICE,
         "osgBTF: " << path
@@ -310,6 +319,9 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
             }
         for (const auto& [key, text] : fitOptions) supportsOption(key, text);
         supportsOption("cache=<dir>|off", "fit cache folder (default ~/.cache/osgbtf)");
+        supportsOption("mipmap=on|off",
+                       "fit a mip-mapped material: minified surfaces without aliasing (default "
+                       "off)");
     }
     supportsOption("scale=<s>", "texture scale (tiling) of the MaterialNode (default 1)");
     supportsOption("map=<file>",

@@ -74,6 +74,21 @@ void main() {
     btfSurfaceFrame(t, b, n);
     vec3 view = btfLocalView(t, b, n);
     ivec2 texel = btfTexel(btfTexCoord);
+    // A mip-mapped material blends the nearest texels of two levels, as GL_LINEAR_MIPMAP_LINEAR
+    // (Material::evaluateFiltered is the CPU reference); magnified fragments evaluate once.
+    ivec2 coarserTexel = texel;
+    float coarserWeight = 0.0;
+#ifndef OSGBTF_COORDINATE_MAP
+    float lod = btfMipLod(btfTexCoord);
+    if (osgBTF_mipLevels > 1) {
+        // NaN (no derivative) or negative: level 0.
+        lod = lod > 0.0 ? min(lod, float(osgBTF_mipLevels - 1)) : 0.0;
+        int level = int(floor(lod));
+        texel = btfLevelTexel(btfTexCoord, level);
+        coarserTexel = btfLevelTexel(btfTexCoord, min(level + 1, osgBTF_mipLevels - 1));
+        coarserWeight = lod - float(level);
+    }
+#endif
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {
         for (int i = 0; i < osgBTF_lightCount && i < osgBTF_maxLights; ++i) {
@@ -83,8 +98,12 @@ void main() {
             if (!(light.z > 0.0)) continue;
             float visible = btfTerminatorFactor(i) * btfShadowFactor(i);
             // Skipped when dark: shadowed lights cost no method evaluation.
-            if (visible > 0.0)
-                color += visible * osgBTF_lightColor[i] * btfEvaluate(texel, view, light);
+            if (visible > 0.0) {
+                vec3 value = btfEvaluate(texel, view, light);
+                if (coarserWeight > 0.0)
+                    value = mix(value, btfEvaluate(coarserTexel, view, light), coarserWeight);
+                color += visible * osgBTF_lightColor[i] * value;
+            }
         }
     }
     gl_FragColor = vec4(color, 1.0);

@@ -28,9 +28,30 @@ vec3 btfLocalView(vec3 t, vec3 b, vec3 n) {
     return view;
 }
 
-/** The nearest texel with wrap-around tiling; texelFetch keeps the GPU equal to the CPU
- *  reference. */
-ivec2 btfNearestTexel(vec2 uv) {
+// Mip-mapped materials (core/MipPyramid.h): level l is the rectangle osgBTF_mipLevel[l] = (x, y,
+// width, height) of the material's texels; osgBTF_mipLevels = 1 for a material without levels
+// (its one rectangle is the whole material).
+const int osgBTF_maxMipLevels = 16;
+uniform int osgBTF_mipLevels;
+uniform ivec4 osgBTF_mipLevel[osgBTF_maxMipLevels];
+
+/** The texel of level `level` at uv, with wrap-around tiling; texelFetch keeps the GPU equal to
+ *  the CPU reference (MipLayout::texelAt). */
+ivec2 btfLevelTexel(vec2 uv, int level) {
+    ivec4 r = osgBTF_mipLevel[level];
     vec2 f = fract(uv);
-    return clamp(ivec2(floor(f * vec2(osgBTF_size))), ivec2(0), osgBTF_size - ivec2(1));
+    return r.xy + clamp(ivec2(floor(f * vec2(r.zw))), ivec2(0), r.zw - ivec2(1));
+}
+
+/** The nearest base texel. */
+ivec2 btfNearestTexel(vec2 uv) {
+    return btfLevelTexel(uv, 0);
+}
+
+/** The level of detail at uv as GL computes it for a texture of the base's size: log2 of the
+ *  longer screen-space step in base texels. Called in uniform control flow (derivatives). */
+float btfMipLod(vec2 uv) {
+    vec2 base = vec2(osgBTF_mipLevel[0].zw);
+    vec2 dx = dFdx(uv) * base, dy = dFdy(uv) * base;
+    return 0.5 * log2(max(dot(dx, dx), dot(dy, dy)));
 }

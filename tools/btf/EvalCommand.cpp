@@ -101,8 +101,12 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
         }
         writeFloatImage(options->cpu ? cpu : gpu, options->output);
         std::cout << "wrote " << options->output << " (" << material->methodName() << ", "
-                  << material->width() << "x" << material->height() << ", "
-                  << (environment ? "environment " + options->env + ", " : "")
+                  << cpu.width << "x" << cpu.height
+                  << (material->mipLayout().mipMapped()
+                          ? " base of " + std::to_string(material->mipLayout().levelCount()) +
+                                " mip levels"
+                          : std::string())
+                  << ", " << (environment ? "environment " + options->env + ", " : "")
                   << (options->cpu ? "CPU reference" : "GPU: " + renderer.glRenderer())
                   << "); largest GPU-CPU difference " << maxAbsDifference(gpu, cpu) << "\n";
     };

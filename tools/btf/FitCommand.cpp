@@ -13,6 +13,7 @@
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
 #include "materials/Material.h"
+#include "materials/MipMapping.h"
 #include "materials/fmf/Fmf.h"
 #include "tools/btf/Commands.h"
 
@@ -42,6 +43,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         std::vector<std::string> settings;
         int lobes = 0, components = 0, clusters = 0;
         long long errorTexels = -1;
+        bool mipmap = false;
     };
     auto options = std::make_shared<Options>();
     command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
@@ -66,6 +68,11 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
                      "pairs each); 0 = all. Default: all for data in memory, 4096 for a UBO2014 "
                      "file, which is decoded block by block and never whole")
         ->check(CLI::NonNegativeNumber);
+    command->add_flag(
+        "--mipmap", options->mipmap,
+        "Fit a mip-mapped material: every level of box-filtered data (down to 1x1) fitted "
+        "with the method, so minified surfaces render the average of what a pixel covers "
+        "instead of aliasing (1.5x the texels; the error covers every level)");
     addLoadOptions(*command, common);
     return [&common, options] {
         const MethodInfo& method = findMethod(options->method);
@@ -86,6 +93,9 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         std::string extension = std::filesystem::path(options->output).extension().string();
         for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
         const bool btfOutput = extension == ".btf";
+        if (btfOutput && options->mipmap)
+            fail(options->output,
+                 "a UBO2014 .btf file has no mip levels; save a --mipmap fit as .btfmat or .exr");
         if (btfOutput && method.name != "fmf")
             fail(options->output,
                  "only method fmf writes a UBO2014 .btf file (its factors are "
@@ -102,9 +112,13 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         // A UBO2014 file stays factored: each method reads decoded blocks (BtfSource).
         const std::unique_ptr<BtfSource> input =
             openBtfSource(options->input, common.loadOptions());
-        const BtfSource& btf = *input;
+        const std::unique_ptr<BtfSource> atlas =
+            options->mipmap ? std::make_unique<MipAtlasSource>(*input) : nullptr;
+        // A mip-mapped fit's error is measured against every level's data.
+        const BtfSource& btf = atlas ? *atlas : *input;
         const auto loaded = std::chrono::steady_clock::now();
-        osg::ref_ptr<Material> material = method.fit(btf, fit);
+        osg::ref_ptr<Material> material =
+            options->mipmap ? fitMipMapped(method, *input, fit) : method.fit(btf, fit);
         const double fitSeconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - loaded).count();
         material->fitInfo["seconds"] = std::to_string(fitSeconds);
@@ -128,7 +142,12 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         }
         const double loadSeconds = std::chrono::duration<double>(loaded - start).count();
         std::cout << std::fixed << std::setprecision(2) << "fitted " << method.name << " to "
-                  << options->input << " (" << btf.width() << "x" << btf.height() << " texels, "
+                  << options->input << " (" << input->width() << "x" << input->height()
+                  << " texels, "
+                  << (atlas ? std::to_string(material->mipLayout().levelCount()) +
+                                  " mip levels in " + std::to_string(btf.width()) + "x" +
+                                  std::to_string(btf.height()) + ", "
+                            : std::string())
                   << btf.viewCount() << "x" << btf.lightCount() << " directions)\n"
                   << "time: load " << loadSeconds << " s, fit " << fitSeconds << " s\n"
                   << "memory: " << memory.valuesPerTexel << " values, " << memory.bytesPerTexel

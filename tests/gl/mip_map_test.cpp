@@ -1,0 +1,178 @@
+// Mip-mapped BTFs on the GPU (issue 12 section 2): a plane on which 8 texels fall in a pixel,
+// seen from a grazing measured view. Each pixel covers an aligned 8x8 block of the tiled sample,
+// so the box-filtered reference is the mean of those 64 measured values, computed here from the
+// sample itself. The render must equal the CPU lookup (Material::evaluateFiltered at lod 3) and
+// lie within the method's own fit error of the reference; the base level alone (what a material
+// without levels shows) aliases: one texel of the 64.
+#include <cmath>
+#include <iostream>
+
+#include <gtest/gtest.h>
+#include <osg/Geode>
+#include <osg/Uniform>
+
+#include "harness/sample/SampleBtf.h"
+#include "materials/Material.h"
+#include "materials/MipMapping.h"
+#include "materials/ShaderInterface.h"
+#include "tests/SmallSample.h"
+#include "tests/gl/GlTestEnv.h"
+
+using namespace osgBTF;
+using namespace osgBTF::test;
+
+namespace {
+
+constexpr int kPixels = 32, kTexels = 64, kRepeats = 4;  // 64 * 4 / 32 = 8 texels per pixel
+constexpr int kPerPixel = kTexels * kRepeats / kPixels;
+
+const MeasuredBtf& sample() {
+    static const MeasuredBtf btf = smallSampleBtf(kTexels);
+    return btf;
+}
+
+/** The measured direction of largest theta among the views (the most grazing one). */
+std::size_t grazingView(const DirectionSet& views) {
+    std::size_t best = 0;
+    for (std::size_t v = 1; v < views.size(); ++v)
+        if (views.vector(v).z < views.vector(best).z) best = v;
+    return best;
+}
+
+struct MinifiedRender {
+    std::vector<glm::vec3> pixels;  // rows bottom-up
+};
+
+/** The unit square under orthoUnitSquare, texture repeated kRepeats times, shaded as seen from
+ *  `view` (osgBTF_fixedView) and lit from `light`; `levels` overrides osgBTF_mipLevels. */
+MinifiedRender render(const Material& material, const glm::vec3& view, const glm::vec3& light,
+                      int levels) {
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+    stateSet->addUniform(new osg::Uniform(shader::kTextureScale, float(kRepeats)));
+    stateSet->addUniform(new osg::Uniform(shader::kMipLevels, levels));
+    stateSet->addUniform(
+        new osg::Uniform(shader::kFixedView, osg::Vec4(view.x, view.y, view.z, 1)));
+    stateSet->addUniform(new osg::Uniform(shader::kLightCount, 1));
+    osg::ref_ptr<osg::Uniform> position =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC4, shader::kLightPosition, shader::kMaxLights);
+    // Eye space = the patch's frame here: view identity, tangent +X, normal +Z.
+    position->setElement(0, osg::Vec4(light.x, light.y, light.z, 0.0f));
+    stateSet->addUniform(position.get());
+    osg::ref_ptr<osg::Uniform> color =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC3, shader::kLightColor, shader::kMaxLights);
+    color->setElement(0, osg::Vec3(1, 1, 1));
+    stateSet->addUniform(color.get());
+    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
+    osg::ref_ptr<osg::Vec4Array> tangents =
+        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
+    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
+    quad->setVertexAttribArray(shader::kTangentAttribute, tangents.get(),
+                               osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(quad.get());
+    geode->setStateSet(stateSet.get());
+    const osg::ref_ptr<osg::Image> image =
+        sharedRenderer().render(geode.get(), orthoUnitSquare(kPixels, kPixels));
+    MinifiedRender out;
+    for (int j = 0; j < kPixels; ++j)
+        for (int i = 0; i < kPixels; ++i)
+            out.pixels.emplace_back(pixel(*image, i, j, 0), pixel(*image, i, j, 1),
+                                    pixel(*image, i, j, 2));
+    return out;
+}
+
+/** The mean of the measured values pixel (i, j) covers: base texels [8 (i mod 8), + 8) and the
+ *  same for j (the pixel spans 1/32 of four repeats of 64 texels). */
+glm::dvec3 boxFiltered(int i, int j, std::size_t view, std::size_t light) {
+    const int x0 = (i * kPerPixel) % kTexels, y0 = (j * kPerPixel) % kTexels;
+    glm::dvec3 sum(0.0);
+    for (int y = y0; y < y0 + kPerPixel; ++y)
+        for (int x = x0; x < x0 + kPerPixel; ++x)
+            for (int c = 0; c < 3; ++c)
+                sum[c] += sample().value(view, light, std::size_t(y) * kTexels + x, c);
+    return sum / double(kPerPixel * kPerPixel);
+}
+
+double rms(const std::vector<double>& squares) {
+    double sum = 0;
+    for (double s : squares) sum += s;
+    return std::sqrt(sum / double(squares.size()));
+}
+
+struct MinificationErrors {
+    double gpuVsCpu = 0;       ///< max |render - evaluateFiltered(lod 3)|
+    double filtered = 0;       ///< RMS of the mip-mapped render against the box-filtered mean
+    double ownFitError = 0;    ///< RMS of the material's level-3 texels against the same means
+    double baseLevelOnly = 0;  ///< RMS of the base level's render against them
+    double meanValue = 0;
+};
+
+MinificationErrors measure(const Material& material) {
+    const std::size_t v = grazingView(sample().views());
+    const std::size_t l = 4;  // a light away from the horizon
+    const glm::vec3 view = sample().views().vector(v), light = sample().lights().vector(l);
+    const MinifiedRender mip = render(material, view, light, material.mipLayout().levelCount());
+    const MinifiedRender base = render(material, view, light, 1);
+    MinificationErrors e;
+    std::vector<double> filtered, own, baseOnly;
+    for (int j = 0; j < kPixels; ++j)
+        for (int i = 0; i < kPixels; ++i) {
+            const float u = (i + 0.5f) / kPixels * kRepeats, t = (j + 0.5f) / kPixels * kRepeats;
+            const glm::vec3 cpu = material.evaluateFiltered(u, t, 3.0f, view, light);
+            const glm::dvec3 reference = boxFiltered(i, j, v, l);
+            const glm::vec3 gpu = mip.pixels[std::size_t(j) * kPixels + i];
+            const glm::vec3 gpuBase = base.pixels[std::size_t(j) * kPixels + i];
+            for (int c = 0; c < 3; ++c) {
+                e.gpuVsCpu = std::max(e.gpuVsCpu, double(std::abs(gpu[c] - cpu[c])));
+                filtered.push_back(std::pow(gpu[c] - reference[c], 2));
+                own.push_back(std::pow(cpu[c] - reference[c], 2));
+                baseOnly.push_back(std::pow(gpuBase[c] - reference[c], 2));
+                e.meanValue += reference[c] / (3.0 * kPixels * kPixels);
+            }
+        }
+    e.filtered = rms(filtered);
+    e.ownFitError = rms(own);
+    e.baseLevelOnly = rms(baseOnly);
+    return e;
+}
+
+std::string describe(const MinificationErrors& e) {
+    return "GPU-CPU " + std::to_string(e.gpuVsCpu) + ", RMS to the box filter: mip-mapped " +
+           std::to_string(e.filtered) + " (own fit error " + std::to_string(e.ownFitError) +
+           "), base level only " + std::to_string(e.baseLevelOnly) + ", mean value " +
+           std::to_string(e.meanValue);
+}
+
+}  // namespace
+
+TEST(MipMapGpu, ExactPcaRendersTheBoxFilteredMeanWhereTheBaseLevelAliases) {
+    // PCA with as many components as lights and float storage reproduces every texel of the
+    // atlas exactly (each view's matrix has rank <= its 9 lights): the filtered render can only
+    // differ from the mean by float rounding.
+    const osg::ref_ptr<Material> pca =
+        fitMipMapped(findMethod("pca"), sample(), FitOptions::parse("components=9 storage=float"));
+    const MinificationErrors e = measure(*pca);
+    std::cout << "pca (exact): " << describe(e) << "\n";
+    SCOPED_TRACE(describe(e));
+    EXPECT_LT(e.gpuVsCpu, 1e-3 * (1.0 + e.meanValue));
+    EXPECT_LT(e.filtered, 1e-3 * e.meanValue);
+    // A single texel of a woven sample is far from the mean of 64.
+    EXPECT_GT(e.baseLevelOnly, 0.05 * e.meanValue);
+    EXPECT_GT(e.baseLevelOnly, 50 * e.filtered);
+}
+
+TEST(MipMapGpu, EveryMethodRendersItsFitOfTheAveragedData) {
+    for (const std::string& name : methodNamesInOrder()) {
+        const MethodInfo& method = findMethod(name);
+        const osg::ref_ptr<Material> material =
+            fitMipMapped(method, sample(), FitOptions::parse(method.quickFitOptions));
+        const MinificationErrors e = measure(*material);
+        std::cout << name << ": " << describe(e) << "\n";
+        SCOPED_TRACE(name + ": " + describe(e));
+        // GPU == CPU within the tolerance of the methods' own GPU tests (8-bit and half storage).
+        EXPECT_LT(e.gpuVsCpu, 1e-3 * (1.0 + e.meanValue) + 2e-3 * e.meanValue);
+        // Within the method's own error on the level's data, and below the aliased render's.
+        EXPECT_LT(e.filtered, e.ownFitError + 1e-3 * (1.0 + e.meanValue));
+        EXPECT_LT(e.filtered, e.baseLevelOnly);
+    }
+}
