@@ -24,6 +24,7 @@
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MipMapping.h"
 
 namespace {
 
@@ -44,6 +45,7 @@ struct Options {
     int size = 32;
     std::string methods = "lambert,laf,pca";
     int blockMap = 0;  // 0: none
+    bool mipmap = false;
     bool benchFps = false;
     std::string benchResolution = "1920x1080", benchLights = "1,8", benchTarget = "rgba8";
     SceneBenchOptions bench;
@@ -123,7 +125,9 @@ void run(Options options) {
     std::vector<SceneItem> items;
     for (const std::string& method : methods) {
         const auto start = std::chrono::steady_clock::now();
-        osg::ref_ptr<Material> material = findMethod(method).fit(sample, FitOptions());
+        osg::ref_ptr<Material> material =
+            options.mipmap ? fitMipMapped(findMethod(method), sample, FitOptions())
+                           : findMethod(method).fit(sample, FitOptions());
         const std::string file = "sample-" + method + ".btfmat";
         saveMaterial(*material, (dir / file).string());
         std::cout << "fitted " << method << " in "
@@ -234,6 +238,10 @@ int main(int argc, char** argv) {
                    "blocks of a quarter of the sample from random places (a stand-in for `btf "
                    "synthesize`'s output; btfviewer --map)")
         ->check(CLI::Range(1, 16384));
+    app.add_flag("--mipmap", options.mipmap,
+                 "Fit mip-mapped materials (`btf fit --mipmap`): distant and grazing surfaces "
+                 "show the average of what a pixel covers instead of aliasing; such materials "
+                 "cannot be drawn through --block-map's coordinate map");
     app.add_flag("--bench-fps", options.benchFps,
                  "After writing the scenes, time them headless (EGL: the GPU where there is one, "
                  "else llvmpipe): for each scene, each method on every object and each light "
