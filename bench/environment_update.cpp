@@ -6,7 +6,9 @@
 //   components on the 81 x 81 Bonn sampling (fitted on an 8 x 8 sample: the per-vertex work does
 //   not depend on the texel count). Prints: per-vertex projection with Embree visibility,
 //   the same without visibility, folding (views x (C + 1) RGB per vertex), the folded data's
-//   size, and the illumination-PCA rebuild of one rotation from 30 samples with 5 components.
+//   size, the illumination-PCA rebuild of one rotation from 30 samples with 5 components, and
+//   the frame time of the lit sphere and ground at 1920x1080 into an RGBA8 target (seed 004
+//   Table 2's fps; --fps-frames N timed frames, 0 skips it; the GL renderer is printed).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,10 +21,12 @@
 #include <osg/Geometry>
 #include <osg/Group>
 
+#include "harness/headless/HeadlessRenderer.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/EnvironmentState.h"
 #include "materials/IlluminationPca.h"
 #include "materials/pca/Pca.h"
+#include "scene/MaterialNode.h"
 #include "scene/VertexEnvironment.h"
 
 using namespace osgBTF;
@@ -87,7 +91,7 @@ EnvironmentMap sky(int width) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    int vertices = 900, width = 128, components = 16;
+    int vertices = 900, width = 128, components = 16, fpsFrames = 30;
     bool illumination = true;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i];
@@ -97,6 +101,10 @@ int main(int argc, char** argv) {
             width = std::atoi(argv[i + 1]);
         else if (a == "--components")
             components = std::atoi(argv[i + 1]);
+        else if (a == "--fps-frames")
+            fpsFrames = std::atoi(argv[i + 1]);
+        else if (a == "--illumination-pca")
+            illumination = std::string(argv[i + 1]) != "off";
     }
     const int rings = std::max(2, int(std::sqrt(vertices / 2.0)));
     const int sectors = std::max(3, vertices / (rings + 1) - 1);
@@ -144,6 +152,36 @@ int main(int argc, char** argv) {
     std::printf("folding (gamma*):               %.2f s, %.1f MiB of folded data\n", fold,
                 double(all.size()) * 4.0 / (1024.0 * 1024.0));
     std::fflush(stdout);
+    if (fpsFrames > 0) {
+        // The lit sphere as a viewer draws it: under a MaterialNode with the material, the folded
+        // data in its geometry's StateSet, the ground plain OSG geometry.
+        osg::ref_ptr<MaterialNode> node = new MaterialNode;
+        node->setMaterial(pca.get());
+        node->addChild(object);
+        lit[0].geometry->setStateSet(environmentStateSet(*pca, folded).get());
+        osg::ref_ptr<osg::Group> drawn = new osg::Group;
+        drawn->addChild(node);
+        drawn->addChild(floor);
+        HeadlessRenderer renderer;
+        renderer.setColorTarget(GL_RGBA8, false);
+        renderer.setScene(drawn.get());
+        CameraSetup camera;
+        camera.width = 1920;
+        camera.height = 1080;
+        const osg::BoundingSphere bound = object->getBound();
+        camera.view =
+            osg::Matrixd::lookAt(bound.center() + osg::Vec3(0.0f, -3.0f, 1.2f) * bound.radius(),
+                                 bound.center(), osg::Vec3(0, 0, 1));
+        camera.projection = osg::Matrixd::perspective(40.0, 1920.0 / 1080.0, 0.1, 100.0);
+        renderer.setCamera(camera);
+        const PassTiming timing = renderer.timePasses(fpsFrames, GpuTimer::Auto, 3);
+        const double ms = timing.gpuMs >= 0 ? timing.gpuMs : timing.wallMs;
+        std::printf("render 1920x1080 RGBA8 (%s): %.2f ms per frame (%s, median of %d), %.1f fps\n",
+                    renderer.glRenderer().c_str(), ms,
+                    timing.gpuMs >= 0 ? "GL_TIME_ELAPSED" : "wall time with glFinish",
+                    timing.frames, 1000.0 / ms);
+        std::fflush(stdout);
+    }
     // Illumination PCA of the folded data of all vertices: the rebuild of one rotation. It holds
     // the 30 samples (30 x the folded data: 4 GB at 9000 vertices; --illumination-pca off).
     if (!illumination) return 0;

@@ -19,6 +19,7 @@
 #include <osgUtil/SmoothingVisitor>
 
 #include "core/Error.h"
+#include "scene/EnvironmentLitGroup.h"
 #include "scene/MaterialNode.h"
 
 namespace osgBTF::examples {
@@ -414,6 +415,26 @@ FloatImage createSkyEnvironment(int width, int height) {
         }
     }
     return image;
+}
+
+osg::ref_ptr<osg::Group> createEnvironmentLitClothScene(const std::string& materialFile,
+                                                        const std::string& environmentFile,
+                                                        float textureScale,
+                                                        const osgDB::Options* options) {
+    osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+    light->setFile(environmentFile, options);
+    if (!light->hasMap()) fail(environmentFile, light->getError());
+    osg::ref_ptr<EnvironmentLitGroup> scene = new EnvironmentLitGroup;
+    scene->setName("environment-lit cloth");
+    scene->setLight(light.get());
+    osg::ref_ptr<MaterialNode> cloth = new MaterialNode;
+    cloth->setName("cloth");
+    cloth->setTextureScale(textureScale);
+    if (!cloth->setMaterialFile(materialFile, options))
+        fail(materialFile, cloth->getMaterialError());
+    cloth->addChild(createClothModel(56).get());
+    scene->addChild(cloth.get());
+    return scene;
 }
 
 }  // namespace osgBTF::examples

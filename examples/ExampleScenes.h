@@ -67,6 +67,16 @@ osg::ref_ptr<osg::Group> createShadowedClothScene(const std::string& materialFil
                                                   float textureScale,
                                                   const osgDB::Options* options);
 
+/** The draped cloth (createClothModel(56)) under a MaterialNode with `materialFile`, inside an
+ *  osgBTF::EnvironmentLitGroup lit by the HDR map `environmentFile` (seed 004 section 5: the
+ *  folds shadow the environment per vertex): the group computes the lighting by itself when a
+ *  viewer first updates it, so stock osgviewer shows it. Throws Error like
+ *  createSideBySideScene, or naming an unusable map. */
+osg::ref_ptr<osg::Group> createEnvironmentLitClothScene(const std::string& materialFile,
+                                                        const std::string& environmentFile,
+                                                        float textureScale,
+                                                        const osgDB::Options* options);
+
 /** The direction toward the sun of createSkyEnvironment (Z up): azimuth 210 degrees from +X
  *  toward +Y, elevation 35 degrees. */
 osg::Vec3 skySunDirection();

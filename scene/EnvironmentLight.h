@@ -56,6 +56,8 @@ public:
 
     const std::string& getError() const { return _error; }
     bool hasMap() const { return _map.width > 0; }
+    int getMapWidth() const { return _map.width; }
+    int getMapHeight() const { return _map.height; }
     /** The full-resolution map with this light's rotation. */
     EnvironmentMap map() const;
     /** The map the projection uses: rotated and averaged down to the projection width (a map of

@@ -190,9 +190,15 @@ void run(Options options) {
               << ")\n";
     writeFloatImage(createSkyEnvironment(), (dir / "sky.hdr").string());
     std::cout << "wrote " << (dir / "sky.hdr").string() << " (procedural sky, CC0)\n";
+    // 4. The same cloth lit by that sky, self-shadowed (seed 004 section 5), in any viewer.
+    writeNodeAtomically(
+        *createEnvironmentLitClothScene(clothMaterial, "sky.hdr", 4.0f, readOptions.get()),
+        (dir / "cloth-sky.osgt").string());
+    std::cout << "wrote " << (dir / "cloth-sky.osgt").string() << " (" << clothMaterial
+              << " under sky.hdr)\n";
     if (!options.benchFps) return;
 
-    // 4. Frames per second of each scene with each method on every object.
+    // 5. Frames per second of each scene with each method on every object.
     std::vector<BenchScene> benchScenes;
     for (const SceneSpec& spec : scenes)
         benchScenes.push_back({fs::path(spec.file).stem().string(),
@@ -221,7 +227,9 @@ int main(int argc, char** argv) {
         "three scenes with one object per method side by side under two lights: spheres.osgt, "
         "cloth.osgt (a draped tablecloth) and vases.osgt (vase.osgt through a ProxyNode); "
         "cloth-shadows.osgt (the cloth in an osgShadow::ShadowedScene: cast shadows and seed "
-        "004's smooth terminator, pca material) and sky.hdr (a procedural HDR sky, CC0). The "
+        "004's smooth terminator, pca material), sky.hdr (a procedural HDR sky, CC0) and "
+        "cloth-sky.osgt (the cloth lit by sky.hdr with self-shadowing, computed by the scene's "
+        "osgBTF::EnvironmentLitGroup when a viewer first shows it). The "
         "scenes name the materials relative to themselves, so the folder can be moved.\n"
         "View them with `btfviewer DIR/spheres.osgt` or, with OSG_LIBRARY_PATH set to osgBTF's "
         "lib folder, stock `osgviewer DIR/spheres.osgt`."};

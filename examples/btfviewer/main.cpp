@@ -736,13 +736,11 @@ int run(osg::ArgumentParser& arguments) {
         state->updateHud();
     }
     if (!envFile.empty()) {
-        state->environment = new btfviewer::EnvironmentControl(envFile, exposure, envRotation,
-                                                               sceneRoot.get(), state->nodes);
-        state->environment->changed = [s = state.get()] { s->updateHud(); };
-        root->insertChild(0, state->environment->node());
+        state->environment =
+            new btfviewer::EnvironmentControl(envFile, exposure, envRotation, sceneRoot.get());
+        state->environment->setChanged([s = state.get()] { s->updateHud(); });
         if (!noOrbitLight) state->toggleOrbitLight();
         if (!noSceneLights && !state->sceneLights.empty()) state->toggleSceneLights();
-        state->environment->request();
     }
 
     viewer.setSceneData(root.get());
@@ -786,8 +784,16 @@ int run(osg::ArgumentParser& arguments) {
         pressStatsKeys();
         return viewer.run();
     }
-    // A fixed number of frames shows the finished environment lighting.
-    if (state->environment) state->environment->finish();
+    // A fixed number of frames shows the finished environment lighting (--env's, and that of
+    // any osgBTF::EnvironmentLitGroup in the scene files).
+    struct LitGroups : osg::NodeVisitor {
+        LitGroups() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+        void apply(osg::Group& group) override {
+            if (auto* lit = dynamic_cast<osgBTF::EnvironmentLitGroup*>(&group)) lit->finish();
+            traverse(group);
+        }
+    } litGroups;
+    root->accept(litGroups);
     for (int frame = 0; frame < frames && !viewer.done(); ++frame) {
         if (frame == 1) pressStatsKeys();
         if (capture && frame == frames - 1) capture->armed = true;

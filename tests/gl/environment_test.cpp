@@ -3,12 +3,20 @@
 // white environment against the brute-force integral of the point-light rendering.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
 #include <random>
 
 #include <glm/geometric.hpp>
 #include <osg/Geode>
 #include <osg/Geometry>
 #include <osg/Group>
+#include <osg/LightSource>
+#include <osgDB/ReadFile>
+#include <osgDB/WriteFile>
+#include <osgUtil/UpdateVisitor>
 
 #include "harness/MaterialImage.h"
 #include "harness/sample/SampleBtf.h"
@@ -19,6 +27,7 @@
 #include "materials/lpca/Lpca.h"
 #include "materials/pca/Pca.h"
 #include "scene/EnvironmentLight.h"
+#include "scene/EnvironmentLitGroup.h"
 #include "scene/MaterialNode.h"
 #include "scene/VertexEnvironment.h"
 #include "tests/gl/GlTestEnv.h"
@@ -279,6 +288,94 @@ TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
                         << "exposure " << exposure << " texel " << tx << ", " << ty;
             }
     }
+}
+
+TEST(EnvironmentGpu, EnvironmentLitGroupLightsItsMaterialNodesByItself) {
+    // The scene of the test above, but under an EnvironmentLitGroup and no call into the
+    // library: an update traversal starts the work, finish() installs it, the render equals
+    // the CPU integral; a non-folding material goes back to its own StateSet and the group's
+    // representative lights; a serialized group keeps its settings and children.
+    osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+    EnvironmentMap white;
+    white.width = 64;
+    white.height = 32;
+    white.rgb.assign(64 * 32 * 3, 1.0f);
+    light->setMap(white);
+    osg::ref_ptr<EnvironmentLitGroup> group = new EnvironmentLitGroup;
+    group->setLight(light.get());
+    group->setRepresentativeLights(4);
+    osg::ref_ptr<MaterialNode> node = new MaterialNode;
+    node->setMaterial(const_cast<PcaMaterial*>(&pca()));
+    osg::ref_ptr<osg::Geometry> geometry = square();
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(geometry);
+    geode->getOrCreateStateSet()->addUniform(
+        new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
+    node->addChild(geode);
+    group->addChild(node);
+    ASSERT_EQ(geometry->getStateSet(), nullptr);
+
+    osgUtil::UpdateVisitor update;
+    group->accept(update);
+    EXPECT_TRUE(group->computing());
+    group->finish();
+    EXPECT_FALSE(group->computing());
+    EXPECT_EQ(group->getError(), "");
+    ASSERT_NE(geometry->getStateSet(), nullptr);
+    const std::vector<EnvironmentSample> samples = visibleEnvironment(white, SurfaceFrame{});
+    osg::ref_ptr<osg::Image> image = test::sharedRenderer().render(group, orthoUnitSquare(32, 32));
+    for (int ty = 0; ty < 4; ++ty)
+        for (int tx = 0; tx < 4; ++tx) {
+            const glm::vec3 expected =
+                environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+            for (int ch = 0; ch < 3; ++ch)
+                EXPECT_NEAR(test::pixel(*image, tx * 8 + 4, ty * 8 + 3, ch), expected[ch],
+                            1e-4 * expected[ch] + 1e-6)
+                    << "texel " << tx << ", " << ty;
+        }
+    // Nothing changed: an update starts nothing. A new rotation does.
+    group->accept(update);
+    EXPECT_FALSE(group->computing());
+    light->setRotation(30.0f);
+    group->accept(update);
+    EXPECT_TRUE(group->computing());
+    group->finish();
+
+    // lambert has no folded lighting: its own StateSet (none here) and the representative lights.
+    node->setMaterial(findMethod("lambert").fit(sample4(), FitOptions::parse("")).get());
+    group->accept(update);
+    group->finish();
+    EXPECT_EQ(geometry->getStateSet(), nullptr);
+    struct CountLights : osg::NodeVisitor {
+        CountLights() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+        void apply(osg::LightSource& source) override {
+            ++count;
+            traverse(source);
+        }
+        int count = 0;
+    } lights;
+    group->accept(lights);
+    EXPECT_EQ(lights.count, 4);
+
+    const std::string file = (std::filesystem::temp_directory_path() /
+                              ("osgbtf-lit-" + std::to_string(getpid()) + ".osgt"))
+                                 .string();
+    ASSERT_TRUE(osgDB::writeNodeFile(*group, file));
+    struct Remove {
+        std::string file;
+        ~Remove() { std::remove(file.c_str()); }
+    } remove{file};
+    osg::ref_ptr<EnvironmentLitGroup> read =
+        dynamic_cast<EnvironmentLitGroup*>(osgDB::readNodeFile(file));
+    ASSERT_NE(read, nullptr);
+    EXPECT_EQ(read->getRepresentativeLights(), 4);
+    EXPECT_TRUE(read->getVisibility());
+    ASSERT_NE(read->getLight(), nullptr);
+    EXPECT_FLOAT_EQ(read->getLight()->getRotation(), 30.0f);
+    EXPECT_EQ(read->getNumChildren(), 1u);
+    // Its map was in memory, not a file: the group says so once and lights nothing.
+    read->finish();
+    EXPECT_EQ(read->getError(), "the EnvironmentLight has no map");
 }
 
 TEST(EnvironmentGpu, PatchImagesOfFoldedAndOtherMethodsMatchTheCpu) {

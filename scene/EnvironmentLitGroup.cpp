@@ -1,0 +1,265 @@
+#include "scene/EnvironmentLitGroup.h"
+
+#include <algorithm>
+#include <set>
+
+#include <osg/Notify>
+#include <osgDB/ObjectWrapper>
+
+#include "core/Error.h"
+#include "core/Notify.h"
+#include "materials/EnvironmentState.h"
+#include "scene/MaterialNode.h"
+#include "scene/VertexEnvironment.h"
+
+namespace osgBTF {
+
+namespace {
+
+struct Collector : osg::NodeVisitor {
+    Collector() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+    void apply(osg::Group& group) override {
+        if (auto* node = dynamic_cast<MaterialNode*>(&group))
+            if (std::find(nodes.begin(), nodes.end(), node) == nodes.end()) nodes.push_back(node);
+        traverse(group);
+    }
+    void apply(osg::Geometry& geometry) override { geometries.push_back(&geometry); }
+    std::vector<osg::ref_ptr<MaterialNode>> nodes;
+    std::vector<osg::Geometry*> geometries;
+};
+
+/** Thrown from the progress callback to stop the work of a group being deleted. */
+struct Cancelled {};
+
+}  // namespace
+
+struct EnvironmentLitGroup::Result {
+    // nullptr: the geometry's StateSet from before (a method lit by representative lights).
+    std::vector<std::pair<osg::ref_ptr<osg::Geometry>, osg::ref_ptr<osg::StateSet>>> states;
+    std::string error;
+    Key key;
+    osg::ref_ptr<osg::Group> occluders;
+};
+
+EnvironmentLitGroup::EnvironmentLitGroup() {
+    // traverse() runs in every update traversal (as osgParticle's systems do).
+    setNumChildrenRequiringUpdateTraversal(1);
+    _representative->setName("osgBTF environment representative lights");
+}
+
+EnvironmentLitGroup::EnvironmentLitGroup(const EnvironmentLitGroup& other,
+                                         const osg::CopyOp& copyop)
+    : osg::Group(other, copyop),
+      _light(other._light),
+      _representativeCount(other._representativeCount),
+      _visibility(other._visibility) {
+    setNumChildrenRequiringUpdateTraversal(getNumChildrenRequiringUpdateTraversal() + 1);
+    _representative->setName("osgBTF environment representative lights");
+}
+
+EnvironmentLitGroup::~EnvironmentLitGroup() {
+    _cancel = true;
+    if (_worker.joinable()) _worker.join();
+}
+
+void EnvironmentLitGroup::setLight(EnvironmentLight* light) {
+    _light = light;
+    _dirty = true;
+}
+
+void EnvironmentLitGroup::setRepresentativeLights(int count) {
+    _representativeCount = std::clamp(count, 1, kMaxLights);
+    std::get<3>(_representativeFor) = 0;  // rebuilt in the next update
+}
+
+void EnvironmentLitGroup::setVisibility(bool on) {
+    _visibility = on;
+}
+
+EnvironmentLitGroup::Key EnvironmentLitGroup::currentKey(
+    std::vector<osg::ref_ptr<MaterialNode>>& nodes) {
+    Key key;
+    if (_light) {
+        key.file = _light->getFile();
+        key.rotation = _light->getRotation();
+        key.projectionWidth = _light->getProjectionWidth();
+        key.mapWidth = _light->getMapWidth();
+        key.mapHeight = _light->getMapHeight();
+    }
+    key.visibility = _visibility;
+    Collector collector;
+    for (unsigned i = 0; i < getNumChildren(); ++i) getChild(i)->accept(collector);
+    nodes = collector.nodes;
+    for (const auto& node : nodes) key.materials.emplace_back(node.get(), node->getMaterial());
+    return key;
+}
+
+void EnvironmentLitGroup::updateRepresentativeLights() {
+    const auto wanted = _light && _light->hasMap()
+                            ? std::make_tuple(_light->getFile(), _light->getRotation(),
+                                              _light->getExposure(), _representativeCount)
+                            : std::make_tuple(std::string(), 0.0f, -1.0f, 0);
+    if (wanted == _representativeFor) return;
+    _representativeFor = wanted;
+    _representative->removeChildren(0, _representative->getNumChildren());
+    if (std::get<3>(wanted) > 0)
+        _representative->addChild(representativeLightSources(*_light, _representativeCount).get());
+}
+
+void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<MaterialNode>> nodes) {
+    _dirty = false;
+    _done = false;
+    _progress = 0;
+    _total = 0;
+    _result = std::make_unique<Result>();
+    _result->key = key;
+    // A geometry drawn under several MaterialNodes (a scene that embeds one model under each)
+    // can hold only one per-vertex StateSet: every further node gets its own copy of its
+    // subgraph (nodes and drawables; the vertex arrays stay shared).
+    std::set<osg::Geometry*> seen;
+    const auto geometriesOf = [](osg::Node& node) {
+        Collector collector;
+        node.accept(collector);
+        return collector.geometries;
+    };
+    for (const auto& node : nodes) {
+        std::vector<osg::Geometry*> geometries = geometriesOf(*node);
+        if (std::any_of(geometries.begin(), geometries.end(),
+                        [&](osg::Geometry* g) { return seen.count(g) != 0; })) {
+            for (unsigned i = 0; i < node->getNumChildren(); ++i)
+                node->setChild(
+                    i, osg::clone(node->getChild(i),
+                                  osg::CopyOp::DEEP_COPY_ALL));
+            geometries = geometriesOf(*node);
+        }
+        seen.insert(geometries.begin(), geometries.end());
+        // The originals are recorded before any of our StateSets replaces them.
+        for (osg::Geometry* geometry : geometries)
+            if (_original.emplace(geometry, geometry->getStateSet()).second)
+                // The previous frame's draw may still use the StateSet being replaced.
+                geometry->setDataVariance(osg::Object::DYNAMIC);
+    }
+    if (!_light || !_light->hasMap()) {
+        _result->error = !_light ? "no EnvironmentLight"
+                         : _light->getError().empty()
+                             ? "the EnvironmentLight has no map"
+                             : "the EnvironmentLight has no map: " + _light->getError();
+        _done = true;
+        joinAndInstall();  // reports it once; the same key does not start again
+        return;
+    }
+    std::vector<std::pair<osg::ref_ptr<MaterialNode>, osg::ref_ptr<Material>>> work;
+    for (const auto& node : nodes) work.emplace_back(node, node->getMaterial());
+    const EnvironmentMap map = _light->projectionMap();
+    const bool visibility = _visibility;
+    // The occluders: this group's children as they are now (not this group, whose
+    // representative lights the update thread rebuilds while the worker runs).
+    // Held by the result, so it is released here, on the update thread (releasing it removes a
+    // parent from every child).
+    _result->occluders = new osg::Group;
+    for (unsigned i = 0; i < getNumChildren(); ++i) _result->occluders->addChild(getChild(i));
+    const osg::Group* occluders = _result->occluders.get();
+    OSGBTF_NOTIFY(osg::NOTICE, "osgBTF::EnvironmentLitGroup: lighting "
+                                   << work.size() << " material node(s) by "
+                                   << (key.file.empty() ? "an in-memory map" : key.file)
+                                   << ", rotation " << key.rotation << " degrees");
+    _worker = std::thread([this, work, map, visibility, occluders] {
+        try {
+            for (const auto& [node, material] : work) {
+                Collector collector;
+                node->accept(collector);
+                if (!material || !foldsEnvironment(*material)) {
+                    for (osg::Geometry* g : collector.geometries)
+                        _result->states.emplace_back(g, nullptr);
+                    continue;
+                }
+                VertexEnvironmentOptions options;
+                options.visibility = visibility;
+                options.progress = [this](std::size_t done, std::size_t total) {
+                    if (_cancel) throw Cancelled();
+                    _progress = done;
+                    _total = total;
+                };
+                for (GeometryEnvironment& entry :
+                     computeVertexEnvironment(*node, occluders, material->lights(), map, options)) {
+                    std::vector<std::vector<float>> folded;
+                    folded.reserve(entry.g.size());
+                    for (const auto& g : entry.g) folded.push_back(foldEnvironment(*material, g));
+                    _result->states.emplace_back(entry.geometry,
+                                                 environmentStateSet(*material, folded));
+                }
+            }
+        } catch (const Cancelled&) {
+            _result->error = "cancelled";
+        } catch (const std::exception& e) {
+            _result->error = e.what();
+        }
+        _done = true;
+    });
+}
+
+void EnvironmentLitGroup::joinAndInstall() {
+    if (_worker.joinable()) _worker.join();
+    if (!_result) return;
+    Result result = std::move(*_result);
+    _result.reset();
+    _computed = result.key;
+    _everComputed = true;
+    if (!result.error.empty()) {
+        _error = result.error;
+        OSGBTF_NOTIFY(osg::WARN, "osgBTF::EnvironmentLitGroup: " << result.error);
+        return;
+    }
+    _error.clear();
+    for (auto& [geometry, state] : result.states) {
+        if (!state) {
+            const auto original = _original.find(geometry.get());
+            geometry->setStateSet(original == _original.end() ? nullptr : original->second.get());
+            continue;
+        }
+        state->addUniform(_light->getExposureUniform());
+        geometry->setStateSet(state.get());
+    }
+    OSGBTF_NOTIFY(osg::NOTICE, "osgBTF::EnvironmentLitGroup: lighting installed ("
+                                   << result.states.size() << " geometries)");
+}
+
+void EnvironmentLitGroup::update() {
+    updateRepresentativeLights();
+    if (_worker.joinable()) {
+        if (_changed) _changed();
+        if (!_done) return;
+        joinAndInstall();
+        if (_changed) _changed();
+    }
+    std::vector<osg::ref_ptr<MaterialNode>> nodes;
+    const Key key = currentKey(nodes);
+    if (_dirty || !_everComputed || !(key == _computed)) start(key, std::move(nodes));
+}
+
+void EnvironmentLitGroup::finish() {
+    if (!_worker.joinable()) {
+        std::vector<osg::ref_ptr<MaterialNode>> nodes;
+        const Key key = currentKey(nodes);
+        if (_dirty || !_everComputed || !(key == _computed)) start(key, std::move(nodes));
+    }
+    updateRepresentativeLights();
+    joinAndInstall();
+    if (_changed) _changed();
+}
+
+void EnvironmentLitGroup::traverse(osg::NodeVisitor& nv) {
+    if (nv.getVisitorType() == osg::NodeVisitor::UPDATE_VISITOR) update();
+    _representative->accept(nv);
+    osg::Group::traverse(nv);
+}
+
+}  // namespace osgBTF
+
+REGISTER_OBJECT_WRAPPER(osgBTF_EnvironmentLitGroup, new osgBTF::EnvironmentLitGroup,
+                        osgBTF::EnvironmentLitGroup,
+                        "osg::Object osg::Node osg::Group osgBTF::EnvironmentLitGroup") {
+    ADD_OBJECT_SERIALIZER(Light, osgBTF::EnvironmentLight, nullptr);
+    ADD_INT_SERIALIZER(RepresentativeLights, 8);
+    ADD_BOOL_SERIALIZER(Visibility, true);
+}
