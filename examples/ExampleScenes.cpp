@@ -348,14 +348,15 @@ osg::ref_ptr<osg::Group> createShadowedClothScene(const std::string& materialFil
     cloth->addChild(createClothModel(56).get());  // tangents: added by the node
     scene->addChild(cloth.get());
 
-    // The table under the cloth (its top hidden by it) and the floor the folds shadow. The
-    // cloth model is tilted 25 degrees about X; so are these.
+    // The table under the cloth (its top hidden by it, 0.01 below the cloth's flat top: rays
+    // that environment lighting casts from the cloth must not start inside the table) and the
+    // floor the folds shadow. The cloth model is tilted 25 degrees about X; so are these.
     const osg::Matrix tilt = osg::Matrix::rotate(osg::DegreesToRadians(25.0), osg::X_AXIS);
     osg::ref_ptr<osg::MatrixTransform> furniture = new osg::MatrixTransform(tilt);
     osg::ref_ptr<osg::Geode> props = new osg::Geode;
     props->setName("table and floor");
     osg::ref_ptr<osg::ShapeDrawable> table =
-        new osg::ShapeDrawable(new osg::Cylinder(osg::Vec3(0, 0, -0.55f), 0.58f, 1.1f));
+        new osg::ShapeDrawable(new osg::Cylinder(osg::Vec3(0, 0, -0.56f), 0.58f, 1.1f));
     table->setColor(osg::Vec4(0.35f, 0.22f, 0.12f, 1.0f));
     osg::ref_ptr<osg::ShapeDrawable> floor =
         new osg::ShapeDrawable(new osg::Box(osg::Vec3(0, 0, -1.13f), 3.2f, 3.2f, 0.06f));

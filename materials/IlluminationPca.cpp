@@ -1,5 +1,7 @@
 #include "materials/IlluminationPca.h"
 
+#include <tbb/parallel_for.h>
+
 #include <cmath>
 
 #include <Eigen/Dense>
@@ -62,15 +64,30 @@ IlluminationPca IlluminationPca::build(const std::function<std::vector<float>(fl
 
 namespace {
 
+/** out = mean + sum_k c_k basis_k in one pass over blocks that stay in cache, on all cores: the
+ *  arrays are tens of MB, so reading each once bounds the time (memory bandwidth). */
+void combineInto(const std::vector<float>& mean, const std::vector<std::vector<float>>& basis,
+                 const std::vector<double>& c, float* out) {
+    constexpr std::size_t kBlock = 4096;
+    const std::size_t n = mean.size();
+    tbb::parallel_for(std::size_t(0), (n + kBlock - 1) / kBlock, [&](std::size_t b) {
+        const std::size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
+        std::copy(mean.begin() + std::ptrdiff_t(begin), mean.begin() + std::ptrdiff_t(end),
+                  out + begin);
+        for (std::size_t k = 0; k < basis.size(); ++k) {
+            const float w = float(c[k]);
+            if (w == 0.0f) continue;
+            const float* row = basis[k].data();
+            for (std::size_t i = begin; i < end; ++i) out[i] += w * row[i];
+        }
+    });
+}
+
 std::vector<float> combine(const std::vector<float>& mean,
                            const std::vector<std::vector<float>>& basis,
                            const std::vector<double>& c) {
-    std::vector<float> out(mean);
-    for (std::size_t k = 0; k < basis.size(); ++k) {
-        const float w = float(c[k]);
-        if (w == 0.0f) continue;
-        for (std::size_t i = 0; i < out.size(); ++i) out[i] += w * basis[k][i];
-    }
+    std::vector<float> out(mean.size());
+    combineInto(mean, basis, c, out.data());
     return out;
 }
 
@@ -82,6 +99,12 @@ std::vector<float> IlluminationPca::reconstructSample(int a) const {
 }
 
 std::vector<float> IlluminationPca::reconstruct(float degrees) const {
+    std::vector<float> out(_mean.size());
+    reconstructInto(degrees, out.data());
+    return out;
+}
+
+void IlluminationPca::reconstructInto(float degrees, float* out) const {
     if (_rotations < 2) throw Error("illumination pca: not built");
     double position = double(degrees) / 360.0 * _rotations;
     position -= _rotations * std::floor(position / _rotations);
@@ -91,7 +114,7 @@ std::vector<float> IlluminationPca::reconstruct(float degrees) const {
     for (int k = 0; k < _components; ++k)
         c[std::size_t(k)] = (1 - t) * _coefficients[std::size_t(a)][std::size_t(k)] +
                             t * _coefficients[std::size_t(b)][std::size_t(k)];
-    return combine(_mean, _basis, c);
+    combineInto(_mean, _basis, c, out);
 }
 
 }  // namespace osgBTF

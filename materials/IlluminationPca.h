@@ -28,6 +28,8 @@ public:
 
     /** The data at any rotation (degrees, any value: periodic). */
     std::vector<float> reconstruct(float degrees) const;
+    /** The same into `out` (length() floats), e.g. a texture's image, without allocating. */
+    void reconstructInto(float degrees, float* out) const;
     /** Sample a's coefficients applied to the basis (no interpolation). */
     std::vector<float> reconstructSample(int a) const;
 

@@ -1,14 +1,17 @@
 #include "scene/EnvironmentLitGroup.h"
 
 #include <algorithm>
+#include <chrono>
 #include <set>
 
 #include <osg/Notify>
+#include <osg/Texture2D>
 #include <osgDB/ObjectWrapper>
 
 #include "core/Error.h"
 #include "core/Notify.h"
 #include "materials/EnvironmentState.h"
+#include "materials/IlluminationPca.h"
 #include "scene/MaterialNode.h"
 #include "scene/VertexEnvironment.h"
 
@@ -33,12 +36,23 @@ struct Cancelled {};
 
 }  // namespace
 
+/** A geometry lit through illumination PCA: its data at any rotation, and how to draw them. */
+struct EnvironmentLitGroup::RotatingGeometry {
+    osg::ref_ptr<osg::Geometry> geometry;
+    osg::ref_ptr<const Material> material;
+    std::shared_ptr<const IlluminationPca> pca;
+    std::size_t stride = 0;  ///< folded values per vertex
+    /** The data texture's image, once drawn: later rotations are written into it in place. */
+    osg::ref_ptr<osg::Image> data;
+};
+
 struct EnvironmentLitGroup::Result {
     // nullptr: the geometry's StateSet from before (a method lit by representative lights).
     std::vector<std::pair<osg::ref_ptr<osg::Geometry>, osg::ref_ptr<osg::StateSet>>> states;
     std::string error;
     Key key;
     osg::ref_ptr<osg::Group> occluders;
+    std::vector<RotatingGeometry> rotating;  // illumination PCA on: instead of fixed states
 };
 
 EnvironmentLitGroup::EnvironmentLitGroup() {
@@ -76,17 +90,28 @@ void EnvironmentLitGroup::setVisibility(bool on) {
     _visibility = on;
 }
 
+void EnvironmentLitGroup::setRotationSamples(int samples) {
+    _rotationSamples = samples >= 2 ? samples : 0;
+}
+
+void EnvironmentLitGroup::setRotationComponents(int components) {
+    _rotationComponents = std::max(1, components);
+}
+
 EnvironmentLitGroup::Key EnvironmentLitGroup::currentKey(
     std::vector<osg::ref_ptr<MaterialNode>>& nodes) {
     Key key;
     if (_light) {
         key.file = _light->getFile();
-        key.rotation = _light->getRotation();
+        // With illumination PCA a rotation is rebuilt from the samples, not computed again.
+        key.rotation = _rotationSamples > 0 ? 0.0f : _light->getRotation();
         key.projectionWidth = _light->getProjectionWidth();
         key.mapWidth = _light->getMapWidth();
         key.mapHeight = _light->getMapHeight();
     }
     key.visibility = _visibility;
+    key.rotationSamples = _rotationSamples;
+    key.rotationComponents = _rotationSamples > 0 ? _rotationComponents : 0;
     Collector collector;
     for (unsigned i = 0; i < getNumChildren(); ++i) getChild(i)->accept(collector);
     nodes = collector.nodes;
@@ -127,9 +152,7 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
         if (std::any_of(geometries.begin(), geometries.end(),
                         [&](osg::Geometry* g) { return seen.count(g) != 0; })) {
             for (unsigned i = 0; i < node->getNumChildren(); ++i)
-                node->setChild(
-                    i, osg::clone(node->getChild(i),
-                                  osg::CopyOp::DEEP_COPY_ALL));
+                node->setChild(i, osg::clone(node->getChild(i), osg::CopyOp::DEEP_COPY_ALL));
             geometries = geometriesOf(*node);
         }
         seen.insert(geometries.begin(), geometries.end());
@@ -152,6 +175,8 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
     for (const auto& node : nodes) work.emplace_back(node, node->getMaterial());
     const EnvironmentMap map = _light->projectionMap();
     const bool visibility = _visibility;
+    const int samples = _rotationSamples, components = _rotationComponents;
+    _result->key.rotation = _light->getRotation();  // the illumination PCA's rotation 0
     // The occluders: this group's children as they are now (not this group, whose
     // representative lights the update thread rebuilds while the worker runs).
     // Held by the result, so it is released here, on the update thread (releasing it removes a
@@ -163,7 +188,7 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
                                    << work.size() << " material node(s) by "
                                    << (key.file.empty() ? "an in-memory map" : key.file)
                                    << ", rotation " << key.rotation << " degrees");
-    _worker = std::thread([this, work, map, visibility, occluders] {
+    _worker = std::thread([this, work, map, visibility, occluders, samples, components] {
         try {
             for (const auto& [node, material] : work) {
                 Collector collector;
@@ -177,16 +202,53 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
                 options.visibility = visibility;
                 options.progress = [this](std::size_t done, std::size_t total) {
                     if (_cancel) throw Cancelled();
-                    _progress = done;
+                    _progress = done;  // per rotation sample when there are several
                     _total = total;
                 };
-                for (GeometryEnvironment& entry :
-                     computeVertexEnvironment(*node, occluders, material->lights(), map, options)) {
-                    std::vector<std::vector<float>> folded;
-                    folded.reserve(entry.g.size());
-                    for (const auto& g : entry.g) folded.push_back(foldEnvironment(*material, g));
-                    _result->states.emplace_back(entry.geometry,
-                                                 environmentStateSet(*material, folded));
+                if (samples == 0) {
+                    for (GeometryEnvironment& entry : computeVertexEnvironment(
+                             *node, occluders, material->lights(), map, options)) {
+                        std::vector<std::vector<float>> folded;
+                        folded.reserve(entry.g.size());
+                        for (const auto& g : entry.g)
+                            folded.push_back(foldEnvironment(*material, g));
+                        _result->states.emplace_back(entry.geometry,
+                                                     environmentStateSet(*material, folded));
+                    }
+                    continue;
+                }
+                // Illumination PCA: every geometry's folded data, flattened, at each rotation.
+                std::vector<osg::ref_ptr<osg::Geometry>> geometries;
+                std::vector<std::vector<std::vector<float>>> flat;  // [geometry][rotation]
+                for (int a = 0; a < samples; ++a) {
+                    EnvironmentMap rotated = map;
+                    rotated.rotationDegrees = map.rotationDegrees + 360.0f * float(a) / samples;
+                    std::vector<GeometryEnvironment> lit = computeVertexEnvironment(
+                        *node, occluders, material->lights(), rotated, options);
+                    if (a == 0) {
+                        for (const auto& entry : lit) geometries.push_back(entry.geometry);
+                        flat.resize(lit.size());
+                    }
+                    for (std::size_t i = 0; i < lit.size() && i < flat.size(); ++i) {
+                        std::vector<float> values;
+                        for (const auto& g : lit[i].g) {
+                            const std::vector<float> folded = foldEnvironment(*material, g);
+                            values.insert(values.end(), folded.begin(), folded.end());
+                        }
+                        flat[i].push_back(std::move(values));
+                    }
+                }
+                for (std::size_t i = 0; i < geometries.size(); ++i) {
+                    RotatingGeometry r;
+                    r.geometry = geometries[i];
+                    r.material = material;
+                    r.stride = foldedStride(*material);
+                    int a = 0;
+                    // Sample a was computed at the light's rotation at the start + 360 a / A.
+                    r.pca = std::make_shared<IlluminationPca>(IlluminationPca::build(
+                        [&](float) { return std::move(flat[i][std::size_t(a++)]); }, samples,
+                        components));
+                    _result->rotating.push_back(std::move(r));
                 }
             }
         } catch (const Cancelled&) {
@@ -204,6 +266,7 @@ void EnvironmentLitGroup::joinAndInstall() {
     Result result = std::move(*_result);
     _result.reset();
     _computed = result.key;
+    if (_rotationSamples > 0) _computed.rotation = 0.0f;  // what currentKey() gives then
     _everComputed = true;
     if (!result.error.empty()) {
         _error = result.error;
@@ -220,8 +283,45 @@ void EnvironmentLitGroup::joinAndInstall() {
         state->addUniform(_light->getExposureUniform());
         geometry->setStateSet(state.get());
     }
+    const std::size_t installed = result.states.size() + result.rotating.size();
+    _rotating = std::move(result.rotating);
+    _pcaRotation = result.key.rotation;
+    if (!_rotating.empty()) rebuildFromIlluminationPca();
     OSGBTF_NOTIFY(osg::NOTICE, "osgBTF::EnvironmentLitGroup: lighting installed ("
-                                   << result.states.size() << " geometries)");
+                                   << installed << " geometries)");
+}
+
+void EnvironmentLitGroup::rebuildFromIlluminationPca() {
+    const auto begin = std::chrono::steady_clock::now();
+    _installedRotation = _light->getRotation();
+    for (RotatingGeometry& r : _rotating) {
+        const float degrees = _installedRotation - _pcaRotation;
+        // environmentStateSet lays vertex v's values out at v * stride floats: the PCA's vector.
+        if (r.data && r.data->getDataType() == GL_FLOAT &&
+            r.data->getTotalSizeInBytes() >= r.pca->length() * sizeof(float)) {
+            r.pca->reconstructInto(degrees, reinterpret_cast<float*>(r.data->data()));
+            r.data->dirty();
+            continue;
+        }
+        const std::vector<float> flat = r.pca->reconstruct(degrees);
+        std::vector<std::vector<float>> folded(flat.size() / r.stride);
+        for (std::size_t v = 0; v < folded.size(); ++v)
+            folded[v].assign(flat.begin() + std::ptrdiff_t(v * r.stride),
+                             flat.begin() + std::ptrdiff_t((v + 1) * r.stride));
+        osg::ref_ptr<osg::StateSet> state = environmentStateSet(*r.material, folded);
+        state->addUniform(_light->getExposureUniform());
+        state->setDataVariance(osg::Object::DYNAMIC);
+        for (const auto& attributes : state->getTextureAttributeList())
+            for (const auto& [type, attribute] : attributes)
+                if (auto* texture = dynamic_cast<osg::Texture2D*>(attribute.first.get()))
+                    if (texture->getName() == "osgBTF_envData" && texture->getImage()) {
+                        r.data = texture->getImage();
+                        r.data->setDataVariance(osg::Object::DYNAMIC);
+                    }
+        r.geometry->setStateSet(state.get());
+    }
+    _rebuildMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
 }
 
 void EnvironmentLitGroup::update() {
@@ -234,7 +334,10 @@ void EnvironmentLitGroup::update() {
     }
     std::vector<osg::ref_ptr<MaterialNode>> nodes;
     const Key key = currentKey(nodes);
-    if (_dirty || !_everComputed || !(key == _computed)) start(key, std::move(nodes));
+    if (_dirty || !_everComputed || !(key == _computed))
+        start(key, std::move(nodes));
+    else if (!_rotating.empty() && _light && _light->getRotation() != _installedRotation)
+        rebuildFromIlluminationPca();
 }
 
 void EnvironmentLitGroup::finish() {
@@ -262,4 +365,6 @@ REGISTER_OBJECT_WRAPPER(osgBTF_EnvironmentLitGroup, new osgBTF::EnvironmentLitGr
     ADD_OBJECT_SERIALIZER(Light, osgBTF::EnvironmentLight, nullptr);
     ADD_INT_SERIALIZER(RepresentativeLights, 8);
     ADD_BOOL_SERIALIZER(Visibility, true);
+    ADD_INT_SERIALIZER(RotationSamples, 0);
+    ADD_INT_SERIALIZER(RotationComponents, 5);
 }

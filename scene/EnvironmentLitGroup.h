@@ -49,6 +49,19 @@ public:
     void setVisibility(bool on);
     bool getVisibility() const { return _visibility; }
 
+    /** Illumination PCA (seed 004 section 5.3): with A > 0, the folded data are computed for A
+     *  rotations of the map (360 / A degrees apart; A times the work and, while building, A
+     *  times the data's memory) and compressed to `components` principal components per
+     *  geometry, and a new rotation is then rebuilt in the update traversal from the two
+     *  neighbouring samples' coefficients (no worker, no ray casting). 0 (default): every new
+     *  rotation is computed exactly on the worker. The seed's setting: 30 and 5. */
+    void setRotationSamples(int samples);
+    int getRotationSamples() const { return _rotationSamples; }
+    void setRotationComponents(int components);
+    int getRotationComponents() const { return _rotationComponents; }
+    /** Milliseconds the last rotation rebuilt from the illumination PCA took (-1: none yet). */
+    double lastRebuildMilliseconds() const { return _rebuildMs; }
+
     /** Recompute in the next update traversal (after geometry below changed). */
     void dirty() { _dirty = true; }
     /** Starts pending work if none runs, waits for it and installs it: for a first frame that
@@ -77,12 +90,14 @@ private:
         float rotation = 0;
         int projectionWidth = 0, mapWidth = 0, mapHeight = 0;
         bool visibility = true;
+        int rotationSamples = 0, rotationComponents = 0;
         std::vector<std::pair<const MaterialNode*, const void*>> materials;
         bool operator==(const Key& o) const {
             return file == o.file && rotation == o.rotation &&
                    projectionWidth == o.projectionWidth && mapWidth == o.mapWidth &&
                    mapHeight == o.mapHeight && visibility == o.visibility &&
-                   materials == o.materials;
+                   rotationSamples == o.rotationSamples &&
+                   rotationComponents == o.rotationComponents && materials == o.materials;
         }
     };
     Key currentKey(std::vector<osg::ref_ptr<MaterialNode>>& nodes);
@@ -90,9 +105,17 @@ private:
     void start(const Key& key, std::vector<osg::ref_ptr<MaterialNode>> nodes);
     void joinAndInstall();
     void updateRepresentativeLights();
+    /** Every geometry's StateSet from its illumination PCA at the light's rotation. */
+    void rebuildFromIlluminationPca();
 
     osg::ref_ptr<EnvironmentLight> _light;
     int _representativeCount = 8;
+    int _rotationSamples = 0, _rotationComponents = 5;
+    struct RotatingGeometry;
+    std::vector<RotatingGeometry> _rotating;  // with illumination PCA: what rebuilds a rotation
+    float _installedRotation = 0;
+    float _pcaRotation = 0;  // the light's rotation at the illumination PCA's sample 0
+    double _rebuildMs = -1;
     bool _visibility = true;
     osg::ref_ptr<osg::Group> _representative = new osg::Group;
     std::tuple<std::string, float, float, int> _representativeFor{"", 0.0f, -1.0f, 0};

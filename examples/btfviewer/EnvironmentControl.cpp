@@ -9,7 +9,7 @@
 namespace btfviewer {
 
 EnvironmentControl::EnvironmentControl(const std::string& file, float exposure, float rotation,
-                                       osg::Node* scene)
+                                       int rotationSamples, osg::Node* scene)
     : _light(new osgBTF::EnvironmentLight), _group(new osgBTF::EnvironmentLitGroup) {
     _light->setFile(file);
     if (!_light->hasMap()) throw osgBTF::Error("--env: " + _light->getError());
@@ -17,6 +17,7 @@ EnvironmentControl::EnvironmentControl(const std::string& file, float exposure, 
     _light->setRotation(rotation);
     _group->setName("btfviewer environment");
     _group->setLight(_light.get());
+    _group->setRotationSamples(rotationSamples);
     osg::ref_ptr<osg::Node> keep = scene;
     if (scene->getNumParents() > 0) scene->getParent(0)->replaceChild(scene, _group.get());
     _group->addChild(scene);
@@ -38,6 +39,9 @@ std::string EnvironmentControl::status() const {
         const std::size_t total = _group->progressTotal(), done = _group->progressDone();
         text << "  computing" << (total ? " " + std::to_string(100 * done / total) + " %" : "");
     }
+    if (_group->getRotationSamples() > 0 && _group->lastRebuildMilliseconds() >= 0)
+        text << std::setprecision(1) << "  (illumination PCA: rebuilt in "
+             << _group->lastRebuildMilliseconds() << " ms)";
     if (!_group->getError().empty()) text << "  error: " << _group->getError();
     return text.str();
 }

@@ -18,8 +18,9 @@ namespace btfviewer {
 class EnvironmentControl : public osg::Referenced {
 public:
     /** Reads the map (throws osgBTF::Error "--env: FILE: problem") and puts the lit group
-     *  between `scene` and its first parent. */
-    EnvironmentControl(const std::string& file, float exposure, float rotation, osg::Node* scene);
+     *  between `scene` and its first parent. `rotationSamples` > 0: illumination PCA. */
+    EnvironmentControl(const std::string& file, float exposure, float rotation, int rotationSamples,
+                       osg::Node* scene);
 
     /** Recomputes (the group also notices new materials by itself). */
     void request() { _group->dirty(); }

@@ -523,6 +523,11 @@ int run(osg::ArgumentParser& arguments) {
     usage->addCommandLineOption("--exposure E", "--env: exposure (default 1)");
     usage->addCommandLineOption("--env-rotation DEG",
                                 "--env: turn the environment about Z (degrees, default 0)");
+    usage->addCommandLineOption(
+        "--env-samples A",
+        "--env: illumination PCA (seed 004 5.3): compute A rotations up front (A times the "
+        "work), then rebuild any rotation at once from 5 components (default 0: each rotation "
+        "computed exactly; the seed uses 30)");
     usage->addCommandLineOption("-O \"OPTIONS\"", "osgDB options for the plugins");
     usage->addCommandLineOption("-h, --help", "This text and the keys");
 
@@ -564,6 +569,12 @@ int run(osg::ArgumentParser& arguments) {
     }
     while (arguments.read("--env-rotation", envRotation)) {
     }
+    int envSamples = 0;
+    while (arguments.read("--env-samples", envSamples)) {
+    }
+    if (envSamples < 0 || envSamples == 1)
+        throw osgBTF::Error("--env-samples " + std::to_string(envSamples) +
+                            ": expected 0 (off) or at least 2 rotations");
     const bool noOrbitLight = arguments.read("--no-orbit-light");
     const bool noSceneLights = arguments.read("--no-scene-lights");
     const bool showStats = arguments.read("--stats");
@@ -736,8 +747,8 @@ int run(osg::ArgumentParser& arguments) {
         state->updateHud();
     }
     if (!envFile.empty()) {
-        state->environment =
-            new btfviewer::EnvironmentControl(envFile, exposure, envRotation, sceneRoot.get());
+        state->environment = new btfviewer::EnvironmentControl(envFile, exposure, envRotation,
+                                                               envSamples, sceneRoot.get());
         state->environment->setChanged([s = state.get()] { s->updateHud(); });
         if (!noOrbitLight) state->toggleOrbitLight();
         if (!noSceneLights && !state->sceneLights.empty()) state->toggleSceneLights();

@@ -14,6 +14,7 @@
 #include <osg/Geometry>
 #include <osg/Group>
 #include <osg/LightSource>
+#include <osg/Texture2D>
 #include <osgDB/ReadFile>
 #include <osgDB/WriteFile>
 #include <osgUtil/UpdateVisitor>
@@ -376,6 +377,97 @@ TEST(EnvironmentGpu, EnvironmentLitGroupLightsItsMaterialNodesByItself) {
     // Its map was in memory, not a file: the group says so once and lights nothing.
     read->finish();
     EXPECT_EQ(read->getError(), "the EnvironmentLight has no map");
+}
+
+TEST(EnvironmentGpu, EnvironmentLitGroupRebuildsRotationsFromItsIlluminationPca) {
+    // A map with a bright patch (so rotation matters), 4 rotation samples and 3 components: the
+    // centred samples span at most 3 dimensions, so the PCA is exact at the samples. Turning the
+    // light to a sample's rotation (90 degrees) rebuilds the data in the update traversal, no
+    // worker, and the render equals the CPU integral of the map turned by 90 degrees.
+    EnvironmentMap map;
+    map.width = 32;
+    map.height = 16;
+    map.rgb.assign(32 * 16 * 3, 0.2f);
+    for (int c = 2; c < 6; ++c)
+        for (int r = 10; r < 13; ++r)  // rows bottom-up: above the horizon
+            for (int ch = 0; ch < 3; ++ch) map.rgb[(r * 32 + c) * 3 + ch] = 4.0f + float(ch);
+    osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+    light->setMap(map);
+    osg::ref_ptr<EnvironmentLitGroup> group = new EnvironmentLitGroup;
+    group->setLight(light.get());
+    group->setVisibility(false);
+    group->setRotationSamples(4);
+    group->setRotationComponents(3);
+    osg::ref_ptr<MaterialNode> node = new MaterialNode;
+    node->setMaterial(const_cast<PcaMaterial*>(&pca()));
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(square());
+    geode->getOrCreateStateSet()->addUniform(
+        new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
+    node->addChild(geode);
+    group->addChild(node);
+    group->finish();
+    ASSERT_EQ(group->getError(), "");
+    EXPECT_LT(group->lastRebuildMilliseconds(), 0.0 + 1e9);  // rebuilt once when installed
+
+    osgUtil::UpdateVisitor update;
+    for (float degrees : {90.0f, 0.0f}) {
+        light->setRotation(degrees);
+        group->accept(update);
+        EXPECT_FALSE(group->computing()) << "a rotation is rebuilt, not computed again";
+        EnvironmentMap turned = map;
+        turned.rotationDegrees = degrees;
+        // The rebuilt per-vertex data against the folded data computed at that rotation.
+        VertexEnvironmentOptions unoccluded;
+        unoccluded.visibility = false;
+        const std::vector<GeometryEnvironment> direct =
+            computeVertexEnvironment(*node, node.get(), pca().lights(), turned, unoccluded);
+        ASSERT_EQ(direct.size(), 1u);
+        std::vector<std::vector<float>> folded;
+        for (const auto& g : direct[0].g) folded.push_back(foldEnvironment(pca(), g));
+        const osg::ref_ptr<osg::StateSet> expected = environmentStateSet(pca(), folded);
+        const osg::StateSet* installed = direct[0].geometry->getStateSet();
+        ASSERT_NE(installed, nullptr);
+        int compared = 0;
+        for (unsigned unit = 0; unit < expected->getTextureAttributeList().size(); ++unit) {
+            const auto* want = dynamic_cast<const osg::Texture2D*>(
+                expected->getTextureAttribute(unit, osg::StateAttribute::TEXTURE));
+            const auto* got = dynamic_cast<const osg::Texture2D*>(
+                installed->getTextureAttribute(unit, osg::StateAttribute::TEXTURE));
+            if (!want || !want->getImage()) continue;
+            ASSERT_TRUE(got && got->getImage()) << "unit " << unit;
+            const osg::Image& a = *want->getImage();
+            const osg::Image& b = *got->getImage();
+            ASSERT_EQ(a.getTotalSizeInBytes(), b.getTotalSizeInBytes());
+            const float* pa = reinterpret_cast<const float*>(a.data());
+            const float* pb = reinterpret_cast<const float*>(b.data());
+            double largest = 0, worst = 0;
+            for (std::size_t i = 0; i < a.getTotalSizeInBytes() / sizeof(float); ++i) {
+                largest = std::max(largest, double(std::abs(pa[i])));
+                worst = std::max(worst, double(std::abs(pa[i] - pb[i])));
+            }
+            EXPECT_LE(worst, 1e-4 * largest) << degrees << " degrees, unit " << unit;
+            ++compared;
+        }
+        EXPECT_GT(compared, 0);
+        const std::vector<EnvironmentSample> samples = visibleEnvironment(turned, SurfaceFrame{});
+        osg::ref_ptr<osg::Image> image =
+            test::sharedRenderer().render(group, orthoUnitSquare(32, 32));
+        double largest = 0;
+        for (int ty = 0; ty < 4; ++ty)
+            for (int tx = 0; tx < 4; ++tx) {
+                const glm::vec3 expected =
+                    environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+                for (int ch = 0; ch < 3; ++ch) {
+                    largest = std::max(largest, double(expected[ch]));
+                    EXPECT_NEAR(test::pixel(*image, tx * 8 + 4, ty * 8 + 3, ch), expected[ch],
+                                1e-3 * expected[ch] + 1e-5)
+                        << degrees << " degrees, texel " << tx << ", " << ty;
+                }
+            }
+        EXPECT_GT(largest, 0.0);
+    }
+    EXPECT_GE(group->lastRebuildMilliseconds(), 0.0);
 }
 
 TEST(EnvironmentGpu, PatchImagesOfFoldedAndOtherMethodsMatchTheCpu) {

@@ -23,7 +23,9 @@ TEST(Soak, MemoryAndGlObjectsStayFlatWhileSwitchingAndReloading) {
     const fs::path folder =
         fs::temp_directory_path() / ("osgbtf-soak-test-" + std::to_string(getpid()));
     fs::create_directories(folder);
-    const MeasuredBtf btf = smallSampleBtf(64);  // 9 x 9 directions: fits in well under 1 s
+    // 9 x 9 directions, 128 x 128 texels: fits in about a second, and a scene is large enough
+    // (~1 MiB) that one leaked per reload stands far above the allocators' noise.
+    const MeasuredBtf btf = smallSampleBtf(128);
     std::vector<std::string> files;
     for (const char* method : {"lambert", "pca"}) {
         const MethodInfo& info = findMethod(method);
@@ -35,9 +37,11 @@ TEST(Soak, MemoryAndGlObjectsStayFlatWhileSwitchingAndReloading) {
     options.reloadEvery = 50;
     options.sampleEvery = 50;
     options.warmupFrames = 300;
-    // The RSS is flat to 0.1 MiB after the first reload (measured, README); 1 MiB leaves room
-    // for allocator noise and is still below one leaked scene per reload (asserted below).
-    options.rssToleranceMiB = 1;
+    // The RSS moves by up to ~1.7 MiB after warm-up, up and down again (malloc arenas, llvmpipe:
+    // measured on the CI machine, where 1 MiB failed one run in five with or without leaks); 3
+    // MiB leaves room for that and is still far below one leaked scene per reload (asserted
+    // below: ~10 MiB).
+    options.rssToleranceMiB = 3;
     const SoakResult result = runSoak(sharedRenderer(), files, options);
     fs::remove_all(folder);
     std::cout << formatSoak(result);
