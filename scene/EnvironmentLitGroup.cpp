@@ -4,6 +4,7 @@
 #include <chrono>
 #include <set>
 
+#include <osg/MatrixTransform>
 #include <osg/Notify>
 #include <osg/Texture2D>
 #include <osgDB/ObjectWrapper>
@@ -19,16 +20,30 @@ namespace osgBTF {
 
 namespace {
 
+/** The MaterialNodes below a node, with the transform from each (its first path) to the node,
+ *  and the geometries. */
 struct Collector : osg::NodeVisitor {
-    Collector() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+    Collector() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) { matrices.emplace_back(); }
+    void apply(osg::Transform& transform) override {
+        osg::Matrixd matrix = matrices.back();
+        transform.computeLocalToWorldMatrix(matrix, this);
+        matrices.push_back(matrix);
+        traverse(transform);
+        matrices.pop_back();
+    }
     void apply(osg::Group& group) override {
         if (auto* node = dynamic_cast<MaterialNode*>(&group))
-            if (std::find(nodes.begin(), nodes.end(), node) == nodes.end()) nodes.push_back(node);
+            if (std::find(nodes.begin(), nodes.end(), node) == nodes.end()) {
+                nodes.push_back(node);
+                placements.push_back(matrices.back());
+            }
         traverse(group);
     }
     void apply(osg::Geometry& geometry) override { geometries.push_back(&geometry); }
     std::vector<osg::ref_ptr<MaterialNode>> nodes;
+    std::vector<osg::Matrixd> placements;
     std::vector<osg::Geometry*> geometries;
+    std::vector<osg::Matrixd> matrices;
 };
 
 /** Thrown from the progress callback to stop the work of a group being deleted. */
@@ -52,6 +67,7 @@ struct EnvironmentLitGroup::Result {
     std::string error;
     Key key;
     osg::ref_ptr<osg::Group> occluders;
+    std::vector<osg::ref_ptr<osg::Node>> placed;
     std::vector<RotatingGeometry> rotating;  // illumination PCA on: instead of fixed states
 };
 
@@ -115,7 +131,11 @@ EnvironmentLitGroup::Key EnvironmentLitGroup::currentKey(
     Collector collector;
     for (unsigned i = 0; i < getNumChildren(); ++i) getChild(i)->accept(collector);
     nodes = collector.nodes;
-    for (const auto& node : nodes) key.materials.emplace_back(node.get(), node->getMaterial());
+    _placements.clear();
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+        key.materials.emplace_back(nodes[i].get(), nodes[i]->getMaterial());
+        _placements[nodes[i].get()] = collector.placements[i];
+    }
     return key;
 }
 
@@ -171,8 +191,22 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
         joinAndInstall();  // reports it once; the same key does not start again
         return;
     }
-    std::vector<std::pair<osg::ref_ptr<MaterialNode>, osg::ref_ptr<Material>>> work;
-    for (const auto& node : nodes) work.emplace_back(node, node->getMaterial());
+    // Each MaterialNode as it stands in this group: under a transform holding the transforms
+    // between them (kept by the result and released on this thread, as the occluders), so its
+    // vertices, frames and rays are in the occluders' space.
+    std::vector<std::tuple<osg::ref_ptr<MaterialNode>, osg::ref_ptr<Material>, const osg::Node*>>
+        work;
+    for (const auto& node : nodes) {
+        const auto placement = _placements.find(node.get());
+        const osg::Node* lit = node.get();
+        if (placement != _placements.end() && !placement->second.isIdentity()) {
+            osg::ref_ptr<osg::MatrixTransform> placed = new osg::MatrixTransform(placement->second);
+            placed->addChild(node.get());
+            _result->placed.push_back(placed);
+            lit = placed.get();
+        }
+        work.emplace_back(node, node->getMaterial(), lit);
+    }
     const EnvironmentMap map = _light->projectionMap();
     const bool visibility = _visibility;
     const int samples = _rotationSamples, components = _rotationComponents;
@@ -190,7 +224,7 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
                                    << ", rotation " << key.rotation << " degrees");
     _worker = std::thread([this, work, map, visibility, occluders, samples, components] {
         try {
-            for (const auto& [node, material] : work) {
+            for (const auto& [node, material, lit] : work) {
                 Collector collector;
                 node->accept(collector);
                 if (!material || !foldsEnvironment(*material)) {
@@ -207,7 +241,7 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
                 };
                 if (samples == 0) {
                     for (GeometryEnvironment& entry : computeVertexEnvironment(
-                             *node, occluders, material->lights(), map, options)) {
+                             *lit, occluders, material->lights(), map, options)) {
                         std::vector<std::vector<float>> folded;
                         folded.reserve(entry.g.size());
                         for (const auto& g : entry.g)
@@ -223,15 +257,15 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
                 for (int a = 0; a < samples; ++a) {
                     EnvironmentMap rotated = map;
                     rotated.rotationDegrees = map.rotationDegrees + 360.0f * float(a) / samples;
-                    std::vector<GeometryEnvironment> lit = computeVertexEnvironment(
-                        *node, occluders, material->lights(), rotated, options);
+                    std::vector<GeometryEnvironment> entries = computeVertexEnvironment(
+                        *lit, occluders, material->lights(), rotated, options);
                     if (a == 0) {
-                        for (const auto& entry : lit) geometries.push_back(entry.geometry);
-                        flat.resize(lit.size());
+                        for (const auto& entry : entries) geometries.push_back(entry.geometry);
+                        flat.resize(entries.size());
                     }
-                    for (std::size_t i = 0; i < lit.size() && i < flat.size(); ++i) {
+                    for (std::size_t i = 0; i < entries.size() && i < flat.size(); ++i) {
                         std::vector<float> values;
-                        for (const auto& g : lit[i].g) {
+                        for (const auto& g : entries[i].g) {
                             const std::vector<float> folded = foldEnvironment(*material, g);
                             values.insert(values.end(), folded.begin(), folded.end());
                         }

@@ -25,6 +25,7 @@
 
 #include <osg/Geometry>
 #include <osg/Group>
+#include <osg/Matrixd>
 
 #include "scene/EnvironmentLight.h"
 
@@ -120,6 +121,7 @@ private:
     osg::ref_ptr<osg::Group> _representative = new osg::Group;
     std::tuple<std::string, float, float, int> _representativeFor{"", 0.0f, -1.0f, 0};
     std::map<osg::Geometry*, osg::ref_ptr<osg::StateSet>> _original;  // StateSets before us
+    std::map<const MaterialNode*, osg::Matrixd> _placements;          // node -> this group's space
     Key _computed;
     bool _everComputed = false;
     bool _dirty = false;

@@ -146,11 +146,14 @@ std::vector<GeometryEnvironment> computeVertexEnvironment(const osg::Node& lit,
         if (tangents && tangents->size() != vertices->size()) tangents = nullptr;
         GeometryEnvironment entry;
         entry.geometry = geometry;
-        const osg::Matrixd normalMatrix = osg::Matrixd::inverse(matrix);  // transposed below
+        // Normals by the inverse transpose: transform3x3(M, v) is M v, i.e. v times M transposed
+        // in OSG's row-vector convention (preMult would add M's translation, as for a point).
+        const osg::Matrixd normalMatrix = osg::Matrixd::inverse(matrix);
         for (std::size_t i = 0; i < vertices->size(); ++i) {
             SurfaceFrame f;
             f.position = toGlm(osg::Vec3d((*vertices)[i]) * matrix);
-            f.normal = glm::normalize(toGlm(normalMatrix.preMult(osg::Vec3d((*normals)[i]))));
+            f.normal = glm::normalize(
+                toGlm(osg::Matrixd::transform3x3(normalMatrix, osg::Vec3d((*normals)[i]))));
             glm::vec3 t(0.0f);
             float handedness = 1.0f;
             if (tangents) {

@@ -14,6 +14,7 @@
 #include <osg/Geometry>
 #include <osg/Group>
 #include <osg/LightSource>
+#include <osg/MatrixTransform>
 #include <osg/Texture2D>
 #include <osgDB/ReadFile>
 #include <osgDB/WriteFile>
@@ -291,6 +292,44 @@ TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
     }
 }
 
+/** The environment data installed in the StateSet of the one geometry below `node` against
+ *  pca()'s folded data of `map` computed here without occlusion, texel by texel. */
+void expectInstalledDataUnoccluded(osg::Node& node, const EnvironmentMap& map,
+                                   const std::string& what) {
+    VertexEnvironmentOptions unoccluded;
+    unoccluded.visibility = false;
+    const std::vector<GeometryEnvironment> direct =
+        computeVertexEnvironment(node, &node, pca().lights(), map, unoccluded);
+    ASSERT_EQ(direct.size(), 1u);
+    std::vector<std::vector<float>> folded;
+    for (const auto& g : direct[0].g) folded.push_back(foldEnvironment(pca(), g));
+    const osg::ref_ptr<osg::StateSet> expected = environmentStateSet(pca(), folded);
+    const osg::StateSet* installed = direct[0].geometry->getStateSet();
+    ASSERT_NE(installed, nullptr) << what;
+    int compared = 0;
+    for (unsigned unit = 0; unit < expected->getTextureAttributeList().size(); ++unit) {
+        const auto* want = dynamic_cast<const osg::Texture2D*>(
+            expected->getTextureAttribute(unit, osg::StateAttribute::TEXTURE));
+        const auto* got = dynamic_cast<const osg::Texture2D*>(
+            installed->getTextureAttribute(unit, osg::StateAttribute::TEXTURE));
+        if (!want || !want->getImage()) continue;
+        ASSERT_TRUE(got && got->getImage()) << what << ", unit " << unit;
+        const osg::Image& a = *want->getImage();
+        const osg::Image& b = *got->getImage();
+        ASSERT_EQ(a.getTotalSizeInBytes(), b.getTotalSizeInBytes());
+        const float* pa = reinterpret_cast<const float*>(a.data());
+        const float* pb = reinterpret_cast<const float*>(b.data());
+        double largest = 0, worst = 0;
+        for (std::size_t i = 0; i < a.getTotalSizeInBytes() / sizeof(float); ++i) {
+            largest = std::max(largest, double(std::abs(pa[i])));
+            worst = std::max(worst, double(std::abs(pa[i] - pb[i])));
+        }
+        EXPECT_LE(worst, 1e-4 * largest) << what << ", unit " << unit << " first values " << pa[0] << " " << pa[1] << " " << pa[2] << " / " << pb[0] << " " << pb[1] << " " << pb[2];
+        ++compared;
+    }
+    EXPECT_GT(compared, 0) << what;
+}
+
 TEST(EnvironmentGpu, EnvironmentLitGroupLightsItsMaterialNodesByItself) {
     // The scene of the test above, but under an EnvironmentLitGroup and no call into the
     // library: an update traversal starts the work, finish() installs it, the render equals
@@ -418,38 +457,7 @@ TEST(EnvironmentGpu, EnvironmentLitGroupRebuildsRotationsFromItsIlluminationPca)
         EnvironmentMap turned = map;
         turned.rotationDegrees = degrees;
         // The rebuilt per-vertex data against the folded data computed at that rotation.
-        VertexEnvironmentOptions unoccluded;
-        unoccluded.visibility = false;
-        const std::vector<GeometryEnvironment> direct =
-            computeVertexEnvironment(*node, node.get(), pca().lights(), turned, unoccluded);
-        ASSERT_EQ(direct.size(), 1u);
-        std::vector<std::vector<float>> folded;
-        for (const auto& g : direct[0].g) folded.push_back(foldEnvironment(pca(), g));
-        const osg::ref_ptr<osg::StateSet> expected = environmentStateSet(pca(), folded);
-        const osg::StateSet* installed = direct[0].geometry->getStateSet();
-        ASSERT_NE(installed, nullptr);
-        int compared = 0;
-        for (unsigned unit = 0; unit < expected->getTextureAttributeList().size(); ++unit) {
-            const auto* want = dynamic_cast<const osg::Texture2D*>(
-                expected->getTextureAttribute(unit, osg::StateAttribute::TEXTURE));
-            const auto* got = dynamic_cast<const osg::Texture2D*>(
-                installed->getTextureAttribute(unit, osg::StateAttribute::TEXTURE));
-            if (!want || !want->getImage()) continue;
-            ASSERT_TRUE(got && got->getImage()) << "unit " << unit;
-            const osg::Image& a = *want->getImage();
-            const osg::Image& b = *got->getImage();
-            ASSERT_EQ(a.getTotalSizeInBytes(), b.getTotalSizeInBytes());
-            const float* pa = reinterpret_cast<const float*>(a.data());
-            const float* pb = reinterpret_cast<const float*>(b.data());
-            double largest = 0, worst = 0;
-            for (std::size_t i = 0; i < a.getTotalSizeInBytes() / sizeof(float); ++i) {
-                largest = std::max(largest, double(std::abs(pa[i])));
-                worst = std::max(worst, double(std::abs(pa[i] - pb[i])));
-            }
-            EXPECT_LE(worst, 1e-4 * largest) << degrees << " degrees, unit " << unit;
-            ++compared;
-        }
-        EXPECT_GT(compared, 0);
+        expectInstalledDataUnoccluded(*node, turned, std::to_string(degrees) + " degrees");
         const std::vector<EnvironmentSample> samples = visibleEnvironment(turned, SurfaceFrame{});
         osg::ref_ptr<osg::Image> image =
             test::sharedRenderer().render(group, orthoUnitSquare(32, 32));
@@ -468,6 +476,43 @@ TEST(EnvironmentGpu, EnvironmentLitGroupRebuildsRotationsFromItsIlluminationPca)
         EXPECT_GT(largest, 0.0);
     }
     EXPECT_GE(group->lastRebuildMilliseconds(), 0.0);
+}
+
+TEST(EnvironmentGpu, EnvironmentLitGroupPlacesMaterialNodesUnderTransformsWhereTheyAre) {
+    // A MaterialNode moved 100 units along +X by a transform inside the group, and a roof just
+    // over the origin: the node's square, where it is drawn, sees the whole sky (the roof is
+    // 0.03 degrees above its horizon). Computed without
+    // the transform (as applyEnvironmentLighting on the node alone would), its vertices would lie
+    // under the roof and see nothing above.
+    EnvironmentMap white;
+    white.width = 32;
+    white.height = 16;
+    white.rgb.assign(32 * 16 * 3, 1.0f);
+    osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+    light->setMap(white);
+    osg::ref_ptr<EnvironmentLitGroup> group = new EnvironmentLitGroup;
+    group->setLight(light.get());
+    osg::ref_ptr<osg::Geometry> roof = square();
+    osg::ref_ptr<osg::Vec3Array> corners = new osg::Vec3Array;
+    for (const osg::Vec3& c : {osg::Vec3(-1, -1, 0.05f), osg::Vec3(2, -1, 0.05f),
+                               osg::Vec3(2, 2, 0.05f), osg::Vec3(-1, 2, 0.05f)})
+        corners->push_back(c);
+    roof->setVertexArray(corners.get());
+    osg::ref_ptr<osg::Geode> roofGeode = new osg::Geode;
+    roofGeode->addDrawable(roof);
+    group->addChild(roofGeode);
+    osg::ref_ptr<MaterialNode> node = new MaterialNode;
+    node->setMaterial(const_cast<PcaMaterial*>(&pca()));
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(square());
+    node->addChild(geode);
+    osg::ref_ptr<osg::MatrixTransform> moved =
+        new osg::MatrixTransform(osg::Matrix::translate(100, 0, 0));
+    moved->addChild(node);
+    group->addChild(moved);
+    group->finish();
+    ASSERT_EQ(group->getError(), "");
+    expectInstalledDataUnoccluded(*node, white, "moved square");
 }
 
 TEST(EnvironmentGpu, PatchImagesOfFoldedAndOtherMethodsMatchTheCpu) {
