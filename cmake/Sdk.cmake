@@ -24,6 +24,8 @@ list(SORT OSGBTF_SDK_HEADERS)
 # <osgBTF/Name> -> the header it stands for: the entry points of the runtime.
 set(OSGBTF_SDK_UMBRELLAS
   MaterialNode=scene/MaterialNode.h
+  EnvironmentLight=scene/EnvironmentLight.h
+  EnvironmentLitGroup=scene/EnvironmentLitGroup.h
   Material=materials/Material.h
   MaterialState=materials/MaterialState.h
   LoadBtf=loaders/LoadBtf.h

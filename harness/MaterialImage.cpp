@@ -15,19 +15,6 @@ namespace osgBTF {
 namespace {
 
 /** The read-back RGBA float image (rows bottom-up) as a top-down RGB FloatImage. */
-/** The full-screen quad every rectified image is drawn on, with its tangent along +s (the
- *  patch's local frame is the measured one). */
-osg::ref_ptr<osg::Geode> rectifiedPatch() {
-    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
-    osg::ref_ptr<osg::Vec4Array> tangents =
-        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
-    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
-    quad->setVertexAttribArray(shader::kTangentAttribute, tangents.get(),
-                               osg::Array::BIND_PER_VERTEX);
-    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(quad.get());
-    return geode;
-}
 
 /** One pixel per base texel: a mip-mapped material's texels also hold its coarser levels, which
  *  a rectified image at the base's size never shows (its level of detail is 0). */
@@ -83,6 +70,18 @@ FloatImage renderImage(HeadlessRenderer& renderer, osg::StateSet* stateSet, osg:
 }
 
 }  // namespace
+
+osg::ref_ptr<osg::Geode> rectifiedPatch() {
+    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
+    osg::ref_ptr<osg::Vec4Array> tangents =
+        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
+    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
+    quad->setVertexAttribArray(shader::kTangentAttribute, tangents.get(),
+                               osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(quad.get());
+    return geode;
+}
 
 std::vector<glm::vec3> projectPatchEnvironment(const Material& material,
                                                const EnvironmentMap& map) {

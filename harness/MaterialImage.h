@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <osg/Geode>
 
 #include "core/CoordinateMap.h"
 #include "core/FloatImage.h"
@@ -13,6 +14,10 @@
 #include "materials/Material.h"
 
 namespace osgBTF {
+
+/** The unit square of createFullScreenQuadGeometry with the tangent attribute +X (the patch's
+ *  local frame is the measured one): what every rectified image is drawn on. */
+osg::ref_ptr<osg::Geode> rectifiedPatch();
 
 /** GPU path: renders the material's StateSet on a unit patch (tangent +X, normal +Z) with an
  *  orthographic camera from above, the view direction fixed to `view` (uniform

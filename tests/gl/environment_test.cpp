@@ -67,6 +67,15 @@ const LpcaMaterial& lpca() {
 }
 
 /** The unit square as two indexed triangles (0 1 2, 0 2 3), normal +Z, tangent +X. */
+/** A map of one radiance everywhere, width x width / 2 texels. */
+EnvironmentMap uniformMap(int width, float radiance) {
+    EnvironmentMap map;
+    map.width = width;
+    map.height = width / 2;
+    map.rgb.assign(std::size_t(map.width) * map.height * 3, radiance);
+    return map;
+}
+
 osg::ref_ptr<osg::Geometry> square() {
     osg::ref_ptr<osg::Geometry> g = new osg::Geometry;
     osg::ref_ptr<osg::Vec3Array> v = new osg::Vec3Array;
@@ -195,10 +204,7 @@ TEST(EnvironmentGpu, FoldedFmfAndLpcaMatchTheCpu) {
 TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
     // Issue 15: constant white environment, no occlusion: the GPU image equals sum_i dOmega_i
     // BTF(x, v, l_i), i.e. the CPU's integral of the point-light rendering over the hemisphere.
-    EnvironmentMap white;
-    white.width = 64;
-    white.height = 32;
-    white.rgb.assign(64 * 32 * 3, 1.0f);
+    const EnvironmentMap white = uniformMap(64, 1.0f);
     const std::vector<EnvironmentSample> samples = visibleEnvironment(white, SurfaceFrame{});
     const std::vector<float> f =
         foldEnvironment(pca(), projectEnvironment(samples, DirectionInterpolator(pca().lights())));
@@ -256,10 +262,7 @@ TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
     // environment, seen straight from above (view +Z everywhere): each texel equals the CPU
     // integral of the point-light rendering; a new exposure shows without recomputation.
     osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
-    EnvironmentMap white;
-    white.width = 64;
-    white.height = 32;
-    white.rgb.assign(64 * 32 * 3, 1.0f);
+    const EnvironmentMap white = uniformMap(64, 1.0f);
     light->setMap(white);
     osg::ref_ptr<MaterialNode> node = new MaterialNode;
     node->setMaterial(const_cast<PcaMaterial*>(&pca()));
@@ -324,7 +327,9 @@ void expectInstalledDataUnoccluded(osg::Node& node, const EnvironmentMap& map,
             largest = std::max(largest, double(std::abs(pa[i])));
             worst = std::max(worst, double(std::abs(pa[i] - pb[i])));
         }
-        EXPECT_LE(worst, 1e-4 * largest) << what << ", unit " << unit << " first values " << pa[0] << " " << pa[1] << " " << pa[2] << " / " << pb[0] << " " << pb[1] << " " << pb[2];
+        EXPECT_LE(worst, 1e-4 * largest)
+            << what << ", unit " << unit << " first values " << pa[0] << " " << pa[1] << " "
+            << pa[2] << " / " << pb[0] << " " << pb[1] << " " << pb[2];
         ++compared;
     }
     EXPECT_GT(compared, 0) << what;
@@ -336,10 +341,7 @@ TEST(EnvironmentGpu, EnvironmentLitGroupLightsItsMaterialNodesByItself) {
     // the CPU integral; a non-folding material goes back to its own StateSet and the group's
     // representative lights; a serialized group keeps its settings and children.
     osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
-    EnvironmentMap white;
-    white.width = 64;
-    white.height = 32;
-    white.rgb.assign(64 * 32 * 3, 1.0f);
+    const EnvironmentMap white = uniformMap(64, 1.0f);
     light->setMap(white);
     osg::ref_ptr<EnvironmentLitGroup> group = new EnvironmentLitGroup;
     group->setLight(light.get());
@@ -484,10 +486,7 @@ TEST(EnvironmentGpu, EnvironmentLitGroupPlacesMaterialNodesUnderTransformsWhereT
     // 0.03 degrees above its horizon). Computed without
     // the transform (as applyEnvironmentLighting on the node alone would), its vertices would lie
     // under the roof and see nothing above.
-    EnvironmentMap white;
-    white.width = 32;
-    white.height = 16;
-    white.rgb.assign(32 * 16 * 3, 1.0f);
+    const EnvironmentMap white = uniformMap(32, 1.0f);
     osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
     light->setMap(white);
     osg::ref_ptr<EnvironmentLitGroup> group = new EnvironmentLitGroup;

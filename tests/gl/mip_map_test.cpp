@@ -11,6 +11,7 @@
 #include <osg/Geode>
 #include <osg/Uniform>
 
+#include "harness/MaterialImage.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MipMapping.h"
@@ -23,7 +24,7 @@ using namespace osgBTF::test;
 
 namespace {
 
-constexpr int kPixels = 32, kTexels = 64, kRepeats = 4;  // 64 * 4 / 32 = 8 texels per pixel
+constexpr int kPixels = 32, kTexels = 32, kRepeats = 8;  // 32 * 8 / 32 = 8 texels per pixel
 constexpr int kPerPixel = kTexels * kRepeats / kPixels;
 
 const MeasuredBtf& sample() {
@@ -62,14 +63,7 @@ MinifiedRender render(const Material& material, const glm::vec3& view, const glm
         new osg::Uniform(osg::Uniform::FLOAT_VEC3, shader::kLightColor, shader::kMaxLights);
     color->setElement(0, osg::Vec3(1, 1, 1));
     stateSet->addUniform(color.get());
-    osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
-    osg::ref_ptr<osg::Vec4Array> tangents =
-        new osg::Vec4Array(quad->getVertexArray()->getNumElements());
-    std::fill(tangents->begin(), tangents->end(), osg::Vec4(1, 0, 0, 1));
-    quad->setVertexAttribArray(shader::kTangentAttribute, tangents.get(),
-                               osg::Array::BIND_PER_VERTEX);
-    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(quad.get());
+    osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
     geode->setStateSet(stateSet.get());
     const osg::ref_ptr<osg::Image> image =
         sharedRenderer().render(geode.get(), orthoUnitSquare(kPixels, kPixels));
@@ -82,7 +76,7 @@ MinifiedRender render(const Material& material, const glm::vec3& view, const glm
 }
 
 /** The mean of the measured values pixel (i, j) covers: base texels [8 (i mod 8), + 8) and the
- *  same for j (the pixel spans 1/32 of four repeats of 64 texels). */
+ *  same for j (the pixel spans 1/32 of eight repeats of 32 texels). */
 glm::dvec3 boxFiltered(int i, int j, std::size_t view, std::size_t light) {
     const int x0 = (i * kPerPixel) % kTexels, y0 = (j * kPerPixel) % kTexels;
     glm::dvec3 sum(0.0);
