@@ -13,6 +13,7 @@
 #include "core/Error.h"
 #include "core/ShaderSource.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/LightVisibility.h"
 #include "materials/MaterialSerializer.h"
 #include "materials/ShaderInterface.h"
 
@@ -253,6 +254,9 @@ osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordi
         created->addShader(vs);
         created->addShader(fs);
         created->addBindAttribLocation(shader::kTangentAttributeName, shader::kTangentAttribute);
+        for (int a = 0; a < shader::kLightVisibilityAttributes; ++a)
+            created->addBindAttribLocation(shader::kLightVisibilityAttributeName[a],
+                                           shader::kLightVisibilityAttribute[a]);
         program = created;
     }
     return program;

@@ -7,6 +7,7 @@
 #include <osg/Uniform>
 
 #include "core/Error.h"
+#include "materials/LightVisibility.h"
 #include "materials/Material.h"
 #include "materials/ShaderInterface.h"
 
@@ -163,6 +164,11 @@ void addCommonState(osg::StateSet& stateSet, const Material& material) {
     stateSet.addUniform(new osg::Uniform(shader::kTerminator, false));
     stateSet.addUniform(new osg::Uniform(shader::kTerminatorAlpha, 0.0f));
     stateSet.addUniform(new osg::Uniform(shader::kTerminatorTexture, shader::kTerminatorUnit));
+    // Every light seen unless a MaterialNode's StateSet names its visibility slot.
+    osg::ref_ptr<osg::Uniform> slots =
+        new osg::Uniform(osg::Uniform::INT, shader::kLightVisibilitySlot, shader::kMaxLights);
+    for (int i = 0; i < shader::kMaxLights; ++i) slots->setElement(unsigned(i), -1);
+    stateSet.addUniform(slots.get());
 }
 
 }  // namespace osgBTF

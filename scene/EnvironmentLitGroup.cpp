@@ -4,6 +4,7 @@
 #include <chrono>
 #include <set>
 
+#include <osg/LightSource>
 #include <osg/MatrixTransform>
 #include <osg/Notify>
 #include <osg/Texture2D>
@@ -13,6 +14,7 @@
 #include "core/Notify.h"
 #include "materials/EnvironmentState.h"
 #include "materials/IlluminationPca.h"
+#include "materials/LightVisibility.h"
 #include "scene/MaterialNode.h"
 #include "scene/VertexEnvironment.h"
 
@@ -68,7 +70,10 @@ struct EnvironmentLitGroup::Result {
     Key key;
     osg::ref_ptr<osg::Group> occluders;
     std::vector<osg::ref_ptr<osg::Node>> placed;
-    std::vector<RotatingGeometry> rotating;  // illumination PCA on: instead of fixed states
+    std::vector<RotatingGeometry> rotating;
+    // The representative lights' per-vertex occlusion, three arrays per geometry.
+    std::vector<std::pair<osg::ref_ptr<osg::Geometry>, std::vector<osg::ref_ptr<osg::Vec4Array>>>>
+        occlusion;  // illumination PCA on: instead of fixed states
 };
 
 EnvironmentLitGroup::EnvironmentLitGroup() {
@@ -140,15 +145,43 @@ EnvironmentLitGroup::Key EnvironmentLitGroup::currentKey(
 }
 
 void EnvironmentLitGroup::updateRepresentativeLights() {
-    const auto wanted = _light && _light->hasMap()
-                            ? std::make_tuple(_light->getFile(), _light->getRotation(),
-                                              _light->getExposure(), _representativeCount)
-                            : std::make_tuple(std::string(), 0.0f, -1.0f, 0);
+    const auto wanted =
+        _light && _light->hasMap()
+            ? std::make_tuple(_light->getFile(), _light->getRotation(), _light->getExposure(),
+                              _representativeCount, _visibility)
+            : std::make_tuple(std::string(), 0.0f, -1.0f, 0, false);
     if (wanted == _representativeFor) return;
     _representativeFor = wanted;
     _representative->removeChildren(0, _representative->getNumChildren());
-    if (std::get<3>(wanted) > 0)
-        _representative->addChild(representativeLightSources(*_light, _representativeCount).get());
+    if (std::get<3>(wanted) == 0) return;
+    osg::ref_ptr<osg::Group> lights = representativeLightSources(*_light, _representativeCount);
+    // Each light reads its per-vertex occlusion from its slot (with visibility on).
+    for (unsigned k = 0; k < lights->getNumChildren() && _visibility; ++k)
+        if (auto* source = dynamic_cast<osg::LightSource*>(lights->getChild(k)))
+            if (int(k) < shader::kLightVisibilitySlots)
+                source->setUserValue(shader::kLightVisibilityUserValue, int(k));
+    _representative->addChild(lights.get());
+}
+
+std::vector<glm::vec3> EnvironmentLitGroup::representativeDirections() const {
+    std::vector<glm::vec3> directions;
+    struct Sources : osg::NodeVisitor {
+        Sources() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) {}
+        void apply(osg::LightSource& source) override {
+            int slot = -1;
+            if (source.getLight() && source.getUserValue(shader::kLightVisibilityUserValue, slot) &&
+                slot >= 0) {
+                const osg::Vec4& p = source.getLight()->getPosition();
+                if (std::size_t(slot) >= found.size()) found.resize(std::size_t(slot) + 1);
+                found[std::size_t(slot)] = glm::vec3(p.x(), p.y(), p.z());
+            }
+            traverse(source);
+        }
+        std::vector<glm::vec3> found;
+    } sources;
+    const_cast<osg::Group&>(*_representative).accept(sources);
+    directions = sources.found;
+    return directions;
 }
 
 void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<MaterialNode>> nodes) {
@@ -209,6 +242,8 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
     }
     const EnvironmentMap map = _light->projectionMap();
     const bool visibility = _visibility;
+    const std::vector<glm::vec3> directions =
+        visibility ? representativeDirections() : std::vector<glm::vec3>();
     const int samples = _rotationSamples, components = _rotationComponents;
     _result->key.rotation = _light->getRotation();  // the illumination PCA's rotation 0
     // The occluders: this group's children as they are now (not this group, whose
@@ -222,76 +257,93 @@ void EnvironmentLitGroup::start(const Key& key, std::vector<osg::ref_ptr<Materia
                                    << work.size() << " material node(s) by "
                                    << (key.file.empty() ? "an in-memory map" : key.file)
                                    << ", rotation " << key.rotation << " degrees");
-    _worker = std::thread([this, work, map, visibility, occluders, samples, components] {
-        try {
-            for (const auto& [node, material, lit] : work) {
-                Collector collector;
-                node->accept(collector);
-                if (!material || !foldsEnvironment(*material)) {
-                    for (osg::Geometry* g : collector.geometries)
-                        _result->states.emplace_back(g, nullptr);
-                    continue;
-                }
-                VertexEnvironmentOptions options;
-                options.visibility = visibility;
-                options.progress = [this](std::size_t done, std::size_t total) {
-                    if (_cancel) throw Cancelled();
-                    _progress = done;  // per rotation sample when there are several
-                    _total = total;
-                };
-                if (samples == 0) {
-                    for (GeometryEnvironment& entry : computeVertexEnvironment(
-                             *lit, occluders, material->lights(), map, options)) {
-                        std::vector<std::vector<float>> folded;
-                        folded.reserve(entry.g.size());
-                        for (const auto& g : entry.g)
-                            folded.push_back(foldEnvironment(*material, g));
-                        _result->states.emplace_back(entry.geometry,
-                                                     environmentStateSet(*material, folded));
-                    }
-                    continue;
-                }
-                // Illumination PCA: every geometry's folded data, flattened, at each rotation.
-                std::vector<osg::ref_ptr<osg::Geometry>> geometries;
-                std::vector<std::vector<std::vector<float>>> flat;  // [geometry][rotation]
-                for (int a = 0; a < samples; ++a) {
-                    EnvironmentMap rotated = map;
-                    rotated.rotationDegrees = map.rotationDegrees + 360.0f * float(a) / samples;
-                    std::vector<GeometryEnvironment> entries = computeVertexEnvironment(
-                        *lit, occluders, material->lights(), rotated, options);
-                    if (a == 0) {
-                        for (const auto& entry : entries) geometries.push_back(entry.geometry);
-                        flat.resize(entries.size());
-                    }
-                    for (std::size_t i = 0; i < entries.size() && i < flat.size(); ++i) {
-                        std::vector<float> values;
-                        for (const auto& g : entries[i].g) {
-                            const std::vector<float> folded = foldEnvironment(*material, g);
-                            values.insert(values.end(), folded.begin(), folded.end());
+    _worker =
+        std::thread([this, work, map, visibility, occluders, samples, components, directions] {
+            try {
+                for (const auto& [node, material, lit] : work) {
+                    Collector collector;
+                    node->accept(collector);
+                    if (!material || !foldsEnvironment(*material)) {
+                        for (osg::Geometry* g : collector.geometries)
+                            _result->states.emplace_back(g, nullptr);
+                        if (directions.empty()) continue;
+                        // Lit by the representative lights: which of them each vertex sees.
+                        for (GeometryLightOcclusion& entry :
+                             computeVertexLightOcclusion(*lit, *occluders, directions)) {
+                            const std::size_t vertices = entry.occlusion.size() / directions.size();
+                            std::vector<osg::ref_ptr<osg::Vec4Array>> arrays;
+                            for (int a = 0; a < shader::kLightVisibilityAttributes; ++a)
+                                arrays.push_back(new osg::Vec4Array(unsigned(vertices)));
+                            for (const auto& array : arrays)  // w unused: 1, as GL's default
+                                std::fill(array->begin(), array->end(), osg::Vec4(0, 0, 0, 1));
+                            for (std::size_t v = 0; v < vertices; ++v)
+                                for (std::size_t k = 0; k < directions.size(); ++k)
+                                    (*arrays[k / 3])[v][int(k % 3)] =
+                                        entry.occlusion[v * directions.size() + k];
+                            _result->occlusion.emplace_back(entry.geometry, std::move(arrays));
                         }
-                        flat[i].push_back(std::move(values));
+                        continue;
+                    }
+                    VertexEnvironmentOptions options;
+                    options.visibility = visibility;
+                    options.progress = [this](std::size_t done, std::size_t total) {
+                        if (_cancel) throw Cancelled();
+                        _progress = done;  // per rotation sample when there are several
+                        _total = total;
+                    };
+                    if (samples == 0) {
+                        for (GeometryEnvironment& entry : computeVertexEnvironment(
+                                 *lit, occluders, material->lights(), map, options)) {
+                            std::vector<std::vector<float>> folded;
+                            folded.reserve(entry.g.size());
+                            for (const auto& g : entry.g)
+                                folded.push_back(foldEnvironment(*material, g));
+                            _result->states.emplace_back(entry.geometry,
+                                                         environmentStateSet(*material, folded));
+                        }
+                        continue;
+                    }
+                    // Illumination PCA: every geometry's folded data, flattened, at each rotation.
+                    std::vector<osg::ref_ptr<osg::Geometry>> geometries;
+                    std::vector<std::vector<std::vector<float>>> flat;  // [geometry][rotation]
+                    for (int a = 0; a < samples; ++a) {
+                        EnvironmentMap rotated = map;
+                        rotated.rotationDegrees = map.rotationDegrees + 360.0f * float(a) / samples;
+                        std::vector<GeometryEnvironment> entries = computeVertexEnvironment(
+                            *lit, occluders, material->lights(), rotated, options);
+                        if (a == 0) {
+                            for (const auto& entry : entries) geometries.push_back(entry.geometry);
+                            flat.resize(entries.size());
+                        }
+                        for (std::size_t i = 0; i < entries.size() && i < flat.size(); ++i) {
+                            std::vector<float> values;
+                            for (const auto& g : entries[i].g) {
+                                const std::vector<float> folded = foldEnvironment(*material, g);
+                                values.insert(values.end(), folded.begin(), folded.end());
+                            }
+                            flat[i].push_back(std::move(values));
+                        }
+                    }
+                    for (std::size_t i = 0; i < geometries.size(); ++i) {
+                        RotatingGeometry r;
+                        r.geometry = geometries[i];
+                        r.material = material;
+                        r.stride = foldedStride(*material);
+                        int a = 0;
+                        // Sample a was computed at the light's rotation at the start + 360 a / A.
+                        r.pca = std::make_shared<IlluminationPca>(IlluminationPca::build(
+                            [&](float) { return std::move(flat[i][std::size_t(a++)]); }, samples,
+                            components));
+                        _result->rotating.push_back(std::move(r));
                     }
                 }
-                for (std::size_t i = 0; i < geometries.size(); ++i) {
-                    RotatingGeometry r;
-                    r.geometry = geometries[i];
-                    r.material = material;
-                    r.stride = foldedStride(*material);
-                    int a = 0;
-                    // Sample a was computed at the light's rotation at the start + 360 a / A.
-                    r.pca = std::make_shared<IlluminationPca>(IlluminationPca::build(
-                        [&](float) { return std::move(flat[i][std::size_t(a++)]); }, samples,
-                        components));
-                    _result->rotating.push_back(std::move(r));
-                }
+            } catch (const Cancelled&) {
+                _result->error = "cancelled";
+            } catch (const std::exception& e) {
+                _result->error = e.what();
             }
-        } catch (const Cancelled&) {
-            _result->error = "cancelled";
-        } catch (const std::exception& e) {
-            _result->error = e.what();
-        }
-        _done = true;
-    });
+            _done = true;
+        });
 }
 
 void EnvironmentLitGroup::joinAndInstall() {
@@ -318,6 +370,11 @@ void EnvironmentLitGroup::joinAndInstall() {
         geometry->setStateSet(state.get());
     }
     const std::size_t installed = result.states.size() + result.rotating.size();
+    for (auto& [geometry, arrays] : result.occlusion)
+        for (int a = 0; a < shader::kLightVisibilityAttributes; ++a)
+            geometry->setVertexAttribArray(shader::kLightVisibilityAttribute[a],
+                                           arrays[std::size_t(a)].get(),
+                                           osg::Array::BIND_PER_VERTEX);
     _rotating = std::move(result.rotating);
     _pcaRotation = result.key.rotation;
     if (!_rotating.empty()) rebuildFromIlluminationPca();
@@ -375,12 +432,12 @@ void EnvironmentLitGroup::update() {
 }
 
 void EnvironmentLitGroup::finish() {
+    updateRepresentativeLights();  // before start(): it casts rays toward them
     if (!_worker.joinable()) {
         std::vector<osg::ref_ptr<MaterialNode>> nodes;
         const Key key = currentKey(nodes);
         if (_dirty || !_everComputed || !(key == _computed)) start(key, std::move(nodes));
     }
-    updateRepresentativeLights();
     joinAndInstall();
     if (_changed) _changed();
 }

@@ -23,6 +23,7 @@
 #include <thread>
 #include <vector>
 
+#include <glm/vec3.hpp>
 #include <osg/Geometry>
 #include <osg/Group>
 #include <osg/Matrixd>
@@ -106,6 +107,8 @@ private:
     void start(const Key& key, std::vector<osg::ref_ptr<MaterialNode>> nodes);
     void joinAndInstall();
     void updateRepresentativeLights();
+    /** Toward each representative light, by visibility slot (empty with visibility off). */
+    std::vector<glm::vec3> representativeDirections() const;
     /** Every geometry's StateSet from its illumination PCA at the light's rotation. */
     void rebuildFromIlluminationPca();
 
@@ -119,7 +122,7 @@ private:
     double _rebuildMs = -1;
     bool _visibility = true;
     osg::ref_ptr<osg::Group> _representative = new osg::Group;
-    std::tuple<std::string, float, float, int> _representativeFor{"", 0.0f, -1.0f, 0};
+    std::tuple<std::string, float, float, int, bool> _representativeFor{"", 0.0f, -1.0f, 0, false};
     std::map<osg::Geometry*, osg::ref_ptr<osg::StateSet>> _original;  // StateSets before us
     std::map<const MaterialNode*, osg::Matrixd> _placements;          // node -> this group's space
     Key _computed;

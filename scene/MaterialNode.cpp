@@ -24,6 +24,7 @@
 #include "core/Error.h"
 #include "core/Notify.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/LightVisibility.h"
 #include "scene/OpenMaterial.h"
 #include "scene/ShadowTerminator.h"
 
@@ -225,11 +226,16 @@ public:
         _matrices.pop_back();
     }
     void apply(osg::LightSource& source) override {
-        if (const osg::Light* light = dynamic_cast<const osg::Light*>(source.getLight()))
+        if (const osg::Light* light = dynamic_cast<const osg::Light*>(source.getLight())) {
             lights.push_back(
                 toEyeLight(*light, source.getReferenceFrame() == osg::LightSource::ABSOLUTE_RF
                                        ? osg::Matrixd::identity()
                                        : _matrices.back()));
+            int slot = -1;
+            if (source.getUserValue(shader::kLightVisibilityUserValue, slot) && slot >= 0 &&
+                slot < shader::kLightVisibilitySlots)
+                lights.back().visibilitySlot = slot;
+        }
         traverse(source);
     }
     std::vector<EyeLight> lights;
@@ -571,8 +577,10 @@ osg::StateSet* MaterialNode::lightStateSet(osgUtil::CullVisitor& cv) {
         entry.positions =
             new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", kMaxLights);
         entry.colors = new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", kMaxLights);
-        for (osg::Uniform* uniform :
-             {entry.count.get(), entry.positions.get(), entry.colors.get()}) {
+        entry.visibilitySlots =
+            new osg::Uniform(osg::Uniform::INT, shader::kLightVisibilitySlot, kMaxLights);
+        for (osg::Uniform* uniform : {entry.count.get(), entry.positions.get(), entry.colors.get(),
+                                      entry.visibilitySlots.get()}) {
             uniform->setDataVariance(osg::Object::DYNAMIC);
             entry.stateSet->addUniform(uniform);
         }
@@ -587,6 +595,7 @@ osg::StateSet* MaterialNode::lightStateSet(osgUtil::CullVisitor& cv) {
         const bool used = i < int(lights.size());
         entry.positions->setElement(i, used ? lights[i].position : osg::Vec4());
         entry.colors->setElement(i, used ? lights[i].color : osg::Vec3());
+        entry.visibilitySlots->setElement(unsigned(i), used ? lights[i].visibilitySlot : -1);
     }
     return entry.stateSet.get();
 }

@@ -53,10 +53,12 @@ class CullVisitor;
 namespace osgBTF {
 
 /** One light as the shaders see it: eye-space position (w = 0: direction toward the light,
- *  w = 1: point position) and RGB colour (the osg::Light's diffuse). */
+ *  w = 1: point position), RGB colour (the osg::Light's diffuse) and its per-vertex visibility
+ *  slot (materials/LightVisibility.h; -1: none, always seen). */
 struct EyeLight {
     osg::Vec4 position;
     osg::Vec3 color;
+    int visibilitySlot = -1;
 };
 
 /** The shader's light limit (materials/ShaderInterface.h). */
@@ -207,7 +209,7 @@ protected:
         osg::observer_ptr<osg::Camera> camera;
         unsigned frameNumber = ~0u;
         osg::ref_ptr<osg::StateSet> stateSet;
-        osg::ref_ptr<osg::Uniform> count, positions, colors;
+        osg::ref_ptr<osg::Uniform> count, positions, colors, visibilitySlots;
         std::vector<EyeLight> lights;  // what the uniforms hold
         // Shadow-map state (program variant, the technique's depth texture on
         // shader::kShadowMapUnit), rebuilt when the technique's texture or unit changes.

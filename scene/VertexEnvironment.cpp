@@ -194,6 +194,28 @@ std::vector<GeometryEnvironment> computeVertexEnvironment(const osg::Node& lit,
     return result;
 }
 
+std::vector<GeometryLightOcclusion> computeVertexLightOcclusion(
+    const osg::Node& lit, const osg::Node& occluders, const std::vector<glm::vec3>& directions) {
+    const SceneOccluder occluder(occluders);
+    std::vector<GeometryLightOcclusion> result;
+    for (auto& [geometry, matrix] : collect(lit)) {
+        const osg::Vec3Array* vertices =
+            dynamic_cast<const osg::Vec3Array*>(geometry->getVertexArray());
+        if (!vertices) continue;
+        GeometryLightOcclusion entry;
+        entry.geometry = geometry;
+        entry.occlusion.resize(vertices->size() * directions.size());
+        tbb::parallel_for(std::size_t(0), vertices->size(), [&](std::size_t i) {
+            const glm::vec3 position = toGlm(osg::Vec3d((*vertices)[i]) * matrix);
+            for (std::size_t k = 0; k < directions.size(); ++k)
+                entry.occlusion[i * directions.size() + k] =
+                    occluder.occluded(position, glm::normalize(directions[k])) ? 1.0f : 0.0f;
+        });
+        result.push_back(std::move(entry));
+    }
+    return result;
+}
+
 std::size_t applyEnvironmentLighting(osg::Node& lit, const osg::Node* occluders,
                                      const Material& material, const EnvironmentLight& light,
                                      const VertexEnvironmentOptions& options) {

@@ -74,6 +74,19 @@ std::vector<GeometryEnvironment> computeVertexEnvironment(const osg::Node& lit,
                                                           const EnvironmentMap& map,
                                                           const VertexEnvironmentOptions& options);
 
+/** Per-vertex occlusion of single directions (the representative lights of environment
+ *  lighting, materials/LightVisibility.h): 1 where a ray from the vertex toward the direction
+ *  hits a triangle below the occluders, else 0; occlusion[vertex * directions + k]. */
+struct GeometryLightOcclusion {
+    osg::ref_ptr<osg::Geometry> geometry;
+    std::vector<float> occlusion;
+};
+
+/** For every geometry below `lit` (transforms inside it applied, as computeVertexEnvironment),
+ *  against everything below `occluders`; directions in the same space (toward the light). */
+std::vector<GeometryLightOcclusion> computeVertexLightOcclusion(
+    const osg::Node& lit, const osg::Node& occluders, const std::vector<glm::vec3>& directions);
+
 class EnvironmentLight;
 class Material;
 

@@ -25,6 +25,14 @@ uniform bool osgBTF_terminator = false;
 uniform float osgBTF_terminatorAlpha = 0.0;  // radians
 out float btfTerminatorCoordinate[osgBTF_maxLights];
 
+// Per-vertex occlusion of single lights (materials/LightVisibility.h): light i reads slot
+// osgBTF_lightVisibilitySlot[i] of the three attributes' x, y, z; -1: seen.
+in vec4 osgBTF_lightOcclusion0;
+in vec4 osgBTF_lightOcclusion1;
+in vec4 osgBTF_lightOcclusion2;
+uniform int osgBTF_lightVisibilitySlot[osgBTF_maxLights];
+out float btfLightVisibility[osgBTF_maxLights];
+
 #ifdef OSGBTF_SHADOW_MAP
 // osgShadow::ShadowMap's eye-linear TexGen on its texture unit: planes already in eye space.
 uniform int osgBTF_shadowTexGenUnit = 1;
@@ -42,7 +50,11 @@ void main() {
     btfTexCoord = gl_MultiTexCoord0.st * osgBTF_textureScale;
     gl_Position = gl_ModelViewProjectionMatrix * gl_Vertex;
     vec3 n = normalize(btfEyeNormal);
+    vec3 occlusion[3] =
+        vec3[3](osgBTF_lightOcclusion0.xyz, osgBTF_lightOcclusion1.xyz, osgBTF_lightOcclusion2.xyz);
     for (int i = 0; i < osgBTF_maxLights; ++i) {
+        int slot = osgBTF_lightVisibilitySlot[i];
+        btfLightVisibility[i] = slot < 0 || slot > 8 ? 1.0 : 1.0 - occlusion[slot / 3][slot % 3];
         btfTerminatorCoordinate[i] = 1.0;
         if (!osgBTF_terminator || i >= osgBTF_lightCount) continue;
         vec4 p = osgBTF_lightPosition[i];

@@ -27,6 +27,8 @@ vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light);
 uniform bool osgBTF_terminator = false;
 uniform sampler1D osgBTF_terminatorTexture;
 in float btfTerminatorCoordinate[osgBTF_maxLights];
+// Per-vertex visibility of single lights (btf.vert, materials/LightVisibility.h).
+in float btfLightVisibility[osgBTF_maxLights];
 
 float btfTerminatorFactor(int i) {
     return osgBTF_terminator ? texture(osgBTF_terminatorTexture, btfTerminatorCoordinate[i]).r
@@ -96,7 +98,7 @@ void main() {
             vec3 toLight = normalize(p.w == 0.0 ? p.xyz : p.xyz - btfEyePosition);
             vec3 light = vec3(dot(toLight, t), dot(toLight, b), dot(toLight, n));
             if (!(light.z > 0.0)) continue;
-            float visible = btfTerminatorFactor(i) * btfShadowFactor(i);
+            float visible = btfTerminatorFactor(i) * btfShadowFactor(i) * btfLightVisibility[i];
             // Skipped when dark: shadowed lights cost no method evaluation.
             if (visible > 0.0) {
                 vec3 value = btfEvaluate(texel, view, light);

@@ -514,6 +514,59 @@ TEST(EnvironmentGpu, EnvironmentLitGroupPlacesMaterialNodesUnderTransformsWhereT
     expectInstalledDataUnoccluded(*node, white, "moved square");
 }
 
+TEST(EnvironmentGpu, RepresentativeLightsAreOccludedPerVertex) {
+    // lambert has no folded lighting: one representative light carries the map, a bright patch
+    // low in the +X direction. A wall beside the square (outside the camera's view) hides that
+    // light from every vertex: the square goes black; without the wall, or with the group's
+    // visibility off, it is lit, and the same in both.
+    EnvironmentMap map = uniformMap(32, 0.0f);
+    for (int r = 9; r < 11; ++r)  // rows bottom-up: elevations 11 to 34 degrees
+        for (int c : {0, 31})     // azimuth about 0: toward +X
+            for (int ch = 0; ch < 3; ++ch) map.rgb[(r * 32 + c) * 3 + ch] = 100.0f;
+    osg::ref_ptr<EnvironmentLight> light = new EnvironmentLight;
+    light->setMap(map);
+    osg::ref_ptr<EnvironmentLitGroup> group = new EnvironmentLitGroup;
+    group->setLight(light.get());
+    group->setRepresentativeLights(1);
+    osg::ref_ptr<MaterialNode> node = new MaterialNode;
+    node->setMaterial(findMethod("lambert").fit(sample4(), FitOptions::parse("")).get());
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(square());
+    geode->getOrCreateStateSet()->addUniform(
+        new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
+    node->addChild(geode);
+    group->addChild(node);
+    osg::ref_ptr<osg::Geometry> wall = square();
+    osg::ref_ptr<osg::Vec3Array> corners = new osg::Vec3Array;
+    for (const osg::Vec3& c : {osg::Vec3(1.5f, -2, -0.1f), osg::Vec3(1.5f, 3, -0.1f),
+                               osg::Vec3(1.5f, 3, 2), osg::Vec3(1.5f, -2, 2)})
+        corners->push_back(c);
+    wall->setVertexArray(corners.get());
+    osg::ref_ptr<osg::Geode> wallGeode = new osg::Geode;
+    wallGeode->addDrawable(wall);
+    group->addChild(wallGeode);
+
+    const auto brightest = [&] {
+        group->finish();
+        EXPECT_EQ(group->getError(), "");
+        osg::ref_ptr<osg::Image> image =
+            test::sharedRenderer().render(group, orthoUnitSquare(16, 16));
+        float largest = 0;
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 16; ++x)
+                for (int ch = 0; ch < 3; ++ch)
+                    largest = std::max(largest, test::pixel(*image, x, y, ch));
+        return largest;
+    };
+    EXPECT_EQ(brightest(), 0.0f) << "the wall hides the only light";
+    group->setVisibility(false);
+    const float unoccluded = brightest();
+    EXPECT_GT(unoccluded, 0.01f);
+    group->setVisibility(true);
+    group->removeChild(wallGeode);
+    EXPECT_NEAR(brightest(), unoccluded, 1e-5f * unoccluded) << "without the wall";
+}
+
 TEST(EnvironmentGpu, PatchImagesOfFoldedAndOtherMethodsMatchTheCpu) {
     // btf eval --env's images (harness/MaterialImage.h): fmf through its folded program, lambert
     // (no folding) as the g-weighted sum of its point-light renders, both against the CPU's
