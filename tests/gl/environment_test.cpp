@@ -425,10 +425,7 @@ TEST(EnvironmentGpu, EnvironmentLitGroupRebuildsRotationsFromItsIlluminationPca)
     // centred samples span at most 3 dimensions, so the PCA is exact at the samples. Turning the
     // light to a sample's rotation (90 degrees) rebuilds the data in the update traversal, no
     // worker, and the render equals the CPU integral of the map turned by 90 degrees.
-    EnvironmentMap map;
-    map.width = 32;
-    map.height = 16;
-    map.rgb.assign(32 * 16 * 3, 0.2f);
+    EnvironmentMap map = uniformMap(32, 0.2f);
     for (int c = 2; c < 6; ++c)
         for (int r = 10; r < 13; ++r)  // rows bottom-up: above the horizon
             for (int ch = 0; ch < 3; ++ch) map.rgb[(r * 32 + c) * 3 + ch] = 4.0f + float(ch);
@@ -571,10 +568,7 @@ TEST(EnvironmentGpu, PatchImagesOfFoldedAndOtherMethodsMatchTheCpu) {
     // btf eval --env's images (harness/MaterialImage.h): fmf through its folded program, lambert
     // (no folding) as the g-weighted sum of its point-light renders, both against the CPU's
     // sum_i g_i BTF(x, v, l_i) times the exposure. Float sums of ~81 terms: 1e-4 of the largest.
-    EnvironmentMap sky;
-    sky.width = 16;
-    sky.height = 8;
-    sky.rgb.assign(16 * 8 * 3, 0.2f);
+    EnvironmentMap sky = uniformMap(16, 0.2f);
     for (int c = 0; c < 4; ++c)
         for (int ch = 0; ch < 3; ++ch) sky.rgb[(6 * 16 + c) * 3 + ch] = 5.0f * float(ch + 1);
     const osg::ref_ptr<Material> lambert =
