@@ -205,8 +205,9 @@ std::vector<GeometryLightOcclusion> computeVertexLightOcclusion(
         GeometryLightOcclusion entry;
         entry.geometry = geometry;
         entry.occlusion.resize(vertices->size() * directions.size());
+        const osg::Matrixd toOccluders = matrix;  // a structured binding: not capturable
         tbb::parallel_for(std::size_t(0), vertices->size(), [&](std::size_t i) {
-            const glm::vec3 position = toGlm(osg::Vec3d((*vertices)[i]) * matrix);
+            const glm::vec3 position = toGlm(osg::Vec3d((*vertices)[i]) * toOccluders);
             for (std::size_t k = 0; k < directions.size(); ++k)
                 entry.occlusion[i * directions.size() + k] =
                     occluder.occluded(position, glm::normalize(directions[k])) ? 1.0f : 0.0f;
