@@ -1,7 +1,8 @@
 # The layers of the source tree and what each may include (README "Layout"). A lower layer never
 # includes a higher one: the runtime libosgBTF (core, loaders, materials, scene) must build and
 # ship without harness/ (libosgBTFHarness), and the plugins load only the runtime.
-#   core <- loaders, materials, synthesis <- scene <- harness <- tools, examples; scene <- plugins
+#   core <- loaders, materials, synthesis; materials <- streaming (BSVTF);
+#   all of those <- scene <- harness <- tools, examples; scene <- plugins
 # tests/, fuzz/ and bench/ may include everything below them (fuzz/ holds the fuzz targets'
 # bodies, which the regression test in tests/ calls, and their seed generator). Used by
 # cmake/CheckLayers.cmake (the layers.include_graph test) and tested on fake trees by
@@ -11,15 +12,16 @@ set(OSGBTF_LAYER_ALLOWED_core core)
 set(OSGBTF_LAYER_ALLOWED_loaders core loaders)
 set(OSGBTF_LAYER_ALLOWED_materials core materials)
 set(OSGBTF_LAYER_ALLOWED_synthesis core synthesis)
-set(OSGBTF_LAYER_ALLOWED_scene core loaders materials synthesis scene)
-set(OSGBTF_LAYER_ALLOWED_harness core loaders materials synthesis scene harness)
-set(OSGBTF_LAYER_ALLOWED_tools core loaders materials synthesis scene harness tools)
-set(OSGBTF_LAYER_ALLOWED_examples core loaders materials synthesis scene harness examples)
-set(OSGBTF_LAYER_ALLOWED_plugins core loaders materials synthesis scene plugins)
-set(OSGBTF_LAYER_ALLOWED_fuzz core loaders materials synthesis scene harness plugins fuzz)
-set(OSGBTF_LAYER_ALLOWED_tests core loaders materials synthesis scene harness plugins fuzz tests)
-set(OSGBTF_LAYER_ALLOWED_bench core loaders materials synthesis scene harness bench)
-set(OSGBTF_LAYERS core loaders materials synthesis scene harness tools examples plugins fuzz tests
+set(OSGBTF_LAYER_ALLOWED_streaming core materials streaming)
+set(OSGBTF_LAYER_ALLOWED_scene core loaders materials synthesis streaming scene)
+set(OSGBTF_LAYER_ALLOWED_harness core loaders materials synthesis streaming scene harness)
+set(OSGBTF_LAYER_ALLOWED_tools core loaders materials synthesis streaming scene harness tools)
+set(OSGBTF_LAYER_ALLOWED_examples core loaders materials synthesis streaming scene harness examples)
+set(OSGBTF_LAYER_ALLOWED_plugins core loaders materials synthesis streaming scene plugins)
+set(OSGBTF_LAYER_ALLOWED_fuzz core loaders materials synthesis streaming scene harness plugins fuzz)
+set(OSGBTF_LAYER_ALLOWED_tests core loaders materials synthesis streaming scene harness plugins fuzz tests)
+set(OSGBTF_LAYER_ALLOWED_bench core loaders materials synthesis streaming scene harness bench)
+set(OSGBTF_LAYERS core loaders materials synthesis streaming scene harness tools examples plugins fuzz tests
                   bench)
 
 # Sets OUT_VAR to one message per include of a layer the including file's layer may not use:

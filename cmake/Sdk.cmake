@@ -13,7 +13,7 @@
 include(CMakePackageConfigHelpers)
 
 set(OSGBTF_SDK_DIR ${CMAKE_BINARY_DIR}/sdk)
-set(OSGBTF_SDK_LAYERS core loaders materials synthesis scene)  # the runtime: every header is public
+set(OSGBTF_SDK_LAYERS core loaders materials synthesis streaming scene)  # the runtime: every header is public
 set(OSGBTF_SDK_HEADERS)
 foreach(layer IN LISTS OSGBTF_SDK_LAYERS)
   file(GLOB_RECURSE headers RELATIVE ${CMAKE_SOURCE_DIR} CONFIGURE_DEPENDS

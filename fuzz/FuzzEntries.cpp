@@ -23,6 +23,8 @@
 #include "loaders/Ubo2003.h"
 #include "loaders/Ubo2014.h"
 #include "plugins/btf/ReaderWriterBTF.h"
+#include "streaming/TileCodec.h"
+#include "streaming/TileSet.h"
 
 namespace fs = std::filesystem;
 
@@ -139,7 +141,7 @@ const std::vector<Target>& targets() {
         {"ubo2003_zip", ubo2003Zip},         {"ubo2014", ubo2014},
         {"fitted_material", fittedMaterial}, {"coordinate_map", coordinateMap},
         {"btfmat_plugin", btfmatPlugin},     {"plugin_names", pluginNames},
-        {"scene_file", sceneFile},
+        {"scene_file", sceneFile},           {"bsvtf_tiles", bsvtfTiles},
     };
     return all;
 }
@@ -217,6 +219,25 @@ void sceneFile(const std::uint8_t* data, std::size_t size) {
     std::istringstream in(text);
     osg::ref_ptr<osgDB::Options> options = new osgDB::Options("cache=off");
     osgt->readNode(in, options.get());
+}
+
+void bsvtfTiles(const std::uint8_t* data, std::size_t size) {
+    const std::string text(reinterpret_cast<const char*>(data), size);
+    if (text.rfind("osgBTF-bsvtf", 0) == 0) {
+        const TileSetIndex index = TileSetIndex::parse(text, "fuzz.bsvtf");
+        index.serialize();
+        return;
+    }
+    constexpr int kSide = 16;
+    std::vector<Imath::half> out(kSide * kSide * 4),
+        prediction(kSide * kSide * 4, Imath::half(0.5f));
+    TileCodecSettings settings;
+    settings.unit = 0.01f;
+    try {
+        decodeTile(data, size, nullptr, kSide, settings, out.data(), "fuzz.tile");
+    } catch (const Error&) {
+    }
+    decodeTile(data, size, prediction.data(), kSide, settings, out.data(), "fuzz.tile");
 }
 
 }  // namespace osgBTF::fuzz

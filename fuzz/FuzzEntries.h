@@ -52,4 +52,9 @@ void pluginNames(const std::uint8_t* data, std::size_t size);
  *  the fixtures folder, embedded FittedMaterials are parsed). */
 void sceneFile(const std::uint8_t* data, std::size_t size);
 
+/** BSVTF tile sets (streaming/TileSet.h): bytes starting with "osgBTF-bsvtf" as an index
+ *  (TileSetIndex::parse), anything else as a dct tile payload of a 16-texel tile (T = 8, P = 4)
+ *  decoded without and with a prediction (TileCodec's decodeTile). */
+void bsvtfTiles(const std::uint8_t* data, std::size_t size);
+
 }  // namespace osgBTF::fuzz

@@ -21,7 +21,9 @@
 #include "harness/sample/Ubo2003Writer.h"
 #include "loaders/Ubo2014.h"
 #include "materials/Material.h"
+#include "materials/fmf/Fmf.h"
 #include "scene/MaterialNode.h"
+#include "streaming/TileBuilder.h"
 
 namespace fs = std::filesystem;
 using namespace osgBTF;
@@ -74,8 +76,9 @@ int main(int argc, char** argv) {
     try {
         Progress::setEnabled(false);
         const fs::path out = fs::absolute(argv[1]);
-        for (const char* folder : {"ubo2003_zip", "ubo2014", "fitted_material", "coordinate_map",
-                                   "btfmat_plugin", "plugin_names", "scene_file", "fixtures"})
+        for (const char* folder :
+             {"ubo2003_zip", "ubo2014", "fitted_material", "coordinate_map", "btfmat_plugin",
+              "plugin_names", "scene_file", "bsvtf_tiles", "fixtures"})
             fs::create_directories(out / folder);
 
         // UBO2003: 2 views x 2 lights of 2x2 texels in every image format.
@@ -198,6 +201,27 @@ int main(int argc, char** argv) {
             {"seed-btfmat-map.txt", "m.btfmat\nmap=map.exr scale=0.5"},
         };
         for (const auto& [file, text] : names) writeText(out / "plugin_names" / file, text);
+        // BSVTF: the index and every dct tile (T = 8, P = 4, what the target decodes) of a
+        // 20 x 12 fmf material with 3 levels.
+        {
+            SampleOptions small;
+            small.width = 20;
+            small.height = 12;
+            small.views = small.lights = DirectionSet("d", {{0, 0}, {45, 90}, {30, 200}});
+            const osg::ref_ptr<FmfMaterial> fmf =
+                FmfMaterial::fit(makeSampleBtf(small), FitOptions::parse("components=4"));
+            TileBuildOptions build;
+            build.tileSize = 8;
+            build.quality = 75;
+            const fs::path tiles = out / "bsvtf_tiles" / "set";
+            buildTileSet(*fmf, tiles.string(), build);
+            fs::copy_file(tiles / "index.bsvtf", out / "bsvtf_tiles" / "seed-index.bsvtf");
+            int n = 0;
+            for (const char* tile : {"0/0/0_0", "0/1/1_0", "0/2/2_1"})
+                fs::copy_file(tiles / "tiles" / (std::string(tile) + ".tile"),
+                              out / "bsvtf_tiles" / ("seed-tile-" + std::to_string(n++)));
+            fs::remove_all(tiles);
+        }
         std::printf("osgbtf_fuzz_seeds: wrote %s\n", out.string().c_str());
         return 0;
     } catch (const std::exception& e) {

@@ -1,11 +1,10 @@
 #include "harness/Compare.h"
 
-#include <fcntl.h>  // AT_FDCWD
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>  // renameat2, RENAME_EXCHANGE (glibc, _GNU_SOURCE)
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -14,6 +13,7 @@
 #include "core/Error.h"
 #include "core/FloatImage.h"
 #include "core/Progress.h"
+#include "core/PublishFolder.h"
 #include "harness/MaterialImage.h"
 #include "harness/Pictures.h"
 #include "harness/Report.h"
@@ -48,33 +48,6 @@ void writeText(const std::string& path, const std::string& text) {
         out.close();
         if (!out) throw Error(path + ": cannot write");
     });
-}
-
-/** Replaces `target` by the finished folder `temporary` (both in the same parent). */
-void publishFolder(const fs::path& temporary, const fs::path& target) {
-    std::error_code ec;
-    fs::path old;
-    // Swapping the two names in one step leaves no moment without `target` for a reader (or a
-    // kill) to find; the previous results then sit under the temporary name until removed.
-    if (fs::exists(target) &&
-        ::renameat2(AT_FDCWD, temporary.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) == 0) {
-        fs::remove_all(temporary, ec);
-        return;
-    }
-    // A file system without RENAME_EXCHANGE: move the old folder aside first.
-    if (fs::exists(target)) {
-        old = target;
-        old += ".old" + std::to_string(getpid());
-        fs::rename(target, old, ec);
-        if (ec) throw Error(target.string() + ": cannot replace: " + ec.message());
-    }
-    fs::rename(temporary, target, ec);
-    if (ec) {
-        if (!old.empty()) fs::rename(old, target);
-        throw Error(target.string() + ": cannot rename " + temporary.string() +
-                    " to it: " + ec.message());
-    }
-    if (!old.empty()) fs::remove_all(old, ec);
 }
 
 std::vector<std::string> orderedMethods(const CompareOptions& options) {

@@ -26,6 +26,9 @@
 
 #include "core/FloatImage.h"
 #include "materials/Material.h"
+#include "materials/fmf/Fmf.h"
+#include "streaming/TileSet.h"
+#include "tests/RandomFactors.h"
 #include "tests/PluginTestUtil.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
@@ -284,6 +287,32 @@ TEST(Kills, CompareFolderIsCompleteOrAbsentAfterEveryKill) {
     // The fits compare started died with it (OSGBTF_PARENT_PID): nothing still writes there.
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     EXPECT_FALSE(processMentions(report.string() + ".tmp"));
+}
+
+TEST(Kills, TileSetFolderIsCompleteOrAbsentAfterEveryKill) {
+    TempDir dir;
+    // Large enough for kills to land while it runs: 8 groups x 85 tiles of 64 + 4 texels.
+    const std::string material = dir.file("m.btfmat");
+    saveMaterial(*FmfMaterial::fromFactors(randomFactors(FactorModel::Fmf, {32, 0, 0}, 512, 512, 7)),
+                 material);
+    const fs::path out = dir.path() / "out";
+    fs::create_directory(out);
+    const fs::path tiles = out / "tiles";
+    Writer w;
+    w.name = "btf tiles -o";
+    w.args = {OSGBTF_BTF_TOOL, "--no-progress", "tiles", material, "-o", tiles.string()};
+    w.folder = out;
+    w.isFinal = [](const std::string& name) { return name == "tiles"; };
+    // Complete: the index reads and every file it lists is there, of its size and CRC, and
+    // decodes (loadTileSetFinest reads them all).
+    w.checkFinal = [tiles]() -> std::string {
+        if (!fs::exists(tiles)) return {};
+        const std::string problem = errorOf([&] { loadTileSetFinest(tiles.string()); });
+        return problem == "no error" ? std::string() : problem;
+    };
+    w.removeFinal = [tiles] { fs::remove_all(tiles); };
+    std::mt19937 random(16033);
+    EXPECT_EQ(killRepeatedly(w, 4, random), 4) << "kills should land while it runs";
 }
 
 TEST(Kills, PluginCacheEntryIsCompleteOrAbsentAfterEveryKill) {

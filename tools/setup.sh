@@ -10,6 +10,7 @@ PACKAGES=(
   libopenexr-dev openexr libopenimageio-dev openimageio-tools   # float images, exrheader, oiiotool
   libglm-dev libeigen3-dev libceres-dev libtbb-dev libzip-dev zip unzip
   libembree-dev               # ray-cast environment visibility (scene/VertexEnvironment.h)
+  zlib1g-dev libcurl4-openssl-dev nginx-light  # BSVTF: tile codec, HTTP streaming and its tests
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)
   xvfb xauth libglx-mesa0     # X server for the viewer tests and xvfb-run (osgviewer, btfviewer)

@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
         tool::addInfoCommand(app, common),         tool::addSampleCommand(app, common),
         tool::addContactSheetCommand(app, common), tool::addFitCommand(app, common),
         tool::addEvalCommand(app, common),         tool::addCompareCommand(app, common),
-        tool::addSynthesizeCommand(app, common),   tool::addMakeTileableCommand(app, common)};
+        tool::addSynthesizeCommand(app, common),   tool::addMakeTileableCommand(app, common),
+        tool::addTilesCommand(app, common)};
     try {
         app.parse(argc, argv);
         Progress::setEnabled(progress);

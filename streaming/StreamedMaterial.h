@@ -1,0 +1,62 @@
+// osgBTF BSVTF: an fmf material streamed tile by tile (seed 003 sections 5-6). It renders at once,
+// from what has arrived (missing Eigen-Textures and U packets count as zero), and sharpens as the
+// TileStreamer that opened it brings tiles into the shared cache. Put it on a MaterialNode like
+// any material; the scene needs a StreamingGroup above it for the feedback pass and the updates
+// (streaming/StreamingGroup.h).
+#pragma once
+
+#include <osg/observer_ptr>
+
+#include "materials/DirectionLookup.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+class FmfMaterial;
+class TileStreamer;
+
+class StreamedFmfMaterial : public Material {
+public:
+    StreamedFmfMaterial() = default;
+    StreamedFmfMaterial(const StreamedFmfMaterial& other,
+                        const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+    META_Object(osgBTF, StreamedFmfMaterial)
+
+        std::string methodName() const override {
+        return "bsvtf";
+    }
+    /** The fmf material of what has arrived (snapshot()): the CPU reference of the shader. */
+    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+    void evaluateMeasured(std::size_t texel, float* abrdf) const override;
+    /** This material's own GPU bytes: U and its lookup table (the tile cache is the streamer's,
+     *  shared by every streamed material: TileStreamer::gpuBytes). */
+    MemoryFootprint memory() const override;
+    /** The snapshot's file: an fmf material of what has arrived. */
+    FittedMaterial toFittedMaterial() const override;
+    osg::ref_ptr<osg::StateSet> createStateSet() const override;
+    /** Shares the other material's stream (a shallow copy). */
+    void assignFrom(const Material& other) override;
+
+    /** The fmf material the shader renders now: every texel's Eigen-Texture values from the
+     *  deepest resident tile over it (zeros where its data have not arrived), U with zeros for
+     *  the packets still missing. Rebuilt when the stream changed. Throws Error when the
+     *  streamer is gone. */
+    osg::ref_ptr<FmfMaterial> snapshot() const;
+
+    TileStreamer* streamer() const { return _streamer.get(); }
+    int streamIndex() const { return _index; }
+    /** Where the tile set comes from (a folder or a URL). */
+    const std::string& location() const { return _location; }
+
+protected:
+    ~StreamedFmfMaterial() override = default;
+
+private:
+    friend class TileStreamer;
+    osg::observer_ptr<TileStreamer> _streamer;
+    int _index = -1;
+    std::string _location;
+    DirectionLookup _viewLookup, _lightLookup;
+};
+
+}  // namespace osgBTF

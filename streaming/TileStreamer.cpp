@@ -1,0 +1,590 @@
+#include "streaming/TileStreamer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <list>
+#include <map>
+#include <sstream>
+
+#include <osg/GL>
+#include <osg/GLExtensions>
+#include <osg/Notify>
+#include <osg/State>
+#include <osg/Texture2DArray>
+
+#include "core/Error.h"
+#include "core/Notify.h"
+#include "materials/MaterialState.h"
+#include "materials/fmf/Fmf.h"
+#include "streaming/TileFetcher.h"
+#include "streaming/TileSet.h"
+
+#ifndef GL_HALF_FLOAT
+#define GL_HALF_FLOAT 0x140B
+#endif
+#ifndef GL_RGBA16UI
+#define GL_RGBA16UI 0x8D76
+#endif
+#ifndef GL_RGBA_INTEGER
+#define GL_RGBA_INTEGER 0x8D99
+#endif
+
+namespace osgBTF {
+
+namespace {
+
+using HalfTile = std::vector<Imath::half>;
+constexpr std::uint64_t kPacketKey = std::uint64_t(1) << 48;
+/** Fetch priority of what everything else waits for: the level-0 tiles and U packet 0. */
+constexpr double kFirst = 1e30;
+
+}  // namespace
+
+/** The tiles waiting for the cache texture, uploaded by the draw thread when it applies it. */
+struct TileStreamer::CacheUploads : osg::Texture2D::SubloadCallback {
+    int size = 0, padded = 0, slotsPerRow = 0;
+    mutable std::mutex mutex;
+    mutable std::vector<std::pair<int, std::shared_ptr<const HalfTile>>> pending;
+
+    void load(const osg::Texture2D&, osg::State&) const override {
+        // Undefined texels are never read: the LUTs point at uploaded slots only.
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F_ARB, size, size, 0, GL_RGBA, GL_HALF_FLOAT,
+                     nullptr);
+        flush();
+    }
+    void subload(const osg::Texture2D&, osg::State&) const override { flush(); }
+    void flush() const {
+        std::vector<std::pair<int, std::shared_ptr<const HalfTile>>> uploads;
+        {
+            std::lock_guard<std::mutex> lock(mutex);
+            uploads.swap(pending);
+        }
+        if (uploads.empty()) return;
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+        for (const auto& upload : uploads) {
+            const int x = (upload.first % slotsPerRow) * padded;
+            const int y = (upload.first / slotsPerRow) * padded;
+            glTexSubImage2D(GL_TEXTURE_2D, 0, x, y, padded, padded, GL_RGBA, GL_HALF_FLOAT,
+                            upload.second->data());
+        }
+    }
+    void queue(int slot, std::shared_ptr<const HalfTile> tile) {
+        std::lock_guard<std::mutex> lock(mutex);
+        pending.emplace_back(slot, std::move(tile));
+    }
+};
+
+struct TileStreamer::Stream {
+    enum class State : std::uint8_t { None, Requested, Fetched, Decoded, Failed };
+    osg::ref_ptr<StreamedFmfMaterial> material;
+    std::string location;
+    TileSetIndex index;
+    std::unique_ptr<TileFetcher> fetcher;
+    std::vector<float> u;  ///< the u texture's values (zeros for missing packets)
+    std::vector<State> packet, tile;
+    std::vector<std::shared_ptr<const HalfTile>> decoded;  ///< per tile
+    std::vector<char> uploaded;  ///< per tile: resident and its data in its slot
+    std::map<std::size_t, std::vector<std::uint8_t>> fetched;  ///< tiles awaiting decoding
+    std::list<std::size_t> lru;  ///< decoded tiles not resident, most recent first
+    osg::ref_ptr<osg::Texture2DArray> uTexture, lutTexture;
+    std::uint64_t version = 0;
+    mutable std::uint64_t snapshotVersion = std::numeric_limits<std::uint64_t>::max();
+    mutable osg::ref_ptr<FmfMaterial> snapshot;
+
+    std::string describe(const std::string& path) const { return location + "/" + path; }
+};
+
+TileStreamer::TileStreamer(TileStreamerOptions options)
+    : _options(options),
+      _padded(options.tileSize + 2 * options.padding),
+      _slotsPerRow(_padded > 0 ? options.cacheSize / _padded : 0),
+      _scheduler(std::max(1, _slotsPerRow * _slotsPerRow)) {
+    if (_slotsPerRow < 1)
+        throw Error("tile streamer: a cache of " + std::to_string(options.cacheSize) +
+                    " texels holds no tile of " + std::to_string(_padded) + " texels");
+    _uploads = new CacheUploads;
+    _uploads->size = _slotsPerRow * _padded;
+    _uploads->padded = _padded;
+    _uploads->slotsPerRow = _slotsPerRow;
+    _cache = new osg::Texture2D;
+    _cache->setName("bsvtfCache");
+    _cache->setTextureSize(_uploads->size, _uploads->size);
+    _cache->setInternalFormat(GL_RGBA16F_ARB);
+    _cache->setSourceFormat(GL_RGBA);
+    _cache->setSourceType(GL_HALF_FLOAT);
+    _cache->setFilter(osg::Texture::MIN_FILTER, osg::Texture::NEAREST);
+    _cache->setFilter(osg::Texture::MAG_FILTER, osg::Texture::NEAREST);
+    _cache->setResizeNonPowerOfTwoHint(false);
+    _cache->setUseHardwareMipMapGeneration(false);
+    _cache->setSubloadCallback(_uploads.get());
+    _cache->setDataVariance(osg::Object::DYNAMIC);
+}
+
+TileStreamer::~TileStreamer() = default;
+
+int TileStreamer::materialCount() const {
+    return int(_streams.size());
+}
+
+StreamedFmfMaterial* TileStreamer::material(int index) const {
+    return _streams.at(std::size_t(index))->material.get();
+}
+
+TileVotes TileStreamer::makeVotes() const {
+    return _scheduler.makeVotes();
+}
+
+osg::ref_ptr<StreamedFmfMaterial> TileStreamer::open(const std::string& location) {
+    auto stream = std::make_unique<Stream>();
+    stream->location = location;
+    while (!stream->location.empty() && stream->location.back() == '/') stream->location.pop_back();
+    std::unique_ptr<TileSource> source = openTileSource(stream->location);
+    const FetchResult indexFile = source->fetch(TileSetIndex::kIndexName);
+    const std::string indexName = source->describe(TileSetIndex::kIndexName);
+    if (!indexFile.ok) throw Error(indexFile.error);
+    stream->index =
+        TileSetIndex::parse(std::string(indexFile.data.begin(), indexFile.data.end()), indexName);
+    TileSetIndex& index = stream->index;
+    const TileLayout& layout = index.layout;
+    if (layout.tileSize() != _options.tileSize || layout.padding() != _options.padding)
+        fail(indexName,
+             "tiles of " + std::to_string(layout.tileSize()) + " + " +
+                 std::to_string(layout.padding()) + " padding; this streamer's cache holds " +
+                 std::to_string(_options.tileSize) + " + " + std::to_string(_options.padding));
+    const auto parameter = [&](const std::string& key) {
+        const auto it = index.parameters.find(key);
+        if (it == index.parameters.end()) fail(indexName, "parameter '" + key + "' is missing");
+        return it->second;
+    };
+    if (parameter("model") != "fmf")
+        fail(indexName, "model '" + parameter("model") + "': BSVTF streams fmf materials");
+
+    std::vector<float> weights(layout.tileCount()), norms(layout.tileCount());
+    for (std::size_t i = 0; i < layout.tileCount(); ++i) {
+        weights[i] = index.tiles[i].weight;
+        norms[i] = index.tiles[i].norm;
+    }
+    const int schedulerIndex = _scheduler.addMaterial(layout, weights, norms);
+    const int streamIndex = int(_streams.size());
+
+    const std::size_t groups = std::size_t(layout.groups());
+    stream->packet.assign(groups, Stream::State::None);
+    stream->tile.assign(layout.tileCount(), Stream::State::None);
+    stream->decoded.assign(layout.tileCount(), nullptr);
+    stream->uploaded.assign(layout.tileCount(), 0);
+    const int rows = int(index.lights.size() * 3), views = int(index.views.size());
+    stream->u.assign(groups * std::size_t(rows) * std::size_t(views) * 4, 0.0f);
+    stream->uTexture = createFloatTextureArray(
+        {"u", int(groups), rows, views, 4, MaterialTexture::Half, stream->u});
+
+    const int lutW = layout.tilesX(layout.finestLevel()),
+              lutH = layout.tilesY(layout.finestLevel());
+    stream->lutTexture = newTexture2DArray();
+    stream->lutTexture->setTextureSize(lutW, lutH, int(groups));
+    for (int g = 0; g < int(groups); ++g) {
+        osg::ref_ptr<osg::Image> image = new osg::Image;
+        image->allocateImage(lutW, lutH, 1, GL_RGBA_INTEGER, GL_UNSIGNED_SHORT);
+        image->setInternalTextureFormat(GL_RGBA16UI);
+        std::memset(image->data(), 0, image->getTotalSizeInBytes());
+        stream->lutTexture->setImage(g, image.get());
+    }
+    stream->lutTexture->setInternalFormat(GL_RGBA16UI);
+    stream->lutTexture->setSourceFormat(GL_RGBA_INTEGER);
+    stream->lutTexture->setSourceType(GL_UNSIGNED_SHORT);
+    stream->lutTexture->setFilter(osg::Texture::MIN_FILTER, osg::Texture::NEAREST);
+    stream->lutTexture->setFilter(osg::Texture::MAG_FILTER, osg::Texture::NEAREST);
+    stream->lutTexture->setResizeNonPowerOfTwoHint(false);
+    stream->lutTexture->setUseHardwareMipMapGeneration(false);
+    stream->lutTexture->setDataVariance(osg::Object::DYNAMIC);
+
+    osg::ref_ptr<StreamedFmfMaterial> material = new StreamedFmfMaterial;
+    material->setGeometry(layout.width(), layout.height(), index.views, index.lights);
+    material->_streamer = this;
+    material->_index = streamIndex;
+    material->_location = stream->location;
+    material->sourceFile = stream->location;
+    material->_viewLookup = DirectionLookup(index.views);
+    material->_lightLookup = DirectionLookup(index.lights);
+    stream->material = material;
+
+    TileFetcherOptions fetching;
+    fetching.threads = std::max(1, _options.fetchThreads);
+    stream->fetcher =
+        std::make_unique<TileFetcher>(std::shared_ptr<TileSource>(std::move(source)), fetching);
+    // The level-0 tiles are resident from now on: zeros in their slots until their data
+    // arrive, which are fetched first, with U packet 0.
+    static const auto zeros =
+        std::make_shared<const HalfTile>(std::size_t(_padded) * std::size_t(_padded) * 4);
+    for (int g = 0; g < int(groups); ++g) {
+        const TileId root{g, 0, 0, 0};
+        _uploads->queue(_scheduler.slotOf(schedulerIndex, root), zeros);
+        stream->fetcher->request(layout.index(root), TileSetIndex::tilePath(root), kFirst);
+        stream->tile[layout.index(root)] = Stream::State::Requested;
+        stream->fetcher->request(kPacketKey + std::uint64_t(g), TileSetIndex::uPacketPath(g),
+                                 g == 0 ? kFirst : 0.0);
+        stream->packet[std::size_t(g)] = Stream::State::Requested;
+    }
+    _stats.uPackets += int(groups);
+    {
+        std::lock_guard<std::mutex> lock(_mutex);
+        _streams.push_back(std::move(stream));
+    }
+    writeLut(streamIndex);
+    _scheduler.clearLutDirty(schedulerIndex);
+    _lastOperations = 1;
+    return material;
+}
+
+void TileStreamer::receive() {
+    int budget = _options.decodesPerUpdate;
+    for (std::size_t s = 0; s < _streams.size(); ++s) {
+        Stream& stream = *_streams[s];
+        const TileLayout& layout = stream.index.layout;
+        for (FetchedItem& item : stream.fetcher->takeCompleted()) {
+            const bool isPacket = item.key >= kPacketKey;
+            const std::size_t i = std::size_t(isPacket ? item.key - kPacketKey : item.key);
+            if (!item.result.ok) {
+                // The fetcher has reported it (once per URL); the material renders without it.
+                ++_stats.failures;
+                (isPacket ? stream.packet : stream.tile)[i] = Stream::State::Failed;
+                continue;
+            }
+            _stats.bytesReceived += item.result.data.size();
+            if (!isPacket) {
+                stream.fetched[i] = std::move(item.result.data);
+                stream.tile[i] = Stream::State::Fetched;
+                continue;
+            }
+            const std::string name = stream.describe(item.path);
+            try {
+                const std::vector<float> values =
+                    stream.index.decodeUPacket(int(i), item.result.data, name);
+                const std::size_t groups = std::size_t(layout.groups());
+                const std::size_t rows = values.size() / 4;
+                for (std::size_t r = 0; r < rows; ++r)
+                    for (std::size_t j = 0; j < 4; ++j)
+                        stream.u[(r * groups + i) * 4 + j] = values[r * 4 + j];
+                const std::size_t perView = rows / stream.index.views.size();
+                for (unsigned v = 0; v < stream.uTexture->getNumImages(); ++v) {
+                    osg::Image* image = stream.uTexture->getImage(v);
+                    auto* data = reinterpret_cast<float*>(image->data());
+                    std::copy(stream.u.begin() + std::ptrdiff_t(v * perView * groups * 4),
+                              stream.u.begin() + std::ptrdiff_t((v + 1) * perView * groups * 4),
+                              data);
+                    image->dirty();
+                }
+                stream.packet[i] = Stream::State::Decoded;
+                ++_stats.uPacketsReceived;
+                ++stream.version;
+            } catch (const Error& e) {
+                OSGBTF_NOTIFY(osg::WARN, "osgBTF: " << e.what());
+                stream.packet[i] = Stream::State::Failed;
+                ++_stats.failures;
+            }
+        }
+        // Decode what has its parent (coarse levels first: the map's order is level-major).
+        for (auto it = stream.fetched.begin(); it != stream.fetched.end() && budget > 0;) {
+            const std::size_t i = it->first;
+            const TileId t = layout.tileAt(i);
+            const Imath::half* parent = nullptr;
+            if (t.level > 0) {
+                const std::size_t p = layout.index(TileLayout::parent(t));
+                if (!stream.decoded[p]) {
+                    // The parent left the RAM cache (or failed): fetch it again first.
+                    if (stream.tile[p] == Stream::State::None) {
+                        stream.fetcher->request(p, TileSetIndex::tilePath(layout.tileAt(p)),
+                                                kFirst);
+                        stream.tile[p] = Stream::State::Requested;
+                    }
+                    if (stream.tile[p] == Stream::State::Failed) {
+                        stream.tile[i] = Stream::State::Failed;
+                        it = stream.fetched.erase(it);
+                        continue;
+                    }
+                    ++it;
+                    continue;
+                }
+                parent = stream.decoded[p]->data();
+            }
+            const std::string name = stream.describe(TileSetIndex::tilePath(t));
+            try {
+                stream.decoded[i] = std::make_shared<const HalfTile>(
+                    stream.index.decodeTile(t, it->second, parent, name));
+                stream.tile[i] = Stream::State::Decoded;
+                ++_stats.tilesDecoded;
+                const int slot = _scheduler.slotOf(int(s), t);
+                if (slot >= 0) {
+                    // A resident tile without its data (a level-0 tile): upload them now.
+                    _uploads->queue(slot, stream.decoded[i]);
+                    stream.uploaded[i] = 1;
+                    ++_stats.uploads;
+                    ++stream.version;
+                } else {
+                    stream.lru.push_front(i);
+                }
+            } catch (const Error& e) {
+                OSGBTF_NOTIFY(osg::WARN, "osgBTF: " << e.what());
+                stream.tile[i] = Stream::State::Failed;
+                ++_stats.failures;
+            }
+            --budget;
+            it = stream.fetched.erase(it);
+        }
+    }
+}
+
+void TileStreamer::applyOperations(const std::vector<TileOperation>& operations) {
+    for (const TileOperation& op : operations) {
+        Stream& stream = *_streams[std::size_t(op.material)];
+        const std::size_t i = stream.index.layout.index(op.tile);
+        ++stream.version;
+        if (op.kind == TileOperation::Kind::Add) {
+            stream.lru.remove(i);
+            _uploads->queue(op.slot, stream.decoded[i]);
+            stream.uploaded[i] = 1;
+            ++_stats.uploads;
+        } else {
+            stream.uploaded[i] = 0;
+            if (stream.decoded[i]) stream.lru.push_front(i);
+        }
+    }
+    // The RAM cache: drop the least recently used decoded tiles that are not resident.
+    const std::size_t tileBytes = std::size_t(_padded) * std::size_t(_padded) * 4 * 2;
+    std::size_t held = 0;
+    for (const auto& stream : _streams) held += stream->lru.size() * tileBytes;
+    for (auto& stream : _streams)
+        while (held > _options.ramBytes && !stream->lru.empty()) {
+            const std::size_t i = stream->lru.back();
+            stream->lru.pop_back();
+            stream->decoded[i] = nullptr;
+            stream->tile[i] = Stream::State::None;
+            stream->fetcher->forget(i);
+            held -= tileBytes;
+        }
+    for (std::size_t s = 0; s < _streams.size(); ++s)
+        if (_scheduler.lutDirty(int(s))) {
+            writeLut(int(s));
+            _scheduler.clearLutDirty(int(s));
+        }
+}
+
+void TileStreamer::writeLut(int index) {
+    Stream& stream = *_streams[std::size_t(index)];
+    for (int g = 0; g < stream.index.layout.groups(); ++g) {
+        const std::vector<LutEntry>& lut = _scheduler.lut(index, g);
+        osg::Image* image = stream.lutTexture->getImage(g);
+        auto* texels = reinterpret_cast<std::uint16_t*>(image->data());
+        for (std::size_t e = 0; e < lut.size(); ++e) {
+            texels[4 * e + 0] = std::uint16_t(lut[e].slot % _slotsPerRow);
+            texels[4 * e + 1] = std::uint16_t(lut[e].slot / _slotsPerRow);
+            texels[4 * e + 2] = std::uint16_t(lut[e].level);
+            texels[4 * e + 3] = 0;
+        }
+        image->dirty();
+    }
+}
+
+void TileStreamer::requestWanted(const TileVotes& votes) {
+    const std::size_t ahead = std::size_t(std::max(1, _options.requestsAhead)) *
+                              std::max<std::size_t>(1, _streams.size());
+    for (const auto& [m, t] : _scheduler.wanted(votes, ahead)) {
+        Stream& stream = *_streams[std::size_t(m)];
+        const std::size_t i = stream.index.layout.index(t);
+        if (stream.tile[i] == Stream::State::None || stream.tile[i] == Stream::State::Requested) {
+            // Re-requesting updates the priority of a request still waiting.
+            stream.fetcher->request(i, TileSetIndex::tilePath(t), _scheduler.priority(m, t, votes));
+            if (stream.tile[i] == Stream::State::None) ++_stats.requests;
+            stream.tile[i] = Stream::State::Requested;
+        }
+    }
+    for (std::size_t s = 0; s < _streams.size(); ++s) {
+        Stream& stream = *_streams[s];
+        for (int g = 0; g < stream.index.layout.groups(); ++g)
+            if (stream.packet[std::size_t(g)] == Stream::State::Requested)
+                stream.fetcher->request(
+                    kPacketKey + std::uint64_t(g), TileSetIndex::uPacketPath(g),
+                    g == 0 ? kFirst : _scheduler.groupPriority(int(s), g, votes));
+    }
+}
+
+std::size_t TileStreamer::update(const TileVotes& votes) {
+    receive();
+    std::vector<TileOperation> operations;
+    {
+        std::lock_guard<std::mutex> lock(_mutex);
+        operations = _scheduler.step(
+            votes,
+            [this](int m, const TileId& t) {
+                return bool(_streams[std::size_t(m)]
+                                ->decoded[_streams[std::size_t(m)]->index.layout.index(t)]);
+            },
+            _options.uploadsPerUpdate);
+        applyOperations(operations);
+    }
+    requestWanted(votes);
+    _stats.operations += operations.size();
+    _lastOperations = operations.size();
+    return operations.size();
+}
+
+bool TileStreamer::settled() const {
+    if (_lastOperations != 0) return false;
+    // Requested and not yet taken in: pending, in flight, or delivered to the completed list.
+    const auto waiting = [](const std::vector<Stream::State>& states) {
+        return std::find(states.begin(), states.end(), Stream::State::Requested) != states.end();
+    };
+    for (const auto& stream : _streams)
+        if (!stream->fetched.empty() || waiting(stream->tile) || waiting(stream->packet))
+            return false;
+    return true;
+}
+
+StreamingStats TileStreamer::stats() const {
+    StreamingStats s = _stats;
+    s.residentTiles = _scheduler.used();
+    return s;
+}
+
+std::uint64_t TileStreamer::materialGpuBytes(int index) const {
+    const Stream& stream = *_streams.at(std::size_t(index));
+    const TileLayout& layout = stream.index.layout;
+    const std::uint64_t lut = std::uint64_t(layout.tilesX(layout.finestLevel())) *
+                              std::uint64_t(layout.tilesY(layout.finestLevel())) *
+                              std::uint64_t(layout.groups()) * 8;
+    return std::uint64_t(stream.u.size()) * 2 + lut;
+}
+
+std::uint64_t TileStreamer::gpuBytes() const {
+    std::uint64_t bytes = std::uint64_t(_uploads->size) * std::uint64_t(_uploads->size) * 8;
+    for (int i = 0; i < materialCount(); ++i) bytes += materialGpuBytes(i);
+    return bytes;
+}
+
+osg::ref_ptr<FmfMaterial> TileStreamer::snapshot(int index) const {
+    std::lock_guard<std::mutex> lock(_mutex);
+    const Stream& stream = *_streams.at(std::size_t(index));
+    if (stream.snapshot && stream.snapshotVersion == stream.version) return stream.snapshot;
+    const TileLayout& layout = stream.index.layout;
+    const int W = layout.width(), H = layout.height(), T = layout.tileSize(), P = layout.padding(),
+              side = layout.paddedTileSize(), L = layout.finestLevel();
+    std::vector<float> sxv(std::size_t(W) * std::size_t(H) * std::size_t(layout.groups()) * 4,
+                           0.0f);
+    for (int g = 0; g < layout.groups(); ++g) {
+        const std::vector<LutEntry>& lut = _scheduler.lut(index, g);
+        const int lutW = layout.tilesX(L);
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                // What bsvtf.frag's fmfEigenTexture reads for this texel.
+                const LutEntry e = lut[std::size_t(y / T) * std::size_t(lutW) + std::size_t(x / T)];
+                const int lx = x >> (L - e.level), ly = y >> (L - e.level);
+                const TileId t{g, e.level, lx / T, ly / T};
+                const std::size_t i = layout.index(t);
+                if (!stream.uploaded[i]) continue;
+                const Imath::half* v =
+                    stream.decoded[i]->data() + (std::size_t(ly - t.y * T + P) * std::size_t(side) +
+                                                 std::size_t(lx - t.x * T + P)) *
+                                                    4;
+                float* out = sxv.data() +
+                             ((std::size_t(g) * std::size_t(H) + std::size_t(y)) * std::size_t(W) +
+                              std::size_t(x)) *
+                                 4;
+                for (int c = 0; c < 4; ++c) out[c] = float(v[c]);
+            }
+    }
+    stream.snapshot = stream.index.material(stream.u, std::move(sxv), stream.location);
+    stream.snapshotVersion = stream.version;
+    return stream.snapshot;
+}
+
+osg::ref_ptr<osg::StateSet> TileStreamer::createStateSet(
+    const StreamedFmfMaterial& material) const {
+    const Stream& stream = *_streams.at(std::size_t(material.streamIndex()));
+    const TileSetIndex& index = stream.index;
+    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
+    // The LUT and U change while it renders: the viewer must not update them during a draw.
+    stateSet->setDataVariance(osg::Object::DYNAMIC);
+    addCommonState(*stateSet, material);
+    addTexture(*stateSet, stream.uTexture.get(), "fmfU", 0);
+    addTexture(*stateSet, _cache.get(), "bsvtfCache", 1);
+    material._viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
+    material._lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
+    addTexture(*stateSet, stream.lutTexture.get(), "bsvtfLut", 4);
+    const auto number = [&](const std::string& key) {
+        const auto it = index.parameters.find(key);
+        if (it == index.parameters.end()) return 0.0f;
+        std::istringstream in(it->second);
+        float v = 0;
+        in >> v;
+        return v;
+    };
+    stateSet->addUniform(new osg::Uniform("fmfShared", 1));
+    stateSet->addUniform(new osg::Uniform("fmfGroups", index.layout.groups(), 0, 0));
+    stateSet->addUniform(new osg::Uniform("fmfLayerOffset", 0, 0, 0));
+    stateSet->addUniform(new osg::Uniform("fmfColorModel", 0));
+    stateSet->addUniform(new osg::Uniform("fmfDrr", number("dynamicRangeReduction") != 0 ? 1 : 0));
+    stateSet->addUniform(new osg::Uniform("fmfEps", number("eps")));
+    stateSet->addUniform(new osg::Uniform("fmfCosine", number("cosine") != 0 ? 1 : 0));
+    stateSet->addUniform(new osg::Uniform("bsvtfTile", index.layout.tileSize(),
+                                          index.layout.padding(), index.layout.finestLevel()));
+    stateSet->addUniform(new osg::Uniform("bsvtfMaterialId", material.streamIndex()));
+    return stateSet;
+}
+
+// ---- StreamedFmfMaterial -----------------------------------------------------------------------
+
+StreamedFmfMaterial::StreamedFmfMaterial(const StreamedFmfMaterial& other,
+                                         const osg::CopyOp& copyop)
+    : Material(other, copyop),
+      _streamer(other._streamer),
+      _index(other._index),
+      _location(other._location),
+      _viewLookup(other._viewLookup),
+      _lightLookup(other._lightLookup) {}
+
+void StreamedFmfMaterial::assignFrom(const Material& other) {
+    const auto& same = assignCommon<StreamedFmfMaterial>(other);
+    _streamer = same._streamer;
+    _index = same._index;
+    _location = same._location;
+    _viewLookup = same._viewLookup;
+    _lightLookup = same._lightLookup;
+}
+
+osg::ref_ptr<FmfMaterial> StreamedFmfMaterial::snapshot() const {
+    osg::ref_ptr<TileStreamer> streamer;
+    if (!_streamer.lock(streamer))
+        fail(_location, "the tile streamer of this streamed material no longer exists");
+    return streamer->snapshot(_index);
+}
+
+glm::vec3 StreamedFmfMaterial::evaluate(int x, int y, const glm::vec3& view,
+                                        const glm::vec3& light) const {
+    return snapshot()->evaluate(x, y, view, light);
+}
+
+void StreamedFmfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
+    snapshot()->evaluateMeasured(texel, abrdf);
+}
+
+MemoryFootprint StreamedFmfMaterial::memory() const {
+    osg::ref_ptr<TileStreamer> streamer;
+    if (!_streamer.lock(streamer)) return {};
+    const std::uint64_t bytes = streamer->materialGpuBytes(_index);
+    return {0.0, double(bytes) / double(std::max<std::size_t>(1, texelCount())), bytes, bytes};
+}
+
+FittedMaterial StreamedFmfMaterial::toFittedMaterial() const {
+    return snapshot()->toFittedMaterial();
+}
+
+osg::ref_ptr<osg::StateSet> StreamedFmfMaterial::createStateSet() const {
+    osg::ref_ptr<TileStreamer> streamer;
+    if (!_streamer.lock(streamer))
+        fail(_location, "the tile streamer of this streamed material no longer exists");
+    return streamer->createStateSet(*this);
+}
+
+}  // namespace osgBTF

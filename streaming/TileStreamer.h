@@ -1,0 +1,110 @@
+// osgBTF BSVTF runtime (seed 003 sections 3, 5, 6): one tile cache texture shared by every
+// streamed material, the scheduler that fills it, and the fetchers that bring the files.
+//
+// Per update (StreamingGroup calls update() in the update traversal with the feedback's votes):
+//   1. fetched files in: U packets go straight into the material's U texture; tiles are checked
+//      (size, CRC) and decoded against their decoded parent (within a per-update budget) into
+//      RAM, where they stay while resident and in an LRU of the others;
+//   2. one scheduler step (streaming/TileScheduler.h): adds, swaps, removals; the added tiles'
+//      data are queued for upload (at most uploadsPerUpdate) and the changed LUTs rewritten;
+//   3. requests out: the scheduler's most wanted tiles whose data are not in RAM (their parents'
+//      first when those were dropped), and the U packets by seed 003's group priority, each
+//      through the material's fetcher (a folder or HTTP, streaming/TileFetcher.h).
+// A fetch that fails (404, 500, timeout, a truncated or corrupted file) is reported once and
+// not retried; the material keeps rendering from what it has. The GL side: the cache texture
+// uploads the queued tiles when it is applied (one graphics context).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <osg/Referenced>
+#include <osg/Texture2D>
+#include <osg/ref_ptr>
+
+#include "streaming/StreamedMaterial.h"
+#include "streaming/TileScheduler.h"
+
+namespace osgBTF {
+
+struct TileStreamerOptions {
+    /** Every tile set this streamer opens must have this tile size and padding (the cache's
+     *  slots are (T + 2 P)^2 texels). */
+    int tileSize = TileLayout::kDefaultTileSize;
+    int padding = TileLayout::kDefaultPadding;
+    /** Texels per side of the RGBA16F cache (seed 003: 4032 = 56 slots of 72, 124 MiB). */
+    int cacheSize = 4032;
+    int uploadsPerUpdate = 32;  ///< tiles added to the cache per update (the upload budget)
+    int decodesPerUpdate = 64;  ///< tiles decoded per update
+    int requestsAhead = 64;     ///< wanted tiles requested at a time, per material
+    int fetchThreads = 2;       ///< per material
+    std::size_t ramBytes = std::size_t(512) << 20;  ///< decoded tiles kept that are not resident
+};
+
+struct StreamingStats {
+    std::uint64_t bytesReceived = 0;  ///< tiles, packets and indexes, as fetched
+    std::uint64_t tilesDecoded = 0, uploads = 0, operations = 0, requests = 0, failures = 0;
+    int residentTiles = 0;
+    int uPacketsReceived = 0, uPackets = 0;
+};
+
+class TileStreamer : public osg::Referenced {
+public:
+    /** Throws Error when the cache holds no tile (cacheSize < the padded tile side). */
+    explicit TileStreamer(TileStreamerOptions options = {});
+
+    /** Opens the tile set at `location` (a folder, or an http:// or https:// URL of the folder):
+     *  reads its index now (throws Error naming it and the problem, e.g. a missing index or a
+     *  tile size other than the streamer's), registers the material with the scheduler (its
+     *  level-0 tiles resident at once) and requests its first data. */
+    osg::ref_ptr<StreamedFmfMaterial> open(const std::string& location);
+    int materialCount() const;
+    StreamedFmfMaterial* material(int index) const;
+
+    TileVotes makeVotes() const;
+    /** One update (see the top of this file); returns the scheduler's operation count. */
+    std::size_t update(const TileVotes& votes);
+    /** True when the last update changed nothing and nothing is in flight or waits for
+     *  decoding: for a static camera, the streamed scene has converged. */
+    bool settled() const;
+
+    osg::Texture2D* cacheTexture() const { return _cache.get(); }
+    int cacheSlotsPerRow() const { return _slotsPerRow; }
+    const TileScheduler& scheduler() const { return _scheduler; }
+    const TileStreamerOptions& options() const { return _options; }
+    StreamingStats stats() const;
+    /** GPU bytes: the cache plus every material's U and LUT textures. */
+    std::uint64_t gpuBytes() const;
+
+    /** StreamedFmfMaterial's data, by material index (see there). */
+    osg::ref_ptr<FmfMaterial> snapshot(int index) const;
+    osg::ref_ptr<osg::StateSet> createStateSet(const StreamedFmfMaterial& material) const;
+    std::uint64_t materialGpuBytes(int index) const;
+
+    struct Stream;  // TileStreamer.cpp
+
+protected:
+    ~TileStreamer() override;
+
+private:
+    void applyOperations(const std::vector<TileOperation>& operations);
+    void receive();
+    void requestWanted(const TileVotes& votes);
+    void writeLut(int index);
+
+    TileStreamerOptions _options;
+    int _padded = 0, _slotsPerRow = 0;
+    TileScheduler _scheduler;
+    osg::ref_ptr<osg::Texture2D> _cache;
+    struct CacheUploads;
+    osg::ref_ptr<CacheUploads> _uploads;
+    std::vector<std::unique_ptr<Stream>> _streams;
+    std::size_t _lastOperations = 1;
+    StreamingStats _stats;
+    mutable std::mutex _mutex;  // _streams' snapshots (evaluate may run beside an update)
+};
+
+}  // namespace osgBTF
