@@ -5,12 +5,15 @@
 
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 
+#include "core/ImageSimilarity.h"
 #include "materials/fmf/Fmf.h"
 #include "streaming/TileBuilder.h"
 #include "streaming/TileLayout.h"
 #include "streaming/TileSet.h"
 #include "tests/RandomFactors.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
 using namespace osgBTF;
@@ -262,6 +265,82 @@ TEST(TileBuilder, AllFinestRawTilesRenderExactlyTheFmfMaterial) {
         streamed->evaluateMeasured(texel, b.data());
         ASSERT_EQ(a, b) << "texel " << texel;
     }
+}
+
+TEST(ImageSimilarity, RefusesMismatchedImagesAndMatchesTheFormulaOnConstantImages) {
+    EXPECT_EQ(errorOf([] {
+                  structuralSimilarity({1, 2}, {1}, 2, 1, 1, 1.0);
+              }),
+              "SSIM: the images must both hold 2 x 1 x 1 values");
+    const std::vector<float> noise = {0.1f, 0.7f, 0.3f, 0.9f, 0.2f, 0.5f, 0.8f, 0.4f, 0.6f};
+    EXPECT_DOUBLE_EQ(structuralSimilarity(noise, noise, 3, 3, 1, 1.0), 1.0);
+    // Constant images have no variance: SSIM = (2 ma mb + C1) / (ma^2 + mb^2 + C1) with
+    // C1 = (0.01 x range)^2 = 1e-4: (0.16 + 1e-4) / (0.2 + 1e-4).
+    const std::vector<float> a(16 * 16, 0.2f), b(16 * 16, 0.4f);
+    EXPECT_NEAR(structuralSimilarity(a, b, 16, 16, 1, 1.0), 0.1601 / 0.2001, 1e-6);
+}
+
+TEST(TileBuilder, DctTilesOfTheSampleAreFourTimesSmallerAndRenderWithSsimAbove099) {
+    // The built-in sample's fmf fit, 3 levels of 16-texel tiles (seed 003: 6:1 "with no
+    // perceivable artifacts"; the issue asks >= 4:1 at SSIM >= 0.99 against uncompressed tiles).
+    const MeasuredBtf btf = test::smallSampleBtf(64);
+    const osg::ref_ptr<FmfMaterial> fmf = FmfMaterial::fit(btf, FitOptions::parse("components=8"));
+    test::TempDir dir;
+    TileBuildOptions raw, dct;
+    raw.codec = "raw";
+    raw.tileSize = dct.tileSize = 16;
+    const TileBuildReport rawReport = buildTileSet(*fmf, dir.file("raw"), raw);
+    const TileBuildReport dctReport = buildTileSet(*fmf, dir.file("dct"), dct);
+    const double ratio = double(rawReport.storedTileBytes) / double(dctReport.storedTileBytes);
+    std::cout << "quality " << dct.quality << ": " << rawReport.storedTileBytes << " -> "
+              << dctReport.storedTileBytes << " bytes of tiles (" << ratio
+              << ":1), largest tile error " << dctReport.largestTileError << "\n";
+    EXPECT_GE(ratio, 4.0);
+    // No drift: every decoded texel of every level within the codec's bound of its own tile.
+    const TileSetIndex index =
+        TileSetIndex::parse(test::readTextFile(dir.file("dct/index.bsvtf")), "index");
+    EXPECT_LE(dctReport.largestTileError,
+              tileCodecErrorBound(index.codecSettings, 255.0f * index.codecSettings.unit));
+
+    const osg::ref_ptr<FmfMaterial> exact = loadTileSetFinest(dir.file("raw"));
+    const osg::ref_ptr<FmfMaterial> coded = loadTileSetFinest(dir.file("dct"));
+    const std::size_t pairs[][2] = {{0, 0}, {4, 6}, {8, 2}};  // of the 9 x 9 directions
+    for (const auto& pair : pairs) {
+        const glm::vec3 view = btf.views().vector(pair[0]), light = btf.lights().vector(pair[1]);
+        std::vector<float> a, b;
+        float peak = 0;
+        for (int y = 0; y < 64; ++y)
+            for (int x = 0; x < 64; ++x) {
+                const glm::vec3 va = exact->evaluate(x, y, view, light);
+                const glm::vec3 vb = coded->evaluate(x, y, view, light);
+                for (int c = 0; c < 3; ++c) {
+                    a.push_back(va[c]);
+                    b.push_back(vb[c]);
+                    peak = std::max(peak, va[c]);
+                }
+            }
+        const double ssim = structuralSimilarity(a, b, 64, 64, 3, peak);
+        std::cout << "view " << pair[0] << ", light " << pair[1] << ": SSIM " << ssim << "\n";
+        EXPECT_GE(ssim, 0.99) << "view " << pair[0] << ", light " << pair[1];
+    }
+}
+
+TEST(TilesCommand, RefusesOtherMethodsAndWritesTheSetOfAnFmfMaterial) {
+    test::TempDir dir;
+    const std::string lambert = dir.file("l.btfmat"), fmf = dir.file("f.btfmat");
+    saveMaterial(*findMethod("lambert").fit(test::smallSampleBtf(8), FitOptions()), lambert);
+    saveMaterial(*formulaMaterial(), fmf);
+    const std::string tool = std::string(OSGBTF_BTF_TOOL) + " --no-progress tiles ";
+    test::CommandResult r = test::runCommand(tool + lambert + " -o " + dir.file("out"));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_EQ(r.output, "btf: error: " + lambert +
+                            ": is a 'lambert' material; BSVTF tiles an fmf material (`btf fit IN "
+                            "-m fmf -o M.btfmat`, or a UBO2014 FMF .btf)\n");
+    EXPECT_FALSE(std::filesystem::exists(dir.file("out")));
+    r = test::runCommand(tool + fmf + " -o " + dir.file("out") + " --tile-size 8 --codec raw");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("1 groups x 3 levels, 9 tiles"), std::string::npos) << r.output;
+    EXPECT_EQ(errorOf([&] { loadTileSetFinest(dir.file("out")); }), "no error");
 }
 
 }  // namespace
