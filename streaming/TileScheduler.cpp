@@ -145,7 +145,6 @@ void TileScheduler::Material::setSlot(const TileId& t, int newSlot) {
             solidChildren[p] = std::uint8_t(int(solidChildren[p]) + solidDelta);
             solidChanged = parentWas != (slot[p] >= 0 || covered(p));
         }
-        if (!solidChanged && belowDelta == 0) break;
     }
 }
 

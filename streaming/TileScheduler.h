@@ -124,8 +124,9 @@ public:
     /** One update (seed 003 5.1, 5.2): adds by priority while slots are free, then evictions
      *  while cheaper than the best add; at most maxAdds Add operations (the upload budget; removes
      *  are free). `available` empty means every tile is available. `votes` may hold fewer
-     *  materials than the scheduler (the others have no votes). Throws Error for maxAdds < 0, or
-     *  votes of more materials or of another tile grid than the scheduler's. */
+     *  materials than the scheduler (the others have no votes). Slots: the lowest free one first,
+     *  a freed one is the next handed out. Throws Error for maxAdds < 0, or votes of more
+     *  materials or of another tile grid than the scheduler's. */
     std::vector<TileOperation> step(const TileVotes& votes, const Availability& available,
                                     int maxAdds);
 
@@ -147,7 +148,8 @@ public:
     double priority(int material, const TileId& tile, const TileVotes& votes) const;
     /** The add candidates (non-resident, parent resident, not covered, P > 0) of highest P,
      *  available or not: the fetcher requests those not yet decoded. At most maxCount, best
-     *  first. */
+     *  first. (A swap's T' is not listed: it is an ancestor of resident tiles, whose data the
+     *  runtime keeps anyway to decode them, seed 003 section 6.) */
     std::vector<std::pair<int, TileId>> wanted(const TileVotes& votes, std::size_t maxCount) const;
     /** Sum over the group's resident tiles of v ||T||_F^2 / T^2: the priority of the group's U
      *  packet (seed 003 section 6). */

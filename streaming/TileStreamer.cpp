@@ -97,21 +97,10 @@ struct TileStreamer::Stream {
     std::string describe(const std::string& path) const { return location + "/" + path; }
 };
 
-TileStreamer::TileStreamer(TileStreamerOptions options)
-    : _options(options),
-      _padded(options.tileSize + 2 * options.padding),
-      _slotsPerRow(_padded > 0 ? options.cacheSize / _padded : 0),
-      _scheduler(std::max(1, _slotsPerRow * _slotsPerRow)) {
-    if (_slotsPerRow < 1)
-        throw Error("tile streamer: a cache of " + std::to_string(options.cacheSize) +
-                    " texels holds no tile of " + std::to_string(_padded) + " texels");
+TileStreamer::TileStreamer(TileStreamerOptions options) : _options(options), _scheduler(1) {
     _uploads = new CacheUploads;
-    _uploads->size = _slotsPerRow * _padded;
-    _uploads->padded = _padded;
-    _uploads->slotsPerRow = _slotsPerRow;
     _cache = new osg::Texture2D;
     _cache->setName("bsvtfCache");
-    _cache->setTextureSize(_uploads->size, _uploads->size);
     _cache->setInternalFormat(GL_RGBA16F_ARB);
     _cache->setSourceFormat(GL_RGBA);
     _cache->setSourceType(GL_HALF_FLOAT);
@@ -121,6 +110,23 @@ TileStreamer::TileStreamer(TileStreamerOptions options)
     _cache->setUseHardwareMipMapGeneration(false);
     _cache->setSubloadCallback(_uploads.get());
     _cache->setDataVariance(osg::Object::DYNAMIC);
+    if (options.tileSize > 0) configure(options.tileSize, options.padding);
+}
+
+void TileStreamer::configure(int tileSize, int padding) {
+    const int padded = tileSize + 2 * padding, slotsPerRow = _options.cacheSize / padded;
+    if (slotsPerRow < 1)
+        throw Error("tile streamer: a cache of " + std::to_string(_options.cacheSize) +
+                    " texels holds no tile of " + std::to_string(padded) + " texels");
+    _options.tileSize = tileSize;
+    _options.padding = padding;
+    _padded = padded;
+    _slotsPerRow = slotsPerRow;
+    _scheduler = TileScheduler(slotsPerRow * slotsPerRow);
+    _uploads->size = slotsPerRow * padded;
+    _uploads->padded = padded;
+    _uploads->slotsPerRow = slotsPerRow;
+    _cache->setTextureSize(_uploads->size, _uploads->size);
 }
 
 TileStreamer::~TileStreamer() = default;
@@ -149,6 +155,7 @@ osg::ref_ptr<StreamedFmfMaterial> TileStreamer::open(const std::string& location
         TileSetIndex::parse(std::string(indexFile.data.begin(), indexFile.data.end()), indexName);
     TileSetIndex& index = stream->index;
     const TileLayout& layout = index.layout;
+    if (_padded == 0) configure(layout.tileSize(), layout.padding());
     if (layout.tileSize() != _options.tileSize || layout.padding() != _options.padding)
         fail(indexName,
              "tiles of " + std::to_string(layout.tileSize()) + " + " +
@@ -455,6 +462,14 @@ std::uint64_t TileStreamer::materialGpuBytes(int index) const {
                               std::uint64_t(layout.tilesY(layout.finestLevel())) *
                               std::uint64_t(layout.groups()) * 8;
     return std::uint64_t(stream.u.size()) * 2 + lut;
+}
+
+std::uint64_t TileStreamer::plainFmfGpuBytes(int index) const {
+    const Stream& stream = *_streams.at(std::size_t(index));
+    const TileLayout& layout = stream.index.layout;
+    return std::uint64_t(stream.u.size()) * 2 + std::uint64_t(layout.width()) *
+                                                    std::uint64_t(layout.height()) *
+                                                    std::uint64_t(layout.groups()) * 8;
 }
 
 std::uint64_t TileStreamer::gpuBytes() const {

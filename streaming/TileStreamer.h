@@ -32,9 +32,9 @@ namespace osgBTF {
 
 struct TileStreamerOptions {
     /** Every tile set this streamer opens must have this tile size and padding (the cache's
-     *  slots are (T + 2 P)^2 texels). */
-    int tileSize = TileLayout::kDefaultTileSize;
-    int padding = TileLayout::kDefaultPadding;
+     *  slots are (T + 2 P)^2 texels); tileSize 0: those of the first tile set opened. */
+    int tileSize = 0;
+    int padding = 0;
     /** Texels per side of the RGBA16F cache (seed 003: 4032 = 56 slots of 72, 124 MiB). */
     int cacheSize = 4032;
     int uploadsPerUpdate = 32;  ///< tiles added to the cache per update (the upload budget)
@@ -53,7 +53,8 @@ struct StreamingStats {
 
 class TileStreamer : public osg::Referenced {
 public:
-    /** Throws Error when the cache holds no tile (cacheSize < the padded tile side). */
+    /** Throws Error when the cache holds no tile (cacheSize < the padded tile side; with
+     *  tileSize 0 open() checks that). */
     explicit TileStreamer(TileStreamerOptions options = {});
 
     /** Opens the tile set at `location` (a folder, or an http:// or https:// URL of the folder):
@@ -83,6 +84,9 @@ public:
     osg::ref_ptr<FmfMaterial> snapshot(int index) const;
     osg::ref_ptr<osg::StateSet> createStateSet(const StreamedFmfMaterial& material) const;
     std::uint64_t materialGpuBytes(int index) const;
+    /** What the same material takes on the GPU as a plain fmf material: half U and SxV, the
+     *  textures FmfMaterial uploads (seed 003 Table 2's FMF column). */
+    std::uint64_t plainFmfGpuBytes(int index) const;
 
     struct Stream;  // TileStreamer.cpp
 
@@ -94,6 +98,8 @@ private:
     void receive();
     void requestWanted(const TileVotes& votes);
     void writeLut(int index);
+    /** Sizes the cache's slots and the scheduler for tiles of T + 2 P texels. */
+    void configure(int tileSize, int padding);
 
     TileStreamerOptions _options;
     int _padded = 0, _slotsPerRow = 0;

@@ -43,6 +43,7 @@
 #include "examples/btfviewer/EnvironmentControl.h"
 #include "scene/MaterialNode.h"
 #include "scene/ShadowTerminator.h"
+#include "streaming/StreamingGroup.h"
 
 namespace {
 
@@ -217,8 +218,28 @@ public:
              << "  [x]"
              << "   stats [s]  help [h]";
         if (environment) text << "\n" << environment->status();
+        if (streaming) text << "\n" << streamingStatus();
         hud->setText(text.str());
     }
+
+    /** BSVTF (--stream): what has arrived and the GPU memory it takes, against plain fmf. */
+    std::string streamingStatus() const {
+        const osgBTF::TileStreamer& streamer = *streaming->streamer();
+        const osgBTF::StreamingStats s = streamer.stats();
+        std::ostringstream text;
+        text << std::fixed << std::setprecision(1) << "streaming: " << streamer.materialCount()
+             << " materials, " << s.residentTiles << " of " << streamer.scheduler().capacity()
+             << " cache tiles, U " << s.uPacketsReceived << "/" << s.uPackets << ", "
+             << double(s.bytesReceived) / 1048576.0 << " MiB received"
+             << (s.failures ? ", " + std::to_string(s.failures) + " failed" : std::string())
+             << (streaming->settled() ? ", converged" : "")
+             << "\nGPU: " << double(streamer.gpuBytes()) / 1048576.0
+             << " MiB (as plain fmf: " << double(plainFmfBytes) / 1048576.0 << " MiB)";
+        return text.str();
+    }
+
+    osg::ref_ptr<osgBTF::StreamingGroup> streaming;
+    std::uint64_t plainFmfBytes = 0;
 
 protected:
     ~ViewerState() override = default;
@@ -231,6 +252,10 @@ public:
     bool handle(const osgGA::GUIEventAdapter& ea, osgGA::GUIActionAdapter&) override {
         using GEA = osgGA::GUIEventAdapter;
         switch (ea.getEventType()) {
+            case GEA::FRAME:
+                // The streaming line changes as tiles arrive, without any event.
+                if (_state->streaming) _state->updateHud();
+                return false;
             case GEA::KEYDOWN:
                 return handleKey(ea.getKey());
             case GEA::PUSH:
@@ -528,6 +553,13 @@ int run(osg::ArgumentParser& arguments) {
         "--env: illumination PCA (seed 004 5.3): compute A rotations up front (A times the "
         "work), then rebuild any rotation at once from 5 components (default 0: each rotation "
         "computed exactly; the seed uses 30)");
+    usage->addCommandLineOption(
+        "--stream LOCATION",
+        "A BSVTF tile set (`btf tiles`; a folder or an http:// URL of one) streamed into the "
+        "shared tile cache, on the model like a material file; repeatable (seed 003)");
+    usage->addCommandLineOption("--cache-size N",
+                                "--stream: texels per side of the RGBA16F tile cache (default "
+                                "4032: 3136 tiles, 124 MiB)");
     usage->addCommandLineOption("-O \"OPTIONS\"", "osgDB options for the plugins");
     usage->addCommandLineOption("-h, --help", "This text and the keys");
 
@@ -572,6 +604,11 @@ int run(osg::ArgumentParser& arguments) {
     int envSamples = 0;
     while (arguments.read("--env-samples", envSamples)) {
     }
+    std::vector<std::string> streams;
+    for (std::string location; arguments.read("--stream", location);) streams.push_back(location);
+    int cacheSize = osgBTF::TileStreamerOptions().cacheSize;
+    while (arguments.read("--cache-size", cacheSize)) {
+    }
     if (envSamples < 0 || envSamples == 1)
         throw osgBTF::Error("--env-samples " + std::to_string(envSamples) +
                             ": expected 0 (off) or at least 2 rotations");
@@ -614,13 +651,27 @@ int run(osg::ArgumentParser& arguments) {
     }
     std::vector<std::string> files;
     for (int i = 1; i < arguments.argc(); ++i) files.push_back(arguments[i]);
-    if (files.empty()) throw osgBTF::Error("no input files (btfviewer --help)");
+    if (files.empty() && streams.empty()) throw osgBTF::Error("no input files (btfviewer --help)");
 
     // Inputs: a MaterialNode without children (a material file) gets the model.
     osg::ref_ptr<osg::Node> model;
     std::vector<osg::ref_ptr<osg::Node>> inputs;
-    for (const std::string& file : files) {
-        osg::ref_ptr<osg::Node> node = readInput(file);
+    osg::ref_ptr<osgBTF::StreamingGroup> streaming;
+    std::uint64_t plainFmfBytes = 0;
+    if (!streams.empty()) {
+        osgBTF::TileStreamerOptions options;
+        options.cacheSize = cacheSize;
+        streaming = new osgBTF::StreamingGroup(new osgBTF::TileStreamer(options));
+    }
+    std::vector<std::pair<std::string, osg::ref_ptr<osg::Node>>> named;
+    for (const std::string& file : files) named.emplace_back(file, readInput(file));
+    for (const std::string& location : streams) {
+        const osg::ref_ptr<osgBTF::StreamedFmfMaterial> streamed =
+            streaming->streamer()->open(location);
+        plainFmfBytes += streaming->streamer()->plainFmfGpuBytes(streamed->streamIndex());
+        named.emplace_back(location, new MaterialNode(streamed.get()));
+    }
+    for (const auto& [file, node] : named) {
         auto* material = dynamic_cast<MaterialNode*>(node.get());
         if (material && material->getNumChildren() == 0) {
             if (!model)
@@ -653,21 +704,36 @@ int run(osg::ArgumentParser& arguments) {
 
     osg::ref_ptr<osg::Group> root = new osg::Group;
     osg::ref_ptr<osg::Group> sceneRoot = new osg::Group;
-    float x = 0;
+    // Side by side along +X, a fifth of a radius apart; more than 5 objects in rows downward
+    // (-Z), facing the home view.
+    const std::size_t columns =
+        inputs.size() > 5 ? std::size_t(std::ceil(std::sqrt(double(inputs.size())))) : 5;
+    float x = 0, z = 0, rowDepth = 0;
     for (std::size_t i = 0; i < inputs.size(); ++i) {
         if (inputs.size() == 1) {
             sceneRoot->addChild(inputs[i].get());
             break;
         }
-        // Side by side along +X, a fifth of a radius apart.
         const osg::BoundingSphere bound = inputs[i]->getBound();
         const float radius = bound.valid() ? bound.radius() : 1.0f;
-        x += i == 0 ? 0.0f : radius * 1.1f;
+        if (i > 0 && i % columns == 0) {
+            x = 0;
+            z -= rowDepth;
+            rowDepth = 0;
+        }
+        x += i % columns == 0 ? 0.0f : radius * 1.1f;
         osg::ref_ptr<osg::MatrixTransform> place = new osg::MatrixTransform(osg::Matrix::translate(
-            osg::Vec3(x, 0, 0) - (bound.valid() ? bound.center() : osg::Vec3())));
+            osg::Vec3(x, 0, z) - (bound.valid() ? bound.center() : osg::Vec3())));
         place->addChild(inputs[i].get());
         sceneRoot->addChild(place.get());
         x += radius * 1.1f;
+        rowDepth = std::max(rowDepth, radius * 2.2f);
+    }
+    // Streamed materials need the feedback pass and updates of a StreamingGroup above them.
+    osg::ref_ptr<osg::Group> sceneTop = sceneRoot;
+    if (streaming) {
+        streaming->addChild(sceneRoot.get());
+        sceneTop = streaming;
     }
     osg::ref_ptr<ViewerState> state = new ViewerState;
     ShadowedSceneCollector shadowed;
@@ -680,14 +746,16 @@ int run(osg::ArgumentParser& arguments) {
         osg::ref_ptr<osgShadow::ShadowMap> technique = new osgShadow::ShadowMap;
         technique->setTextureSize(osg::Vec2s(2048, 2048));
         scene->setShadowTechnique(technique.get());
-        scene->addChild(sceneRoot.get());
+        scene->addChild(sceneTop.get());
         root->addChild(scene.get());
         shadowed.scenes.push_back({scene, technique});
         orbitParent = scene;
     } else {
-        root->addChild(sceneRoot.get());
+        root->addChild(sceneTop.get());
     }
     state->shadowedScenes = shadowed.scenes;
+    state->streaming = streaming;
+    state->plainFmfBytes = plainFmfBytes;
     if (noShadows) state->toggleShadows();
 
     MaterialNodeCollector materialNodes;
@@ -704,9 +772,10 @@ int run(osg::ArgumentParser& arguments) {
             std::any_of(state->choices.begin(), state->choices.end(),
                         [&](const MaterialChoice& choice) { return choice.material == material; });
         if (known) continue;
-        const std::string name = node->getMaterialFile().empty()
-                                     ? std::string("in memory")
-                                     : osgDB::getSimpleFileName(node->getMaterialFile());
+        const std::string name = !node->getMaterialFile().empty()
+                                     ? osgDB::getSimpleFileName(node->getMaterialFile())
+                                 : !material->sourceFile.empty() ? material->sourceFile
+                                                                 : std::string("in memory");
         state->choices.push_back({material, name + " (" + material->methodName() + ")"});
     }
     if (state->nodes.empty())
