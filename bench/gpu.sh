@@ -25,6 +25,7 @@
 #   SCENE_SIZE=32 SCENE_METHODS=lambert,laf,slaf,rf,pca,lpca,lpca-revised
 #   SCENE_RESOLUTION=1920x1080
 #   LPCA_VIEWPORT=1024     viewport of bench_lpca_pass_time
+#   BSVTF_ARGS="--width 1280 --height 720"  options of bench_bsvtf (seed 003 Tables 1-2, Fig. 5)
 # A step that fails is reported in tables.md and the others still run; the exit status is the
 # number of failed steps (0: all ran).
 set -u
@@ -186,6 +187,19 @@ if [ -f "$sample" ]; then
             echo
         } >> "$tables"
     fi
+fi
+
+# 6. BSVTF (issue 13): GPU memory and frame time for 1, 5, 25 and 100 streamed materials against
+#    plain fmf, preprocessing, bytes received against SSIM (seed 003 Tables 1-2, Fig. 5).
+if [ -x "$bin/bench_bsvtf" ]; then
+    # shellcheck disable=SC2086  # BSVTF_ARGS is a list of options
+    if step bsvtf "$bin/bench_bsvtf" --work "$work/bsvtf" --frames "$FRAMES" \
+        ${BSVTF_ARGS:---width 1280 --height 720}; then
+        cat "$work/bsvtf.log" >> "$tables"
+        echo >> "$tables"
+    fi
+else
+    printf '## bench_bsvtf: not built (-DOSGBTF_BUILD_BENCH=ON)\n\n' >> "$tables"
 fi
 
 for f in "$work"/compare-*/report.md; do
