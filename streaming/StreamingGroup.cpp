@@ -1,6 +1,12 @@
 #include "streaming/StreamingGroup.h"
 
 #include <cmath>
+#include <cstring>
+
+#include <osg/BufferObject>
+#include <osg/GLExtensions>
+#include <osg/State>
+#include <osg/Texture2D>
 
 #include <osg/Viewport>
 #include <osgUtil/CullVisitor>
@@ -32,19 +38,62 @@ struct UpdateStreaming : osg::NodeCallback {
 
 }  // namespace
 
-/** Copies the feedback image after the pass drew and read it back (draw thread). */
+/** Reads the feedback pass back without waiting for it (seed 003: the feedback is "read back
+ *  asynchronously"): after the pass, glGetTexImage of its texture into one of two pixel-pack
+ *  buffers, and a map of the other one, which the pass of the previous frame filled. The GPU
+ *  copies while the frame goes on; the update sees feedback one frame old. Draw thread, the
+ *  one graphics context a TileStreamer serves. */
 struct FeedbackReadBack : osg::Camera::DrawCallback {
     explicit FeedbackReadBack(StreamingGroup* group) : _group(group) {}
-    void operator()(osg::RenderInfo&) const override {
+    void operator()(osg::RenderInfo& renderInfo) const override {
         osg::ref_ptr<StreamingGroup> group;
         if (!_group.lock(group)) return;
-        osg::ref_ptr<osg::Image> copy =
-            new osg::Image(*group->_feedbackTarget, osg::CopyOp::DEEP_COPY_ALL);
-        std::lock_guard<std::mutex> lock(group->_feedbackMutex);
-        group->_feedback = copy;
-        group->_feedbackIsNew = true;
+        osg::State& state = *renderInfo.getState();
+        osg::GLExtensions* ext = state.get<osg::GLExtensions>();
+        osg::Texture2D* texture = group->_feedbackTexture.get();
+        if (!ext || !ext->isBufferObjectSupported ||
+            !texture->getTextureObject(state.getContextID()))
+            return;
+        if (!_buffers[0]) ext->glGenBuffers(2, _buffers);
+        const int w = texture->getTextureWidth(), h = texture->getTextureHeight();
+        const GLsizeiptr bytes = GLsizeiptr(w) * h * 4;
+        // Issue this frame's copy.
+        Slot& issue = _slots[_next];
+        ext->glBindBuffer(GL_PIXEL_PACK_BUFFER_ARB, _buffers[_next]);
+        if (issue.bytes != bytes)
+            ext->glBufferData(GL_PIXEL_PACK_BUFFER_ARB, bytes, nullptr, GL_STREAM_READ_ARB);
+        state.applyTextureAttribute(0, texture);
+        glPixelStorei(GL_PACK_ALIGNMENT, 4);
+        glGetTexImage(GL_TEXTURE_2D, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+        issue = {w, h, bytes, true};
+        // Take the previous frame's.
+        const int other = 1 - _next;
+        Slot& ready = _slots[other];
+        if (ready.pending) {
+            ext->glBindBuffer(GL_PIXEL_PACK_BUFFER_ARB, _buffers[other]);
+            if (const void* data = ext->glMapBuffer(GL_PIXEL_PACK_BUFFER_ARB, GL_READ_ONLY_ARB)) {
+                osg::ref_ptr<osg::Image> copy = new osg::Image;
+                copy->allocateImage(ready.width, ready.height, 1, GL_RGBA, GL_UNSIGNED_BYTE);
+                std::memcpy(copy->data(), data, std::size_t(ready.bytes));
+                ext->glUnmapBuffer(GL_PIXEL_PACK_BUFFER_ARB);
+                std::lock_guard<std::mutex> lock(group->_feedbackMutex);
+                group->_feedback = copy;
+                group->_feedbackIsNew = true;
+            }
+            ready.pending = false;
+        }
+        ext->glBindBuffer(GL_PIXEL_PACK_BUFFER_ARB, 0);
+        _next = other;
     }
+    struct Slot {
+        int width = 0, height = 0;
+        GLsizeiptr bytes = 0;
+        bool pending = false;
+    };
     osg::observer_ptr<StreamingGroup> _group;
+    mutable GLuint _buffers[2] = {0, 0};
+    mutable Slot _slots[2];
+    mutable int _next = 0;
 };
 
 namespace {
@@ -68,8 +117,14 @@ StreamingGroup::StreamingGroup(const StreamingGroup& other, const osg::CopyOp& c
 void StreamingGroup::setUp() {
     if (!_streamer) _streamer = new TileStreamer;
     _votes = _streamer->makeVotes();
-    _feedbackTarget = new osg::Image;
-    _feedbackTarget->allocateImage(1, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE);
+    _feedbackTexture = new osg::Texture2D;
+    _feedbackTexture->setTextureSize(1, 1);
+    _feedbackTexture->setInternalFormat(GL_RGBA8);
+    _feedbackTexture->setSourceFormat(GL_RGBA);
+    _feedbackTexture->setSourceType(GL_UNSIGNED_BYTE);
+    _feedbackTexture->setFilter(osg::Texture::MIN_FILTER, osg::Texture::NEAREST);
+    _feedbackTexture->setFilter(osg::Texture::MAG_FILTER, osg::Texture::NEAREST);
+    _feedbackTexture->setResizeNonPowerOfTwoHint(false);
     _feedbackCamera = new osg::Camera;
     _feedbackCamera->setName("osgBTF BSVTF feedback");
     _feedbackCamera->setRenderOrder(osg::Camera::PRE_RENDER);
@@ -79,9 +134,9 @@ void StreamingGroup::setUp() {
     _feedbackCamera->setClearColor(osg::Vec4(0, 0, 0, 0));
     _feedbackCamera->setClearMask(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     _feedbackCamera->setViewport(0, 0, 1, 1);
-    _feedbackCamera->attach(osg::Camera::COLOR_BUFFER, _feedbackTarget.get());
+    _feedbackCamera->attach(osg::Camera::COLOR_BUFFER, _feedbackTexture.get());
     _feedbackCamera->attach(osg::Camera::DEPTH_BUFFER, GL_DEPTH_COMPONENT24);
-    _feedbackCamera->setFinalDrawCallback(new FeedbackReadBack(this));
+    _feedbackCamera->setPostDrawCallback(new FeedbackReadBack(this));
     osg::StateSet* state = _feedbackCamera->getOrCreateStateSet();
     state->setAttributeAndModes(methodProgram("bsvtf_feedback").get(),
                                 osg::StateAttribute::ON | osg::StateAttribute::OVERRIDE);
@@ -137,8 +192,9 @@ void StreamingGroup::cullFeedback(osg::NodeVisitor& nv) {
     if (!viewport) return;
     const int w = std::max(1, int(std::ceil(viewport->width() / _feedbackScale)));
     const int h = std::max(1, int(std::ceil(viewport->height() / _feedbackScale)));
-    if (_feedbackTarget->s() != w || _feedbackTarget->t() != h) {
-        _feedbackTarget->allocateImage(w, h, 1, GL_RGBA, GL_UNSIGNED_BYTE);
+    if (_feedbackTexture->getTextureWidth() != w || _feedbackTexture->getTextureHeight() != h) {
+        _feedbackTexture->setTextureSize(w, h);
+        _feedbackTexture->dirtyTextureObject();
         _feedbackCamera->setViewport(0, 0, w, h);
         _feedbackCamera->dirtyAttachmentMap();
     }

@@ -3,7 +3,8 @@
 // 1 / feedbackScale of the viewport, sharing the view and projection, every program replaced by
 // shaders/bsvtf_feedback.frag) and reads it back; in the update traversal it counts the
 // feedback's votes and runs its TileStreamer's update with them, so tiles stream in as the camera
-// moves. Materials from streamer()->open(location) go on MaterialNodes below it.
+// moves. Materials from streamer()->open(location) go on MaterialNodes below it. The read-back
+// is asynchronous (two pixel-pack buffers): the update uses the feedback of the frame before.
 #pragma once
 
 #include <mutex>
@@ -11,6 +12,7 @@
 #include <osg/Camera>
 #include <osg/Group>
 #include <osg/Image>
+#include <osg/Texture2D>
 
 #include "streaming/TileStreamer.h"
 
@@ -35,7 +37,8 @@ public:
 
     /** The votes of the last feedback image read back (empty before the first). */
     TileVotes lastVotes() const;
-    /** A copy of the last feedback image (RGBA8: tile x, tile y, level, material + 1). */
+    /** A copy of the last feedback image read back (RGBA8: tile x, tile y, level, material + 1),
+     *  that of the frame before the last one drawn; null before the second frame. */
     osg::ref_ptr<osg::Image> lastFeedback() const;
     /** True when the last update used a new feedback image and the streamer settled with it
      *  (TileStreamer::settled): for a static camera, the picture has converged. */
@@ -59,7 +62,7 @@ private:
 
     osg::ref_ptr<TileStreamer> _streamer;
     osg::ref_ptr<osg::Camera> _feedbackCamera;
-    osg::ref_ptr<osg::Image> _feedbackTarget;
+    osg::ref_ptr<osg::Texture2D> _feedbackTexture;
     osg::ref_ptr<osg::Uniform> _scaleUniform;
     int _feedbackScale = 4;
     mutable std::mutex _feedbackMutex;

@@ -141,6 +141,8 @@ TEST_F(BsvtfGpu, FeedbackLevelIsTheFinestMinusLog2OfTexelsPerPixel) {
         group->addChild(patch(*streamed, {0, 0, 1}, {0, 0, 1}, float(1 << k)));
         renderer.setScene(group.get());
         renderer.setCamera(orthoUnitSquare(kWidth, kHeight));
+        // The read-back is asynchronous: the second frame delivers the first one's feedback.
+        renderer.render();
         renderer.render();
         const osg::ref_ptr<osg::Image> feedback = group->lastFeedback();
         ASSERT_TRUE(feedback);
