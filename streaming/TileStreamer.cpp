@@ -230,10 +230,10 @@ osg::ref_ptr<StreamedFmfMaterial> TileStreamer::open(const std::string& location
         _uploads->queue(_scheduler.slotOf(schedulerIndex, root), zeros);
         stream->fetcher->request(layout.index(root), TileSetIndex::tilePath(root), kFirst);
         stream->tile[layout.index(root)] = Stream::State::Requested;
-        stream->fetcher->request(kPacketKey + std::uint64_t(g), TileSetIndex::uPacketPath(g),
-                                 g == 0 ? kFirst : 0.0);
-        stream->packet[std::size_t(g)] = Stream::State::Requested;
     }
+    // U packet 0 now; the others once their groups show (requestWanted).
+    stream->fetcher->request(kPacketKey, TileSetIndex::uPacketPath(0), kFirst);
+    stream->packet[0] = Stream::State::Requested;
     _stats.uPackets += int(groups);
     {
         std::lock_guard<std::mutex> lock(_mutex);
@@ -395,25 +395,58 @@ void TileStreamer::writeLut(int index) {
 }
 
 void TileStreamer::requestWanted(const TileVotes& votes) {
+    // What each fetcher has not been asked for yet competes for this update's request budget,
+    // tiles by P = w v, U packets by seed 003's group priority (sum of v ||T||^2 over the group's
+    // resident tiles: a packet is worth nothing before its Eigen-Textures show). Requests still
+    // waiting only get their new priority.
+    struct Fresh {
+        double priority;
+        std::size_t stream, index;
+        bool packet;
+    };
+    std::vector<Fresh> fresh;
     const std::size_t ahead = std::size_t(std::max(1, _options.requestsAhead)) *
                               std::max<std::size_t>(1, _streams.size());
     for (const auto& [m, t] : _scheduler.wanted(votes, ahead)) {
         Stream& stream = *_streams[std::size_t(m)];
         const std::size_t i = stream.index.layout.index(t);
-        if (stream.tile[i] == Stream::State::None || stream.tile[i] == Stream::State::Requested) {
-            // Re-requesting updates the priority of a request still waiting.
-            stream.fetcher->request(i, TileSetIndex::tilePath(t), _scheduler.priority(m, t, votes));
-            if (stream.tile[i] == Stream::State::None) ++_stats.requests;
-            stream.tile[i] = Stream::State::Requested;
-        }
+        const double priority = _scheduler.priority(m, t, votes);
+        if (stream.tile[i] == Stream::State::Requested)
+            stream.fetcher->request(i, TileSetIndex::tilePath(t), priority);
+        else if (stream.tile[i] == Stream::State::None)
+            fresh.push_back({priority, std::size_t(m), i, false});
     }
     for (std::size_t s = 0; s < _streams.size(); ++s) {
         Stream& stream = *_streams[s];
-        for (int g = 0; g < stream.index.layout.groups(); ++g)
-            if (stream.packet[std::size_t(g)] == Stream::State::Requested)
-                stream.fetcher->request(
-                    kPacketKey + std::uint64_t(g), TileSetIndex::uPacketPath(g),
-                    g == 0 ? kFirst : _scheduler.groupPriority(int(s), g, votes));
+        for (int g = 0; g < stream.index.layout.groups(); ++g) {
+            const Stream::State state = stream.packet[std::size_t(g)];
+            if (state != Stream::State::None && state != Stream::State::Requested) continue;
+            const double priority = g == 0 ? kFirst : _scheduler.groupPriority(int(s), g, votes);
+            if (state == Stream::State::Requested)
+                stream.fetcher->request(kPacketKey + std::uint64_t(g), TileSetIndex::uPacketPath(g),
+                                        priority);
+            else if (priority > 0)
+                fresh.push_back({priority, s, std::size_t(g), true});
+        }
+    }
+    std::sort(fresh.begin(), fresh.end(),
+              [](const Fresh& a, const Fresh& b) { return a.priority > b.priority; });
+    const std::size_t budget = _options.requestsPerUpdate > 0
+                                   ? std::min(fresh.size(), std::size_t(_options.requestsPerUpdate))
+                                   : fresh.size();
+    for (std::size_t k = 0; k < budget; ++k) {
+        const Fresh& f = fresh[k];
+        Stream& stream = *_streams[f.stream];
+        if (f.packet) {
+            stream.fetcher->request(kPacketKey + f.index, TileSetIndex::uPacketPath(int(f.index)),
+                                    f.priority);
+            stream.packet[f.index] = Stream::State::Requested;
+        } else {
+            stream.fetcher->request(
+                f.index, TileSetIndex::tilePath(stream.index.layout.tileAt(f.index)), f.priority);
+            stream.tile[f.index] = Stream::State::Requested;
+        }
+        ++_stats.requests;
     }
 }
 

@@ -8,8 +8,9 @@
 //   2. one scheduler step (streaming/TileScheduler.h): adds, swaps, removals; the added tiles'
 //      data are queued for upload (at most uploadsPerUpdate) and the changed LUTs rewritten;
 //   3. requests out: the scheduler's most wanted tiles whose data are not in RAM (their parents'
-//      first when those were dropped), and the U packets by seed 003's group priority, each
-//      through the material's fetcher (a folder or HTTP, streaming/TileFetcher.h).
+//      first when those were dropped), and the U packets by seed 003's group priority (packet 0
+//      at once, the others once their group shows), highest priority first over all materials,
+//      each through its material's fetcher (a folder or HTTP, streaming/TileFetcher.h).
 // A fetch that fails (404, 500, timeout, a truncated or corrupted file) is reported once and
 // not retried; the material keeps rendering from what it has. The GL side: the cache texture
 // uploads the queued tiles when it is applied (one graphics context).
@@ -39,8 +40,12 @@ struct TileStreamerOptions {
     int cacheSize = 4032;
     int uploadsPerUpdate = 32;  ///< tiles added to the cache per update (the upload budget)
     int decodesPerUpdate = 64;  ///< tiles decoded per update
-    int requestsAhead = 64;     ///< wanted tiles requested at a time, per material
-    int fetchThreads = 2;       ///< per material
+    int requestsAhead = 64;     ///< wanted tiles considered per update, per material
+    /** New files requested per update, highest priority first over every material (0: no
+     *  limit). A limit paces the requests like a slow link would, so that what arrives first
+     *  is what matters most (seed 003 section 6). */
+    int requestsPerUpdate = 0;
+    int fetchThreads = 2;                           ///< per material
     std::size_t ramBytes = std::size_t(512) << 20;  ///< decoded tiles kept that are not resident
 };
 
