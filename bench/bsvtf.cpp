@@ -88,17 +88,7 @@ osg::ref_ptr<osg::Group> grid(const std::vector<osg::ref_ptr<osg::StateSet>>& st
     const int rows = (n + columns - 1) / columns;
     osg::ref_ptr<osg::Group> root = new osg::Group;
     osg::StateSet* common = root->getOrCreateStateSet();
-    const glm::vec3 light = glm::vec3(0.3f, 0.2f, 0.93f);
-    common->addUniform(new osg::Uniform(shader::kFixedView, osg::Vec4(0.1f, -0.2f, 0.97f, 1)));
-    common->addUniform(new osg::Uniform(shader::kLightCount, 1));
-    osg::ref_ptr<osg::Uniform> position =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC4, shader::kLightPosition, shader::kMaxLights);
-    position->setElement(0, osg::Vec4(light.x, light.y, light.z, 0.0f));
-    common->addUniform(position.get());
-    osg::ref_ptr<osg::Uniform> color =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC3, shader::kLightColor, shader::kMaxLights);
-    color->setElement(0, osg::Vec3(1, 1, 1));
-    common->addUniform(color.get());
+    addRectifiedLighting(*common, glm::vec3(0.1f, -0.2f, 0.97f), glm::vec3(0.3f, 0.2f, 0.93f));
     for (int i = 0; i < n; ++i) {
         osg::ref_ptr<osg::MatrixTransform> cell = new osg::MatrixTransform(
             osg::Matrix::scale(1.0 / columns, 1.0 / rows, 1) *

@@ -40,17 +40,7 @@ FloatImage toFloatImage(const osg::Image& image, int w, int h) {
 FloatImage renderImage(HeadlessRenderer& renderer, osg::StateSet* stateSet, osg::StateSet* mapState,
                        int w, int h, const glm::vec3& view, const glm::vec3& light) {
     osg::ref_ptr<osg::StateSet> render = new osg::StateSet;
-    render->addUniform(new osg::Uniform("osgBTF_fixedView", osg::Vec4(view.x, view.y, view.z, 1)));
-    render->addUniform(new osg::Uniform("osgBTF_lightCount", 1));
-    // The camera's view matrix is the identity, so eye space is the patch's local frame.
-    osg::ref_ptr<osg::Uniform> position =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
-    position->setElement(0, osg::Vec4(light.x, light.y, light.z, 0.0f));
-    render->addUniform(position.get());
-    osg::ref_ptr<osg::Uniform> color =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC3, "osgBTF_lightColor", 8);
-    color->setElement(0, osg::Vec3(1, 1, 1));
-    render->addUniform(color.get());
+    addRectifiedLighting(*render, view, light);
 
     osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
     geode->setStateSet(render.get());
@@ -70,6 +60,19 @@ FloatImage renderImage(HeadlessRenderer& renderer, osg::StateSet* stateSet, osg:
 }
 
 }  // namespace
+
+void addRectifiedLighting(osg::StateSet& stateSet, const glm::vec3& view, const glm::vec3& light) {
+    stateSet.addUniform(new osg::Uniform(shader::kFixedView, osg::Vec4(view.x, view.y, view.z, 1)));
+    stateSet.addUniform(new osg::Uniform(shader::kLightCount, 1));
+    osg::ref_ptr<osg::Uniform> position =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC4, shader::kLightPosition, shader::kMaxLights);
+    position->setElement(0, osg::Vec4(light.x, light.y, light.z, 0.0f));
+    stateSet.addUniform(position.get());
+    osg::ref_ptr<osg::Uniform> color =
+        new osg::Uniform(osg::Uniform::FLOAT_VEC3, shader::kLightColor, shader::kMaxLights);
+    color->setElement(0, osg::Vec3(1, 1, 1));
+    stateSet.addUniform(color.get());
+}
 
 osg::ref_ptr<osg::Geode> rectifiedPatch() {
     osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();

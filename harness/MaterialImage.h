@@ -19,6 +19,11 @@ namespace osgBTF {
  *  local frame is the measured one): what every rectified image is drawn on. */
 osg::ref_ptr<osg::Geode> rectifiedPatch();
 
+/** The uniforms of a rectified image on `stateSet`: the local view fixed to `view`, one white
+ *  directional light toward `light`, both in the patch's frame (the camera's view matrix is the
+ *  identity there, so eye space is the patch's local frame). */
+void addRectifiedLighting(osg::StateSet& stateSet, const glm::vec3& view, const glm::vec3& light);
+
 /** GPU path: renders the material's StateSet on a unit patch (tangent +X, normal +Z) with an
  *  orthographic camera from above, the view direction fixed to `view` (uniform
  *  osgBTF_fixedView) and one white directional light from `light`. Returns an RGB image with

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <iostream>
 
-#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+#include <glm/geometric.hpp>
 #include <osg/Geode>
 #include <osg/Uniform>
 
@@ -49,17 +49,7 @@ osg::ref_ptr<osg::Geode> patch(const Material& material, const glm::vec3& view,
                                const glm::vec3& light, float repeats = 1.0f) {
     osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
     stateSet->addUniform(new osg::Uniform(shader::kTextureScale, repeats));
-    stateSet->addUniform(
-        new osg::Uniform(shader::kFixedView, osg::Vec4(view.x, view.y, view.z, 1)));
-    stateSet->addUniform(new osg::Uniform(shader::kLightCount, 1));
-    osg::ref_ptr<osg::Uniform> position =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC4, shader::kLightPosition, shader::kMaxLights);
-    position->setElement(0, osg::Vec4(light.x, light.y, light.z, 0.0f));
-    stateSet->addUniform(position.get());
-    osg::ref_ptr<osg::Uniform> color =
-        new osg::Uniform(osg::Uniform::FLOAT_VEC3, shader::kLightColor, shader::kMaxLights);
-    color->setElement(0, osg::Vec3(1, 1, 1));
-    stateSet->addUniform(color.get());
+    addRectifiedLighting(*stateSet, view, light);
     osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
     geode->setStateSet(stateSet.get());
     return geode;
