@@ -140,6 +140,14 @@ TEST(TileSetIndex, ReadsAHandWrittenIndex) {
     EXPECT_EQ(index.lights.size(), 2u);
     EXPECT_FLOAT_EQ(index.lights[1].theta, 45.0f);
     EXPECT_EQ(index.uPacketValues(), 24u);
+    // A U packet: 4 components x 3 colours x views x lights half floats. Seed 003's 151 x 151
+    // directions give its "packets of 534 KB" (547,224 bytes = 534.4 KiB); the Bonn 81 x 81,
+    // 157,464 bytes.
+    TileSetIndex ubo = index, bonn = index;
+    ubo.views = ubo.lights = DirectionSet::ubo2014();
+    bonn.views = bonn.lights = DirectionSet::bonn81();
+    EXPECT_EQ(ubo.uPacketValues() * 2, 547224u);
+    EXPECT_EQ(bonn.uPacketValues() * 2, 157464u);
     ASSERT_EQ(index.tiles.size(), 1u);
     EXPECT_EQ(index.tiles[0].bytes, 2048u);
     EXPECT_EQ(index.tiles[0].crc, 77u);
