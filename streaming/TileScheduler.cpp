@@ -611,7 +611,8 @@ double TileScheduler::priority(int material, const TileId& tile, const TileVotes
 }
 
 std::vector<std::pair<int, TileId>> TileScheduler::wanted(const TileVotes& votes,
-                                                          std::size_t maxCount) const {
+                                                          std::size_t maxCount,
+                                                          const Availability& skip) const {
     const VoteCounts counts = voteCounts(votes);
     std::vector<Candidate> found;
     for (int mi = 0; mi < materialCount(); ++mi) {
@@ -622,7 +623,7 @@ std::vector<std::pair<int, TileId>> TileScheduler::wanted(const TileVotes& votes
             const TileId t = m.layout.tileAt(i);
             if (t.level == 0 || !m.isResident(TileLayout::parent(t))) continue;
             const double p = m.priority(t, counts[std::size_t(mi)]);
-            if (p > 0) found.push_back({p, mi, i, t, false});
+            if (p > 0 && !(skip && skip(mi, t))) found.push_back({p, mi, i, t, false});
         }
     }
     // addAfter(a, b): a ranks below b, so the reverse order sorts best first.

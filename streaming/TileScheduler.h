@@ -150,7 +150,8 @@ public:
      *  available or not: the fetcher requests those not yet decoded. At most maxCount, best
      *  first. (A swap's T' is not listed: it is an ancestor of resident tiles, whose data the
      *  runtime keeps anyway to decode them, seed 003 section 6.) */
-    std::vector<std::pair<int, TileId>> wanted(const TileVotes& votes, std::size_t maxCount) const;
+    std::vector<std::pair<int, TileId>> wanted(const TileVotes& votes, std::size_t maxCount,
+                                               const Availability& skip = {}) const;
     /** Sum over the group's resident tiles of v ||T||_F^2 / T^2: the priority of the group's U
      *  packet (seed 003 section 6). */
     double groupPriority(int material, int group, const TileVotes& votes) const;

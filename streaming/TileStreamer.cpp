@@ -153,6 +153,7 @@ osg::ref_ptr<StreamedFmfMaterial> TileStreamer::open(const std::string& location
     if (!indexFile.ok) throw Error(indexFile.error);
     stream->index =
         TileSetIndex::parse(std::string(indexFile.data.begin(), indexFile.data.end()), indexName);
+    _stats.bytesReceived += indexFile.data.size();
     TileSetIndex& index = stream->index;
     const TileLayout& layout = index.layout;
     if (_padded == 0) configure(layout.tileSize(), layout.padding());
@@ -407,7 +408,16 @@ void TileStreamer::requestWanted(const TileVotes& votes) {
     std::vector<Fresh> fresh;
     const std::size_t ahead = std::size_t(std::max(1, _options.requestsAhead)) *
                               std::max<std::size_t>(1, _streams.size());
-    for (const auto& [m, t] : _scheduler.wanted(votes, ahead)) {
+    // A tile whose file failed, or whose parent's did (it cannot be decoded), is never wanted
+    // again: it would keep its place in the window and starve the tiles behind it.
+    const auto failed = [this](int m, const TileId& t) {
+        const Stream& stream = *_streams[std::size_t(m)];
+        const TileLayout& layout = stream.index.layout;
+        return stream.tile[layout.index(t)] == Stream::State::Failed ||
+               (t.level > 0 &&
+                stream.tile[layout.index(TileLayout::parent(t))] == Stream::State::Failed);
+    };
+    for (const auto& [m, t] : _scheduler.wanted(votes, ahead, failed)) {
         Stream& stream = *_streams[std::size_t(m)];
         const std::size_t i = stream.index.layout.index(t);
         const double priority = _scheduler.priority(m, t, votes);
@@ -451,10 +461,11 @@ void TileStreamer::requestWanted(const TileVotes& votes) {
 }
 
 std::size_t TileStreamer::update(const TileVotes& votes) {
-    receive();
     std::vector<TileOperation> operations;
     {
+        // snapshot() (evaluate, from any thread) reads what receive() and the operations change.
         std::lock_guard<std::mutex> lock(_mutex);
+        receive();
         operations = _scheduler.step(
             votes,
             [this](int m, const TileId& t) {

@@ -1,21 +1,14 @@
 // BSVTF streaming (streaming/TileFetcher.h): the folder and HTTP sources and the background
 // fetcher, against a stock nginx started by the fixture on a free local port with its own
-// configuration (no system service is touched). Failure cases first, with their exact messages.
-// Without nginx (a developer machine) the HTTP tests are skipped; CI installs it.
+// configuration (tests/NginxServer.h; no system service is touched). Failure cases first, with
+// their exact messages. Without nginx (a developer machine) the HTTP tests are skipped; CI
+// installs it.
 #include <gtest/gtest.h>
 
-#include <arpa/inet.h>
-#include <fcntl.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
-#include <cstring>
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -25,12 +18,12 @@
 #include <osg/ref_ptr>  // before NotifyCapture.h, which uses it
 
 #include "streaming/TileFetcher.h"
+#include "tests/NginxServer.h"
 #include "tests/NotifyCapture.h"
 #include "tests/TestUtil.h"
 
-extern char** environ;
-
 using namespace osgBTF;
+using osgBTF::test::NginxServer;
 using osgBTF::test::ScopedNotifyCapture;
 using osgBTF::test::TempDir;
 using Clock = std::chrono::steady_clock;
@@ -53,61 +46,6 @@ void writeBytes(const std::filesystem::path& path, const std::vector<std::uint8_
     std::ofstream out(path, std::ios::binary);
     out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
     ASSERT_TRUE(out.good()) << path;
-}
-
-/** A TCP socket on 127.0.0.1 bound to a free port. */
-int boundSocket(int& port) {
-    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (fd < 0) return -1;
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    address.sin_port = 0;
-    socklen_t length = sizeof address;
-    if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
-        ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0) {
-        ::close(fd);
-        return -1;
-    }
-    port = ntohs(address.sin_port);
-    return fd;
-}
-
-/** A port nobody listens on (bound, then released: another process could take it meanwhile, but
- *  the kernel hands out ephemeral ports in turn, so not soon). */
-int freePort() {
-    int port = 0;
-    const int fd = boundSocket(port);
-    if (fd >= 0) ::close(fd);
-    return port;
-}
-
-bool acceptsConnections(int port) {
-    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (fd < 0) return false;
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    address.sin_port = htons(std::uint16_t(port));
-    const bool ok = ::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
-    ::close(fd);
-    return ok;
-}
-
-std::string findNginx() {
-    std::vector<std::string> candidates{"/usr/sbin/nginx"};
-    if (const char* path = std::getenv("PATH")) {
-        std::string list = path;
-        std::size_t start = 0;
-        while (start <= list.size()) {
-            const std::size_t end = std::min(list.find(':', start), list.size());
-            if (end > start) candidates.push_back(list.substr(start, end - start) + "/nginx");
-            start = end + 1;
-        }
-    }
-    for (const std::string& candidate : candidates)
-        if (::access(candidate.c_str(), X_OK) == 0) return candidate;
-    return {};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -154,7 +92,7 @@ TEST(OpenTileSource, ChoosesHttpByTheSchemeAndAFolderOtherwise) {
 }
 
 TEST(HttpTileSource, ReportsARefusedConnection) {
-    const int port = freePort();
+    const int port = osgBTF::test::freeLocalPort();
     ASSERT_NE(port, 0);
     const std::string base = "http://127.0.0.1:" + std::to_string(port) + "/x";
     HttpTileSource source(base);
@@ -200,143 +138,24 @@ TEST(TileFetcher, DeliversEveryFileOfAFolderWithAPool) {
 class NginxTileServer : public ::testing::Test {
 protected:
     void SetUp() override {
-        const std::string nginx = findNginx();
-        if (nginx.empty()) GTEST_SKIP() << "nginx is not installed (CI installs it)";
-        // Requests to the local server must not go to a proxy from the environment.
-        ::setenv("no_proxy", "127.0.0.1", 1);
-        ::setenv("NO_PROXY", "127.0.0.1", 1);
-
+        if (NginxServer::executable().empty())
+            GTEST_SKIP() << "nginx is not installed (CI installs it)";
+        const std::filesystem::path www = _server.root();
         tile = randomBytes(100000, 7);
-        writeBytes(_dir.path() / "www/set/tiles/0/0/0_0.tile", tile);
-        writeBytes(_dir.path() / "www/set/big.half", randomBytes(10000, 8));
+        writeBytes(www / "set/tiles/0/0/0_0.tile", tile);
+        writeBytes(www / "set/big.half", randomBytes(10000, 8));
         for (int i = 0; i < kFiles; ++i)
-            writeBytes(_dir.path() / ("www/set/f/" + std::to_string(i)), fileBytes(i));
-
-        // The stalled upstream: connections complete in the kernel's backlog, nothing answers.
-        int blackholePort = 0;
-        _blackhole = boundSocket(blackholePort);
-        ASSERT_GE(_blackhole, 0);
-        ASSERT_EQ(::listen(_blackhole, 64), 0);
-
-        const std::string version =
-            osgBTF::test::runCommand(osgBTF::test::shellQuote(nginx) + " -V").output;
-        std::string temp;
-        for (const char* module : {"client_body", "proxy", "fastcgi", "uwsgi", "scgi"}) {
-            const std::string name = module;
-            if (name != "client_body" && name != "proxy" &&
-                version.find("--without-http_" + name + "_module") != std::string::npos)
-                continue;
-            std::filesystem::create_directories(_dir.path() / "temp" / name);
-            temp += "    " + name + "_temp_path " + _dir.file("temp/" + name) + ";\n";
-        }
-        // The free port may be taken by another process (ctest -j) before nginx binds it: then
-        // nginx exits at once, and another port is tried.
-        std::string log;
-        for (int attempt = 0; attempt < 3; ++attempt) {
-            _port = freePort();
-            ASSERT_NE(_port, 0);
-            osgBTF::test::writeTextFile(_dir.file("nginx.conf"),
-                                        config(_port, blackholePort, temp));
-            if (start(nginx, log) || HasFailure()) return;
-        }
-        FAIL() << "nginx exited:\n" << log;
+            writeBytes(www / ("set/f/" + std::to_string(i)), fileBytes(i));
+        _server.answer("/moved.tile", 301, "/set/tiles/0/0/0_0.tile");
+        const std::string problem = _server.start();
+        ASSERT_EQ(problem, "");
     }
 
-    std::string config(int port, int blackholePort, const std::string& temp) const {
-        return std::string(::geteuid() == 0 ? "user root;\n" : "") +  // else nginx warns
-               "daemon off;\n"
-               "master_process off;\n"
-               "worker_processes 1;\n"
-               "pid " +
-               _dir.file("nginx.pid") + ";\nerror_log " + _dir.file("error.log") +
-               ";\n"
-               "events { worker_connections 64; }\n"
-               "http {\n"
-               "    access_log " +
-               _dir.file("access.log") + ";\n" + temp +
-               "    default_type application/octet-stream;\n"
-               "    server {\n"
-               "        listen 127.0.0.1:" +
-               std::to_string(port) + ";\n        root " + _dir.file("www") +
-               ";\n"
-               "        location /broken/ { return 500; }\n"
-               "        location /loop/ { return 302 /loop/; }\n"
-               "        location = /moved.tile { return 301 /set/tiles/0/0/0_0.tile; }\n"
-               "        location /stall/ {\n"
-               "            proxy_pass http://127.0.0.1:" +
-               std::to_string(blackholePort) +
-               ";\n"
-               "            proxy_read_timeout 60s;\n"
-               "        }\n"
-               "    }\n"
-               "}\n";
-    }
-
-    /** Starts nginx as a child process; true once it accepts connections, false (with its
-     *  output in `log`) when it exited. Fails the test when it does neither within 5 s. */
-    bool start(const std::string& nginx, std::string& log) {
-        const std::vector<std::string> args{nginx,
-                                            "-p",
-                                            _dir.path().string() + "/",
-                                            "-c",
-                                            _dir.file("nginx.conf"),
-                                            "-e",
-                                            _dir.file("error.log")};
-        std::vector<char*> argv;
-        for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-        argv.push_back(nullptr);
-        const std::string outPath = _dir.file("nginx.out");
-        posix_spawn_file_actions_t actions;
-        posix_spawn_file_actions_init(&actions);
-        posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                         0644);
-        posix_spawn_file_actions_adddup2(&actions, 1, 2);
-        const int spawned =
-            posix_spawn(&_pid, nginx.c_str(), &actions, nullptr, argv.data(), environ);
-        posix_spawn_file_actions_destroy(&actions);
-        if (spawned != 0) {
-            _pid = -1;
-            ADD_FAILURE() << "cannot start " << nginx << ": " << std::strerror(spawned);
-            return false;
-        }
-        const auto begin = Clock::now();
-        while (!acceptsConnections(_port)) {
-            int status = 0;
-            if (::waitpid(_pid, &status, WNOHANG) == _pid) {
-                _pid = -1;
-                log = readIfExists(outPath) + readIfExists(_dir.file("error.log"));
-                return false;
-            }
-            if (secondsSince(begin) > 5) {
-                ADD_FAILURE() << "nginx does not accept connections in 5 s";
-                return false;
-            }
-            std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        }
-        return true;
-    }
-
-    void TearDown() override {
-        stopServer();
-        if (_blackhole >= 0) ::close(_blackhole);
-    }
-
-    void stopServer() {
-        if (_pid <= 0) return;
-        ::kill(_pid, SIGKILL);
-        int status = 0;
-        ::waitpid(_pid, &status, 0);
-        _pid = -1;
-    }
-
-    static std::string readIfExists(const std::string& path) {
-        std::ifstream in(path);
-        return std::string(std::istreambuf_iterator<char>(in), {});
-    }
+    void stopServer() { _server.stop(); }
 
     /** The tile set's URL. */
-    std::string base() const { return "http://127.0.0.1:" + std::to_string(_port) + "/set"; }
-    std::string root() const { return "http://127.0.0.1:" + std::to_string(_port); }
+    std::string base() const { return _server.url("/set"); }
+    std::string root() const { return _server.url(); }
     static std::vector<std::uint8_t> fileBytes(int i) {
         return randomBytes(500 + std::size_t(i) * 11, unsigned(100 + i));
     }
@@ -345,10 +164,7 @@ protected:
     std::vector<std::uint8_t> tile;
 
 private:
-    TempDir _dir;
-    pid_t _pid = -1;
-    int _port = 0;
-    int _blackhole = -1;
+    NginxServer _server;  // its own scratch folder: root(), configuration, logs
 };
 
 TEST_F(NginxTileServer, ReportsMissingFilesServerErrorsAndRedirectLoops) {
