@@ -345,6 +345,12 @@ TEST(TilesCommand, RefusesOtherMethodsAndWritesTheSetOfAnFmfMaterial) {
                             ": is a 'lambert' material; BSVTF tiles an fmf material (`btf fit IN "
                             "-m fmf -o M.btfmat`, or a UBO2014 FMF .btf)\n");
     EXPECT_FALSE(std::filesystem::exists(dir.file("out")));
+    const std::string zip = dir.file("s.zip");
+    r = test::runCommand(tool + zip + " -o " + dir.file("out"));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_EQ(r.output, "btf: error: " + zip +
+                            ": is a measured BTF; tile an fmf fit of it (`btf fit " + zip +
+                            " -m fmf -o M.btfmat`, then `btf tiles M.btfmat`)\n");
     r = test::runCommand(tool + fmf + " -o " + dir.file("out") + " --tile-size 8 --codec raw");
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("1 groups x 3 levels, 9 tiles"), std::string::npos) << r.output;

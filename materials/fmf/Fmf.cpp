@@ -120,8 +120,13 @@ void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind sto
     setGeometry(factors.width, factors.height, factors.views, factors.lights);
     _factors = std::move(factors);
     _storage = storage;
-    _viewLookup = DirectionLookup(_views);
-    _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
+    try {
+        _viewLookup = DirectionLookup(_views);
+        _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
+    } catch (const Error& e) {
+        // A direction set the interpolation cannot triangulate is the file's problem: name it.
+        fail(_factors.source, e.what());
+    }
 }
 
 osg::ref_ptr<FmfMaterial> FmfMaterial::fromFactors(FactoredBtf factors,

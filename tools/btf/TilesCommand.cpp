@@ -1,5 +1,7 @@
 // btf tiles INPUT -o DIR: the BSVTF tile set of an fmf material (seed 003 sections 5-7), for
 // streaming from a folder or a static HTTP server (streaming/TileSet.h describes the files).
+#include <cctype>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -48,6 +50,12 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
                      "Texels of padding per side (T + 2 P a multiple of 8)")
         ->capture_default_str();
     return [options] {
+        std::string extension = std::filesystem::path(options->input).extension().string();
+        for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+        if (extension == ".zip" || std::filesystem::is_directory(options->input))
+            fail(options->input, "is a measured BTF; tile an fmf fit of it (`btf fit " +
+                                     options->input +
+                                     " -m fmf -o M.btfmat`, then `btf tiles M.btfmat`)");
         const osg::ref_ptr<Material> material = openMaterial(options->input);
         const auto* fmf = dynamic_cast<const FmfMaterial*>(material.get());
         if (!fmf)
