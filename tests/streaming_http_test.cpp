@@ -322,18 +322,26 @@ protected:
         return server.requestCount("/set/" + relative);
     }
 
+    /** A streamer of url() driven with votes for every finest tile until it settles (at most
+     *  10 s; the caller asserts settled()). */
+    osg::ref_ptr<TileStreamer> streamUntilSettled() {
+        osg::ref_ptr<TileStreamer> streamer = new TileStreamer(streamerOptions());
+        streamer->open(url());
+        const TileVotes votes = finestVotes(*streamer);
+        int updates = 0;
+        EXPECT_NO_THROW(updates = driveUntilSettled(*streamer, votes, 10));
+        EXPECT_TRUE(streamer->settled()) << "not settled after " << updates << " updates";
+        return streamer;
+    }
+
     /** Streams the raw set from url() until settled and checks the outcome of one tile that
      *  fails with `warning`: reported exactly once, counted once, fetched once and never again;
      *  within its group its region stays at its parent's level and renders the parent's texels,
      *  everything else converges to the finest tiles. */
     void expectOnlyThisTileMissing(const TileId& broken, const std::string& warning) {
-        osg::ref_ptr<TileStreamer> streamer = new TileStreamer(streamerOptions());
         ScopedNotifyCapture capture;
-        streamer->open(url());
-        const TileVotes votes = finestVotes(*streamer);
-        int updates = 0;
-        ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, 10));
-        ASSERT_TRUE(streamer->settled()) << "not settled after " << updates << " updates";
+        const osg::ref_ptr<TileStreamer> streamer = streamUntilSettled();
+        ASSERT_TRUE(streamer->settled());
         const std::string brokenPath = TileSetIndex::tilePath(broken);
         EXPECT_EQ(capture.text(), warning);
         EXPECT_EQ(streamer->stats().failures, 1u);
@@ -364,6 +372,7 @@ protected:
                 << "texel " << texel;
 
         // The failure is final: more updates neither fetch it again nor report it again.
+        const TileVotes votes = finestVotes(*streamer);
         for (int i = 0; i < 20; ++i) ASSERT_NO_THROW(streamer->update(votes));
         EXPECT_TRUE(streamer->settled());
         EXPECT_EQ(capture.text(), warning);
@@ -374,13 +383,9 @@ protected:
     /** The same for a U packet that fails with `warning`: every tile converges; the group's
      *  contribution is zero. */
     void expectOnlyThisPacketMissing(int group, const std::string& warning) {
-        osg::ref_ptr<TileStreamer> streamer = new TileStreamer(streamerOptions());
         ScopedNotifyCapture capture;
-        streamer->open(url());
-        const TileVotes votes = finestVotes(*streamer);
-        int updates = 0;
-        ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, 10));
-        ASSERT_TRUE(streamer->settled()) << "not settled after " << updates << " updates";
+        const osg::ref_ptr<TileStreamer> streamer = streamUntilSettled();
+        ASSERT_TRUE(streamer->settled());
         EXPECT_EQ(capture.text(), warning);
         const StreamingStats stats = streamer->stats();
         EXPECT_EQ(stats.failures, 1u);
@@ -392,6 +397,7 @@ protected:
         EXPECT_TRUE(allFinite(*snapshot));
         EXPECT_EQ(differingTexels(*snapshot, *withoutUGroup(pristine(), group)),
                   std::vector<std::size_t>{});
+        const TileVotes votes = finestVotes(*streamer);
         for (int i = 0; i < 20; ++i) ASSERT_NO_THROW(streamer->update(votes));
         EXPECT_EQ(capture.text(), warning);
         EXPECT_EQ(requests(TileSetIndex::uPacketPath(group)), 1);
