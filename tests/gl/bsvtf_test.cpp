@@ -14,6 +14,7 @@
 #include "harness/MaterialImage.h"
 #include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
+#include "scene/MaterialNode.h"
 #include "streaming/StreamingGroup.h"
 #include "streaming/TileBuilder.h"
 #include "tests/RandomFactors.h"
@@ -150,6 +151,37 @@ TEST_F(BsvtfGpu, FeedbackLevelIsTheFinestMinusLog2OfTexelsPerPixel) {
                 ASSERT_EQ(int(p[1]), (ty >> k) / kTile) << x << "," << y << ", k " << k;
             }
     }
+}
+
+TEST_F(BsvtfGpu, AMaterialNodeTakesAStreamedMaterialLikeAnyOther) {
+    // The same patch under a MaterialNode (tangents, the viewer's headlight, its uniforms), once
+    // with the streamed material and once with the fmf material itself: equal once converged.
+    osg::ref_ptr<StreamingGroup> group = new StreamingGroup(new TileStreamer(streamerOptions(7)));
+    group->setFeedbackScale(1);
+    osg::ref_ptr<MaterialNode> streamedNode =
+        new MaterialNode(group->streamer()->open(dir.file("tiles")).get());
+    streamedNode->addChild(rectifiedPatch().get());
+    group->addChild(streamedNode.get());
+    HeadlessRenderer& renderer = sharedRenderer();
+    renderer.setScene(group.get());
+    renderer.setCamera(orthoUnitSquare(kWidth, kHeight));
+    int frames = 0;
+    while (!group->settled() && frames < 200) {
+        renderer.render();
+        ++frames;
+    }
+    ASSERT_TRUE(group->settled()) << "not converged after " << frames << " frames";
+    const osg::ref_ptr<osg::Image> streamedImage = renderer.render();
+    osg::ref_ptr<MaterialNode> fmfNode = new MaterialNode(original().get());
+    fmfNode->addChild(rectifiedPatch().get());
+    const osg::ref_ptr<osg::Image> fmfImage =
+        renderer.render(fmfNode.get(), orthoUnitSquare(kWidth, kHeight));
+    double largest = 0;
+    for (int y = 0; y < kHeight; ++y)
+        for (int x = 0; x < kWidth; ++x)
+            largest = std::max(largest, double(pixel(*fmfImage, x, y, 0)));
+    EXPECT_GT(largest, 0.0) << "the headlight lit nothing";
+    EXPECT_LT(maxDifference(*streamedImage, *fmfImage), 1e-6);
 }
 
 }  // namespace
