@@ -1,7 +1,6 @@
 #include "streaming/TileBuilder.h"
 
 #include <unistd.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <chrono>
@@ -58,25 +57,11 @@ LevelImage downsample(const LevelImage& finer, int width, int height) {
     return out;
 }
 
-std::uint32_t crcOf(const std::vector<std::uint8_t>& data) {
-    return std::uint32_t(crc32(crc32(0L, Z_NULL, 0), data.data(), uInt(data.size())));
-}
-
 void writeBytes(const fs::path& path, const std::vector<std::uint8_t>& data) {
     std::ofstream out(path, std::ios::binary);
     out.write(reinterpret_cast<const char*>(data.data()), std::streamsize(data.size()));
     out.close();
     if (!out) fail(path.string(), "cannot write");
-}
-
-std::vector<std::uint8_t> halfBytes(const Imath::half* values, std::size_t count) {
-    std::vector<std::uint8_t> out(count * 2);
-    for (std::size_t i = 0; i < count; ++i) {
-        const std::uint16_t bits = values[i].bits();
-        out[2 * i] = std::uint8_t(bits & 0xff);
-        out[2 * i + 1] = std::uint8_t(bits >> 8);
-    }
-    return out;
 }
 
 }  // namespace
@@ -152,7 +137,7 @@ TileBuildReport buildTileSet(const FmfMaterial& material, const std::string& fol
                     packet[r * 4 + std::size_t(j)] = Imath::half(
                         u.data[(r * std::size_t(u.width) + std::size_t(g)) * 4 + std::size_t(j)]);
             const std::vector<std::uint8_t> bytes = halfBytes(packet.data(), packet.size());
-            index.uPackets[std::size_t(g)] = {std::uint32_t(bytes.size()), crcOf(bytes)};
+            index.uPackets[std::size_t(g)] = {std::uint32_t(bytes.size()), tileSetCrc(bytes)};
             writeBytes(work / TileSetIndex::uPacketPath(g), bytes);
             report.uBytes += bytes.size();
         }
@@ -232,7 +217,7 @@ TileBuildReport buildTileSet(const FmfMaterial& material, const std::string& fol
                         largest = std::max(largest, std::fabs(double(out[i]) - double(tile[i])));
                     errors[std::size_t(k)] = largest;
                     record.bytes = std::uint32_t(bytes.size());
-                    record.crc = crcOf(bytes);
+                    record.crc = tileSetCrc(bytes);
                     writeBytes(work / TileSetIndex::tilePath(t), bytes);
                     decoded[std::size_t(k)] = std::move(out);
                     progress.advance();

@@ -18,10 +18,6 @@ namespace osgBTF {
 
 namespace {
 
-std::uint32_t crcOf(const std::vector<std::uint8_t>& data) {
-    return std::uint32_t(crc32(crc32(0L, Z_NULL, 0), data.data(), uInt(data.size())));
-}
-
 std::string floatText(float v) {
     std::ostringstream out;
     out << std::setprecision(9) << v;
@@ -277,14 +273,13 @@ std::vector<Imath::half> TileSetIndex::decodeTile(const TileId& tile,
     if (data.size() != record.bytes)
         fail(source, "tile has " + std::to_string(data.size()) + " bytes, the index says " +
                          std::to_string(record.bytes) + " (a truncated or wrong download?)");
-    if (crcOf(data) != record.crc)
+    if (tileSetCrc(data) != record.crc)
         fail(source, "tile CRC-32 does not match the index (corrupted download?)");
     const int side = layout.paddedTileSize();
     const std::size_t values = std::size_t(side) * std::size_t(side) * 4;
     std::vector<Imath::half> out(values);
     if (codec == "raw") {
-        for (std::size_t i = 0; i < values; ++i)
-            out[i].setBits(std::uint16_t(data[2 * i] | (data[2 * i + 1] << 8)));
+        for (std::size_t i = 0; i < values; ++i) out[i] = halfAt(data, i);
         return out;
     }
     std::vector<Imath::half> prediction;
@@ -306,12 +301,11 @@ std::vector<float> TileSetIndex::decodeUPacket(int group, const std::vector<std:
     if (data.size() != record.bytes)
         fail(source, "U packet has " + std::to_string(data.size()) + " bytes, the index says " +
                          std::to_string(record.bytes) + " (a truncated or wrong download?)");
-    if (crcOf(data) != record.crc)
+    if (tileSetCrc(data) != record.crc)
         fail(source, "U packet CRC-32 does not match the index (corrupted download?)");
     std::vector<float> out(data.size() / 2);
     for (std::size_t i = 0; i < out.size(); ++i) {
-        Imath::half h;
-        h.setBits(std::uint16_t(data[2 * i] | (data[2 * i + 1] << 8)));
+        const Imath::half h = halfAt(data, i);
         if (!h.isFinite()) fail(source, "U packet holds a non-finite value");
         out[i] = float(h);
     }
@@ -332,6 +326,20 @@ osg::ref_ptr<FmfMaterial> TileSetIndex::material(std::vector<float> u, std::vect
     file.textures.push_back(
         {"sxv", layout.width(), layout.height(), groups, 4, MaterialTexture::Half, std::move(sxv)});
     return FmfMaterial::fromFile(file);
+}
+
+std::uint32_t tileSetCrc(const std::vector<std::uint8_t>& data) {
+    return std::uint32_t(crc32(crc32(0L, Z_NULL, 0), data.data(), uInt(data.size())));
+}
+
+std::vector<std::uint8_t> halfBytes(const Imath::half* values, std::size_t count) {
+    std::vector<std::uint8_t> out(count * 2);
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::uint16_t bits = values[i].bits();
+        out[2 * i] = std::uint8_t(bits & 0xff);
+        out[2 * i + 1] = std::uint8_t(bits >> 8);
+    }
+    return out;
 }
 
 std::vector<std::uint8_t> readFileBytes(const std::string& path) {

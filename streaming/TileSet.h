@@ -96,6 +96,16 @@ void predictFromParent(const TileLayout& layout, const TileId& child, const Imat
  *  file and the problem. */
 osg::ref_ptr<FmfMaterial> loadTileSetFinest(const std::string& folder);
 
+/** The CRC-32 (zlib's) the index records for a file's bytes. */
+std::uint32_t tileSetCrc(const std::vector<std::uint8_t>& data);
+/** Half floats as the files store them (U packets, raw tiles): little-endian, 2 bytes each. */
+std::vector<std::uint8_t> halfBytes(const Imath::half* values, std::size_t count);
+inline Imath::half halfAt(const std::vector<std::uint8_t>& bytes, std::size_t i) {
+    Imath::half h;
+    h.setBits(std::uint16_t(bytes[2 * i] | (bytes[2 * i + 1] << 8)));
+    return h;
+}
+
 /** Reads a whole file; throws Error "PATH: cannot read ..." */
 std::vector<std::uint8_t> readFileBytes(const std::string& path);
 
