@@ -13,7 +13,7 @@
 # them, or set OSGBTF_LIBS to that folder (added to LD_LIBRARY_PATH and, with its
 # osgPlugins-3.6.5, to OSG_LIBRARY_PATH); on a GPU machine whose NVIDIA EGL vendor is not found by
 # default set __EGL_VENDOR_LIBRARY_FILENAMES to the driver's 10_nvidia.json
-# (../shared/docs/gpu.md). The renderer each run used is in its table.
+# (docs/gpu.md). The renderer each run used is in its table.
 #
 # Sizes (environment; the defaults are for a GPU, small values make a quick llvmpipe run):
 #   SIZE=64                texels per side of the sample BTF that `btf compare` fits

@@ -1,4 +1,4 @@
-// Tiny UBO2014 .btf files written byte by byte from ../shared/docs/formats.md section 2, not
+// Tiny UBO2014 .btf files written byte by byte from docs/formats.md section 2, not
 // through osgBTF's writer, with the values they encode computed here from the format's formulas
 // (2.6, 2.7) in double precision. Shared by the loader tests and the GPU tests of the native
 // material, so both read files that another implementation of the format could have written.

@@ -1,5 +1,5 @@
 // Writing factorisations as UBO2014 .btf files (issue 11 section 1: `btf fit -m fmf -o out.btf`),
-// checked with a byte-level parser written here from ../shared/docs/formats.md section 2, not
+// checked with a byte-level parser written here from docs/formats.md section 2, not
 // with osgBTF's reader: the file must be what the format's reference readers expect.
 #include <unistd.h>
 
