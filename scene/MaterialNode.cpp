@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <set>
 #include <system_error>
 #include <vector>
@@ -30,36 +33,6 @@
 
 namespace osgBTF {
 
-// Materials loaded from files are shared while anything holds them: two nodes naming the same
-// file use one Material, hence one StateSet and one copy of its textures per context.
-osg::ref_ptr<Material> loadSharedMaterial(const std::string& path,
-                                          MaterialTexture::PixelKind factorStorage) {
-    namespace fs = std::filesystem;
-    std::error_code error;
-    fs::path canonical = fs::weakly_canonical(path, error);
-    if (error) canonical = path;
-    const auto size = fs::file_size(canonical, error);
-    const auto time = fs::last_write_time(canonical, error);
-    const std::string stamp = std::to_string(size) + ":" +
-                              std::to_string(time.time_since_epoch().count()) + ":" +
-                              std::to_string(int(factorStorage));
-
-    static std::mutex mutex;
-    static std::map<std::string, std::pair<std::string, osg::observer_ptr<Material>>> loaded;
-    {
-        std::lock_guard<std::mutex> lock(mutex);
-        const auto it = loaded.find(canonical.string());
-        osg::ref_ptr<Material> material;
-        if (it != loaded.end() && it->second.first == stamp && it->second.second.lock(material))
-            return material;
-    }
-    // Outside the lock: may take a while.
-    osg::ref_ptr<Material> material = openMaterial(path, factorStorage);
-    std::lock_guard<std::mutex> lock(mutex);
-    loaded[canonical.string()] = {stamp, material.get()};
-    return material;
-}
-
 namespace {
 
 /** Path + size + modification time: a file rewritten since is read again. */
@@ -73,6 +46,127 @@ std::string fileStamp(const std::string& path, std::string& canonicalPath) {
     const auto time = fs::last_write_time(canonical, error);
     return std::to_string(size) + ":" + std::to_string(time.time_since_epoch().count());
 }
+
+/** The materials opened from files, shared while anything besides this cache holds them: two
+ *  nodes naming the same file use one Material, hence one StateSet and one copy of its textures
+ *  per context.
+ *
+ *  The cache holds each material with a ref_ptr and drops the ones nothing else holds (as
+ *  osgDB's object cache does in removeUnreferencedObjectsInCache), instead of observing them with
+ *  an osg::observer_ptr: an observer shares the material's ObserverSet, which ~Referenced
+ *  releases and frees inside libosg, where its reference count is not visible to
+ *  ThreadSanitizer, so every entry dropped while another thread deleted the material was
+ *  reported as a race (issue 31). Here every change of a material's count made by this cache is
+ *  an inline atomic of OSG's headers, seen by the sanitizer, and a material is deleted either by
+ *  its last outside holder or by this cache once it holds the only reference.
+ *
+ *  A file being opened is marked, and other threads asking for it wait for that open instead of
+ *  opening it a second time (DatabasePager threads loading tiles that name one material). */
+class SharedMaterials {
+public:
+    static SharedMaterials& instance() {
+        // Never destroyed: materials still held at exit would otherwise be deleted during static
+        // destruction, after OSG's own singletons (the GL object managers) may be gone.
+        static SharedMaterials* const cache = new SharedMaterials;
+        return *cache;
+    }
+
+    osg::ref_ptr<Material> open(const std::string& path, MaterialTexture::PixelKind storage) {
+        std::string canonical;
+        const std::string key = fileStamp(path, canonical);
+        canonical += "|" + std::to_string(int(storage));  // a file in two storages: two entries
+        std::vector<osg::ref_ptr<Material>> unused;  // deleted after the lock is released
+        std::unique_lock<std::mutex> lock(_mutex);
+        takeUnused(unused);
+        for (;;) {
+            const auto it = _entries.find(canonical);
+            if (it == _entries.end() || it->second.stamp != key) break;
+            if (it->second.material) return it->second.material;
+            _opened.wait(lock);  // another thread is opening this version of the file
+        }
+        _entries[canonical] = {key, nullptr};  // opening
+        lock.unlock();
+        unused.clear();
+        osg::ref_ptr<Material> material;
+        try {
+            material = openMaterial(path, storage);
+        } catch (...) {
+            forget(canonical, key);
+            throw;
+        }
+        lock.lock();
+        const auto it = _entries.find(canonical);
+        if (it != _entries.end() && it->second.stamp == key) it->second.material = material;
+        lock.unlock();
+        _opened.notify_all();
+        return material;
+    }
+
+    std::size_t releaseUnused() {
+        std::vector<osg::ref_ptr<Material>> unused;
+        {
+            std::lock_guard<std::mutex> lock(_mutex);
+            takeUnused(unused);
+        }
+        return unused.size();  // deleted here, outside the lock
+    }
+
+private:
+    struct Entry {
+        std::string stamp;                 // size and modification time
+        osg::ref_ptr<Material> material;  // null while a thread opens the file
+    };
+
+    /** Moves the materials only this cache holds out of it (the caller holds the lock). The
+     *  count is read with ref(), an atomic increment: referenceCount() is a plain read, which
+     *  ThreadSanitizer would report against another thread's atomic unref. */
+    void takeUnused(std::vector<osg::ref_ptr<Material>>& unused) {
+        for (auto it = _entries.begin(); it != _entries.end();) {
+            Material* material = it->second.material.get();
+            if (!material) {
+                ++it;
+                continue;
+            }
+            // Nobody can take a new reference but through this cache, under the lock: a count
+            // of 2 (the entry's and this one) cannot grow behind our back.
+            const bool onlyHere = material->ref() == 2;
+            material->unref();  // back to the entry's own reference: never deletes
+            if (onlyHere) {
+                unused.push_back(std::move(it->second.material));
+                it = _entries.erase(it);
+            } else {
+                ++it;
+            }
+        }
+    }
+
+    void forget(const std::string& canonical, const std::string& key) {
+        {
+            std::lock_guard<std::mutex> lock(_mutex);
+            const auto it = _entries.find(canonical);
+            if (it != _entries.end() && it->second.stamp == key && !it->second.material)
+                _entries.erase(it);
+        }
+        _opened.notify_all();  // the waiters open the file themselves and report its error
+    }
+
+    std::mutex _mutex;
+    std::condition_variable _opened;
+    std::map<std::string, Entry> _entries;  // by canonical path and texture storage
+};
+
+}  // namespace
+
+osg::ref_ptr<Material> loadSharedMaterial(const std::string& path,
+                                          MaterialTexture::PixelKind factorStorage) {
+    return SharedMaterials::instance().open(path, factorStorage);
+}
+
+std::size_t releaseUnusedSharedMaterials() {
+    return SharedMaterials::instance().releaseUnused();
+}
+
+namespace {
 
 /** One texture per map object, shared by every node drawing that map (uploaded once per
  *  context). */
@@ -342,8 +436,14 @@ void MaterialNode::setTerminatorSoftness(float softness) {
     updateTerminatorState();
 }
 
+MaterialNode::~MaterialNode() {
+    _material = nullptr;
+    releaseUnusedSharedMaterials();  // the GPU memory of a material nothing else draws goes now
+}
+
 void MaterialNode::setMaterial(Material* material) {
     _material = material;
+    releaseUnusedSharedMaterials();
     _materialError.clear();
     if (material) {
         _materialFile = material->sourceFile;

@@ -172,7 +172,7 @@ public:
     std::size_t getNumCameraLightStates() const;
 
 protected:
-    ~MaterialNode() override = default;
+    ~MaterialNode() override;
     void createNodeState();
     /** The material's shared StateSet; null without a material or when it cannot be built (the
      *  failure is reported where the material is set). */
@@ -233,6 +233,12 @@ protected:
  *  modification time, same storage) that is still alive. Throws Error like loadMaterial. */
 osg::ref_ptr<Material> loadSharedMaterial(
     const std::string& path, MaterialTexture::PixelKind factorStorage = MaterialTexture::Half);
+
+/** Deletes the shared materials (loadSharedMaterial) that nothing outside the cache holds any
+ *  more and returns how many. Called by every loadSharedMaterial, by MaterialNode's destructor and
+ *  by setMaterial, so a material goes with the last node drawing it; an application that holds
+ *  materials itself and drops them can call it to free their memory at once. Thread-safe. */
+std::size_t releaseUnusedSharedMaterials();
 
 /** Reads a coordinate map file (readCoordinateMap), sharing it with every earlier read of the
  *  same file (same path, size and modification time) that is still alive. Throws Error "FILE:

@@ -24,6 +24,7 @@
 #include "loaders/Ubo2014.h"
 #include "materials/Material.h"
 #include "materials/fmf/Fmf.h"
+#include "scene/MaterialNode.h"
 #include "tests/PluginTestUtil.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
@@ -113,6 +114,59 @@ TEST(Concurrency, ThreadsReadTheSameFilesThroughOsgDB) {
     EXPECT_EQ(nodes.load(), kThreads * kRounds * 3);
     for (const std::string& p : problems) EXPECT_EQ(p, "") << "not read as a MaterialNode";
     expectCompleteCacheEntries(f.cache);
+}
+
+// Issue 31: the last holder of a shared material drops it on one thread while another thread
+// replaces the material's cache entry (the file changed, so it is read again). The two threads
+// are ordered only by a relaxed atomic, which gives ThreadSanitizer no happens-before edge, so
+// every access the cache makes to the old material must be one it can order by itself. With an
+// osg::observer_ptr in the cache it was not: dropping the entry decremented the material's
+// ObserverSet here (inline, instrumented) while ~Referenced, inside uninstrumented libosg,
+// decremented and freed it there: a report in every run of this test under TSan.
+TEST(Concurrency, LastHolderDropsASharedMaterialWhileAnotherThreadReplacesItsEntry) {
+    TempDir dir;
+    const std::string file = dir.file("changing.btfmat");
+    fs::copy_file(files().btfmat, file);
+    osg::ref_ptr<Material> first = loadSharedMaterial(file);
+    const Material* const firstAddress = first.get();
+    fs::last_write_time(file, fs::last_write_time(file) + std::chrono::seconds(2));
+    std::atomic<bool> replaced{false};
+    osg::ref_ptr<Material> second;
+    std::thread replacer([&] {
+        second = loadSharedMaterial(file);
+        replaced.store(true, std::memory_order_relaxed);
+    });
+    std::thread dropper([&] {
+        while (!replaced.load(std::memory_order_relaxed)) std::this_thread::yield();
+        first = nullptr;
+    });
+    replacer.join();
+    dropper.join();
+    ASSERT_NE(second, nullptr);
+    EXPECT_NE(second.get(), firstAddress) << "the changed file was not read again";
+}
+
+// Threads opening one file at once (DatabasePager threads loading tiles that name the same
+// material) get one Material: one copy of its textures, not one per thread.
+TEST(Concurrency, ThreadsOpeningOneFileAtOnceShareOneMaterial) {
+    TempDir dir;
+    const std::string file = dir.file("once.btfmat");
+    fs::copy_file(files().btfmat, file);
+    constexpr int kThreads = 6;
+    std::vector<osg::ref_ptr<Material>> opened(kThreads);
+    std::atomic<int> ready{0};
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t)
+        threads.emplace_back([&, t] {
+            ++ready;
+            while (ready.load() < kThreads) std::this_thread::yield();
+            opened[std::size_t(t)] = loadSharedMaterial(file);
+        });
+    for (std::thread& t : threads) t.join();
+    for (const auto& material : opened) {
+        ASSERT_NE(material, nullptr);
+        EXPECT_EQ(material.get(), opened[0].get());
+    }
 }
 
 TEST(Concurrency, DatabasePagerThreadsLoadProxyNodesNamingTheSameFiles) {
