@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <condition_variable>
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -30,6 +29,7 @@
 #include "materials/LightVisibility.h"
 #include "scene/OpenMaterial.h"
 #include "scene/ShadowTerminator.h"
+#include "scene/SharedObjects.h"
 
 namespace osgBTF {
 
@@ -47,143 +47,45 @@ std::string fileStamp(const std::string& path, std::string& canonicalPath) {
     return std::to_string(size) + ":" + std::to_string(time.time_since_epoch().count());
 }
 
-/** The materials opened from files, shared while anything besides this cache holds them: two
- *  nodes naming the same file use one Material, hence one StateSet and one copy of its textures
- *  per context.
- *
- *  The cache holds each material with a ref_ptr and drops the ones nothing else holds (as
- *  osgDB's object cache does in removeUnreferencedObjectsInCache), instead of observing them with
- *  an osg::observer_ptr: an observer shares the material's ObserverSet, which ~Referenced
- *  releases and frees inside libosg, where its reference count is not visible to
- *  ThreadSanitizer, so every entry dropped while another thread deleted the material was
- *  reported as a race (issue 31). Here every change of a material's count made by this cache is
- *  an inline atomic of OSG's headers, seen by the sanitizer, and a material is deleted either by
- *  its last outside holder or by this cache once it holds the only reference.
- *
- *  A file being opened is marked, and other threads asking for it wait for that open instead of
- *  opening it a second time (DatabasePager threads loading tiles that name one material). */
-class SharedMaterials {
-public:
-    static SharedMaterials& instance() {
-        // Never destroyed: materials still held at exit would otherwise be deleted during static
-        // destruction, after OSG's own singletons (the GL object managers) may be gone.
-        static SharedMaterials* const cache = new SharedMaterials;
-        return *cache;
-    }
+/** The materials opened from files: two nodes naming the same file (same path, size and
+ *  modification time, same texture storage) use one Material, hence one StateSet and one copy of
+ *  its textures per context. Never destroyed: materials still held at exit would otherwise be
+ *  deleted during static destruction, after OSG's own singletons may be gone. */
+SharedObjects<std::string, Material, std::string>& sharedMaterials() {
+    static auto* const cache = new SharedObjects<std::string, Material, std::string>;
+    return *cache;
+}
 
-    osg::ref_ptr<Material> open(const std::string& path, MaterialTexture::PixelKind storage) {
-        std::string canonical;
-        const std::string key = fileStamp(path, canonical);
-        canonical += "|" + std::to_string(int(storage));  // a file in two storages: two entries
-        std::vector<osg::ref_ptr<Material>> unused;  // deleted after the lock is released
-        std::unique_lock<std::mutex> lock(_mutex);
-        takeUnused(unused);
-        for (;;) {
-            const auto it = _entries.find(canonical);
-            if (it == _entries.end() || it->second.stamp != key) break;
-            if (it->second.material) return it->second.material;
-            _opened.wait(lock);  // another thread is opening this version of the file
-        }
-        _entries[canonical] = {key, nullptr};  // opening
-        lock.unlock();
-        unused.clear();
-        osg::ref_ptr<Material> material;
-        try {
-            material = openMaterial(path, storage);
-        } catch (...) {
-            forget(canonical, key);
-            throw;
-        }
-        lock.lock();
-        const auto it = _entries.find(canonical);
-        if (it != _entries.end() && it->second.stamp == key) it->second.material = material;
-        lock.unlock();
-        _opened.notify_all();
-        return material;
-    }
-
-    std::size_t releaseUnused() {
-        std::vector<osg::ref_ptr<Material>> unused;
-        {
-            std::lock_guard<std::mutex> lock(_mutex);
-            takeUnused(unused);
-        }
-        return unused.size();  // deleted here, outside the lock
-    }
-
-private:
-    struct Entry {
-        std::string stamp;                 // size and modification time
-        osg::ref_ptr<Material> material;  // null while a thread opens the file
-    };
-
-    /** Moves the materials only this cache holds out of it (the caller holds the lock). The
-     *  count is read with ref(), an atomic increment: referenceCount() is a plain read, which
-     *  ThreadSanitizer would report against another thread's atomic unref. */
-    void takeUnused(std::vector<osg::ref_ptr<Material>>& unused) {
-        for (auto it = _entries.begin(); it != _entries.end();) {
-            Material* material = it->second.material.get();
-            if (!material) {
-                ++it;
-                continue;
-            }
-            // Nobody can take a new reference but through this cache, under the lock: a count
-            // of 2 (the entry's and this one) cannot grow behind our back.
-            const bool onlyHere = material->ref() == 2;
-            material->unref();  // back to the entry's own reference: never deletes
-            if (onlyHere) {
-                unused.push_back(std::move(it->second.material));
-                it = _entries.erase(it);
-            } else {
-                ++it;
-            }
-        }
-    }
-
-    void forget(const std::string& canonical, const std::string& key) {
-        {
-            std::lock_guard<std::mutex> lock(_mutex);
-            const auto it = _entries.find(canonical);
-            if (it != _entries.end() && it->second.stamp == key && !it->second.material)
-                _entries.erase(it);
-        }
-        _opened.notify_all();  // the waiters open the file themselves and report its error
-    }
-
-    std::mutex _mutex;
-    std::condition_variable _opened;
-    std::map<std::string, Entry> _entries;  // by canonical path and texture storage
-};
+/** One texture per coordinate map, shared by every node drawing that map (uploaded once per
+ *  context). The stamp is the map itself: the entry keeps it alive, so no other map can take its
+ *  address while the texture is cached. */
+using MapTextures =
+    SharedObjects<const CoordinateMap*, osg::Texture2D, std::shared_ptr<const CoordinateMap>>;
+MapTextures& mapTextures() {
+    static auto* const cache = new MapTextures;
+    return *cache;
+}
 
 }  // namespace
 
 osg::ref_ptr<Material> loadSharedMaterial(const std::string& path,
                                           MaterialTexture::PixelKind factorStorage) {
-    return SharedMaterials::instance().open(path, factorStorage);
+    std::string canonical;
+    const std::string stamp = fileStamp(path, canonical);
+    // A file in two storages is two entries.
+    return sharedMaterials().get(canonical + "|" + std::to_string(int(factorStorage)), stamp,
+                                 [&] { return openMaterial(path, factorStorage); });
 }
 
-std::size_t releaseUnusedSharedMaterials() {
-    return SharedMaterials::instance().releaseUnused();
+std::size_t releaseUnusedSharedObjects() {
+    return sharedMaterials().releaseUnused() + mapTextures().releaseUnused() +
+           releaseUnusedTerminatorTextures();
 }
 
 namespace {
 
-/** One texture per map object, shared by every node drawing that map (uploaded once per
- *  context). */
 osg::ref_ptr<osg::Texture2D> sharedMapTexture(const std::shared_ptr<const CoordinateMap>& map) {
-    static std::mutex mutex;
-    static std::map<const CoordinateMap*, std::pair<std::weak_ptr<const CoordinateMap>,
-                                                    osg::observer_ptr<osg::Texture2D>>>
-        textures;
-    std::lock_guard<std::mutex> lock(mutex);
-    for (auto it = textures.begin(); it != textures.end();)
-        it = it->second.first.expired() ? textures.erase(it) : std::next(it);
-    auto& entry = textures[map.get()];
-    osg::ref_ptr<osg::Texture2D> texture;
-    if (entry.first.lock() == map && entry.second.lock(texture)) return texture;
-    texture = createCoordinateMapTexture(*map);
-    entry = {map, texture.get()};
-    return texture;
+    return mapTextures().get(map.get(), map, [&] { return createCoordinateMapTexture(*map); });
 }
 
 constexpr unsigned kTangentAttribute = shader::kTangentAttribute;
@@ -438,12 +340,12 @@ void MaterialNode::setTerminatorSoftness(float softness) {
 
 MaterialNode::~MaterialNode() {
     _material = nullptr;
-    releaseUnusedSharedMaterials();  // the GPU memory of a material nothing else draws goes now
+    releaseUnusedSharedObjects();  // the GPU memory of a material nothing else draws goes now
 }
 
 void MaterialNode::setMaterial(Material* material) {
     _material = material;
-    releaseUnusedSharedMaterials();
+    releaseUnusedSharedObjects();
     _materialError.clear();
     if (material) {
         _materialFile = material->sourceFile;

@@ -234,11 +234,13 @@ protected:
 osg::ref_ptr<Material> loadSharedMaterial(
     const std::string& path, MaterialTexture::PixelKind factorStorage = MaterialTexture::Half);
 
-/** Deletes the shared materials (loadSharedMaterial) that nothing outside the cache holds any
- *  more and returns how many. Called by every loadSharedMaterial, by MaterialNode's destructor and
- *  by setMaterial, so a material goes with the last node drawing it; an application that holds
- *  materials itself and drops them can call it to free their memory at once. Thread-safe. */
-std::size_t releaseUnusedSharedMaterials();
+/** Deletes the shared objects nothing outside their caches holds any more: materials
+ *  (loadSharedMaterial), coordinate-map textures and terminator textures; returns how many. Each
+ *  cache drops its unused objects whenever it is asked for one, and MaterialNode's destructor and
+ *  setMaterial call this, so a material goes with the last node drawing it; an application that
+ *  holds materials itself and drops them can call it to free their memory at once.
+ *  Thread-safe. */
+std::size_t releaseUnusedSharedObjects();
 
 /** Reads a coordinate map file (readCoordinateMap), sharing it with every earlier read of the
  *  same file (same path, size and modification time) that is still alive. Throws Error "FILE:

@@ -7,7 +7,8 @@
 
 #include <glm/geometric.hpp>
 #include <osg/Image>
-#include <osg/observer_ptr>
+
+#include "scene/SharedObjects.h"
 
 namespace osgBTF {
 
@@ -49,18 +50,22 @@ float terminatorFactor(float u, float softness) {
     return sampleTerminatorTexels(it->second, u);
 }
 
-osg::ref_ptr<osg::Texture1D> terminatorTexture(float softness) {
-    static std::mutex mutex;
-    static std::map<float, osg::observer_ptr<osg::Texture1D>> textures;
-    std::lock_guard<std::mutex> lock(mutex);
-    osg::ref_ptr<osg::Texture1D> texture;
-    if (textures[softness].lock(texture)) return texture;
+namespace {
+
+/** One texture per softness, shared by every node (scene/SharedObjects.h; never destroyed, as
+ *  the other caches there). */
+SharedObjects<float, osg::Texture1D, bool>& terminatorTextures() {
+    static auto* const cache = new SharedObjects<float, osg::Texture1D, bool>;
+    return *cache;
+}
+
+osg::ref_ptr<osg::Texture1D> createTerminatorTexture(float softness) {
     const std::vector<float> values = terminatorTexels(softness);
     osg::ref_ptr<osg::Image> image = new osg::Image;
     image->allocateImage(int(values.size()), 1, 1, GL_RED, GL_FLOAT);
     image->setInternalTextureFormat(GL_R32F);
     std::copy(values.begin(), values.end(), reinterpret_cast<float*>(image->data()));
-    texture = new osg::Texture1D(image.get());
+    osg::ref_ptr<osg::Texture1D> texture = new osg::Texture1D(image.get());
     texture->setName("osgBTF_terminator");
     // Float texels and LINEAR: the factor is the CPU's sampleTerminatorTexels to filter precision.
     texture->setInternalFormat(GL_R32F);
@@ -70,8 +75,18 @@ osg::ref_ptr<osg::Texture1D> terminatorTexture(float softness) {
     texture->setFilter(osg::Texture::MAG_FILTER, osg::Texture::LINEAR);
     texture->setWrap(osg::Texture::WRAP_S, osg::Texture::CLAMP_TO_EDGE);
     texture->setResizeNonPowerOfTwoHint(false);
-    textures[softness] = texture.get();
     return texture;
+}
+
+}  // namespace
+
+osg::ref_ptr<osg::Texture1D> terminatorTexture(float softness) {
+    return terminatorTextures().get(softness, true,
+                                    [softness] { return createTerminatorTexture(softness); });
+}
+
+std::size_t releaseUnusedTerminatorTextures() {
+    return terminatorTextures().releaseUnused();
 }
 
 }  // namespace osgBTF

@@ -49,4 +49,8 @@ float terminatorFactor(float u, float softness);
  *  caller with the same softness while one holds it. */
 osg::ref_ptr<osg::Texture1D> terminatorTexture(float softness);
 
+/** Deletes the terminator textures no node uses any more (releaseUnusedSharedObjects,
+ *  scene/MaterialNode.h, calls it); returns how many. */
+std::size_t releaseUnusedTerminatorTextures();
+
 }  // namespace osgBTF

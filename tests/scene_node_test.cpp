@@ -322,3 +322,40 @@ TEST(SceneMaterialNode, NodesNamingOneFileShareOneMaterialAndStateSet) {
     EXPECT_NE(a->getMaterial()->sharedStateSet()->getAttribute(osg::StateAttribute::PROGRAM),
               nullptr);
 }
+
+// The shared-material cache holds its materials with ref_ptrs (issue 31: observing them raced
+// under ThreadSanitizer) but still lets a material go with the last node drawing it.
+TEST(SceneMaterialNode, SharedMaterialIsDeletedWithTheLastNodeDrawingIt) {
+    TempDir dir;
+    saveMaterial(*sampleMaterial(), dir.file("last.btfmat"));
+    osg::ref_ptr<MaterialNode> a = new MaterialNode, b = new MaterialNode;
+    ASSERT_TRUE(a->setMaterialFile(dir.file("last.btfmat")));
+    ASSERT_TRUE(b->setMaterialFile(dir.file("last.btfmat")));
+    const osg::observer_ptr<Material> watched = a->getMaterial();
+    a = nullptr;
+    EXPECT_TRUE(watched.valid()) << "b still draws it";
+    b = nullptr;
+    EXPECT_FALSE(watched.valid());
+}
+
+// A material the application loaded and dropped itself stays in the cache until the next open
+// of any material or releaseUnusedSharedObjects(), which delete it.
+TEST(SceneMaterialNode, DroppedSharedMaterialIsReleasedOnRequestOrByTheNextOpen) {
+    TempDir dir;
+    const std::string file = dir.file("dropped.btfmat"), other = dir.file("other.btfmat");
+    saveMaterial(*sampleMaterial(), file);
+    saveMaterial(*sampleMaterial(), other);
+    osg::ref_ptr<Material> material = loadSharedMaterial(file);
+    osg::observer_ptr<Material> watched = material.get();
+    material = nullptr;
+    EXPECT_TRUE(watched.valid()) << "held by the cache until asked";
+    EXPECT_GE(releaseUnusedSharedObjects(), 1u);
+    EXPECT_FALSE(watched.valid());
+    EXPECT_EQ(releaseUnusedSharedObjects(), 0u);
+
+    material = loadSharedMaterial(file);
+    watched = material.get();
+    material = nullptr;
+    const osg::ref_ptr<Material> second = loadSharedMaterial(other);
+    EXPECT_FALSE(watched.valid());
+}
