@@ -62,7 +62,10 @@ FloatImage renderImage(HeadlessRenderer& renderer, osg::StateSet* stateSet, osg:
 }  // namespace
 
 void addRectifiedLighting(osg::StateSet& stateSet, const glm::vec3& view, const glm::vec3& light) {
-    stateSet.addUniform(new osg::Uniform(shader::kFixedView, osg::Vec4(view.x, view.y, view.z, 1)));
+    // OVERRIDE: on a parent of materials' StateSets (bench/bsvtf.cpp's grid) the fixed view must
+    // win over the real eye direction each of them sets (addCommonState).
+    stateSet.addUniform(new osg::Uniform(shader::kFixedView, osg::Vec4(view.x, view.y, view.z, 1)),
+                        osg::StateAttribute::ON | osg::StateAttribute::OVERRIDE);
     stateSet.addUniform(new osg::Uniform(shader::kLightCount, 1));
     osg::ref_ptr<osg::Uniform> position =
         new osg::Uniform(osg::Uniform::FLOAT_VEC4, shader::kLightPosition, shader::kMaxLights);

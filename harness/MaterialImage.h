@@ -21,7 +21,8 @@ osg::ref_ptr<osg::Geode> rectifiedPatch();
 
 /** The uniforms of a rectified image on `stateSet`: the local view fixed to `view`, one white
  *  directional light toward `light`, both in the patch's frame (the camera's view matrix is the
- *  identity there, so eye space is the patch's local frame). */
+ *  identity there, so eye space is the patch's local frame). The fixed view is set with OVERRIDE:
+ *  it also holds for materials' StateSets below `stateSet`, which set the real eye direction. */
 void addRectifiedLighting(osg::StateSet& stateSet, const glm::vec3& view, const glm::vec3& light);
 
 /** GPU path: renders the material's StateSet on a unit patch (tangent +X, normal +Z) with an

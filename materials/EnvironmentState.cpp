@@ -118,6 +118,9 @@ osg::ref_ptr<osg::StateSet> environmentStateSet(const Material& material,
     addTexture(*stateSet, createFloatTexture(data).get(), "osgBTF_envData", kEnvironmentDataUnit);
     stateSet->addUniform(new osg::Uniform("osgBTF_envStride", int(texelsPerVertex)));
     stateSet->addUniform(new osg::Uniform("osgBTF_envExposure", exposure));
+    // The real eye direction unless set again on this StateSet (a rectified image): a program
+    // keeps the last value any StateSet gave a uniform (addCommonState).
+    stateSet->addUniform(new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
     if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material))
         stateSet->addUniform(
             new osg::Uniform("fmfComponents", int(fmf->factors().factors[0].U.cols())));

@@ -158,6 +158,11 @@ void addCommonState(osg::StateSet& stateSet, const Material& material) {
     stateSet.addUniform(rectangles.get());
     stateSet.addUniform(new osg::Uniform(shader::kMipLevels, levels));
     stateSet.addUniform(new osg::Uniform(shader::kTextureScale, 1.0f));
+    // The real eye direction unless a rectified image fixes the view (addRectifiedLighting,
+    // harness/MaterialImage.h: on this StateSet, below it, or above it with OVERRIDE). Set here
+    // for the same reason as the terminator below: a draw after a rectified one would otherwise
+    // be shaded as seen from that image's view direction.
+    stateSet.addUniform(new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
     // Off unless a MaterialNode's StateSet (applied after this one) turns it on. Set here, not
     // left to the GLSL default: a program keeps the last value any StateSet gave a uniform, so
     // a draw after a MaterialNode's would otherwise inherit its terminator.

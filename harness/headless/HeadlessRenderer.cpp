@@ -8,6 +8,10 @@
 #include <osg/Notify>
 #include <osg/State>
 #include <osg/Texture>
+#include <osgUtil/RenderStage>
+#include <osgUtil/SceneView>
+#include <osgUtil/StateGraph>
+#include <osgViewer/Renderer>
 #include <osgViewer/Viewer>
 
 #include <algorithm>
@@ -171,6 +175,21 @@ osg::Camera& HeadlessRenderer::camera() {
 void HeadlessRenderer::setScene(osg::Node* scene) {
     _root->removeChildren(0, _root->getNumChildren());
     if (scene) _root->addChild(scene);
+    // The last frame's render graph outlives it until the next cull prunes it, its StateGraph
+    // nodes keyed by the addresses of the StateSets that made them. OSG 3.6.5's
+    // ViewDependentShadowMap gives its node another StateSet (ViewDependentShadowMap.cpp:1094),
+    // so once the previous scene is deleted that key is a freed address, and a StateSet the
+    // next cull allocates there (ShadowMap makes its own in its first cull) is drawn with the
+    // deleted technique's state. The new scene starts from an empty graph instead.
+    if (auto* renderer = dynamic_cast<osgViewer::Renderer*>(_viewer->getCamera()->getRenderer()))
+        for (unsigned i = 0; i < 2; ++i)
+            if (osgUtil::SceneView* view = renderer->getSceneView(i)) {
+                if (view->getRenderStage()) view->getRenderStage()->reset();
+                if (osgUtil::StateGraph* graph = view->getStateGraph()) {
+                    graph->clean();
+                    graph->prune();
+                }
+            }
 }
 
 void HeadlessRenderer::setClearColor(const osg::Vec4& colour) {

@@ -81,7 +81,9 @@ public:
     const std::string& glVersion() const { return _context->glVersion(); }
     bool isSoftwareRenderer() const { return _context->isSoftwareRenderer(); }
 
-    /** The subgraph to render (replaces the previous one; null renders nothing but the clear). */
+    /** The subgraph to render (replaces the previous one; null renders nothing but the clear).
+     *  Also empties the viewer's render graph of the last frame, so nothing of the previous
+     *  scene's state reaches the next frame (HeadlessRenderer.cpp says how it could). */
     void setScene(osg::Node* scene);
     /** Camera matrices and viewport; a new size reallocates the FBO on the next frame. */
     void setCamera(const CameraSetup& setup);

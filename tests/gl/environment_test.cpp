@@ -268,11 +268,12 @@ TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
     node->setMaterial(const_cast<PcaMaterial*>(&pca()));
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(square());
-    // The real eye direction (w = 0); an earlier test left a fixed view in the shared program,
-    // and GL keeps a program's uniform values until they are set again.
-    geode->getOrCreateStateSet()->addUniform(
-        new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
     node->addChild(geode);
+    // A rectified image of the same method first, its view fixed at 60 degrees: GL keeps a
+    // program's uniform values until they are set again, so environmentStateSet sets the real
+    // eye direction (osgBTF_fixedView w = 0) that the renders below need.
+    renderEnvironmentImage(test::sharedRenderer(), pca(), projectPatchEnvironment(pca(), white),
+                           Direction{60, 30}.toVector());
     std::size_t reports = 0;
     VertexEnvironmentOptions options;
     options.progress = [&](std::size_t, std::size_t) { ++reports; };
@@ -351,8 +352,6 @@ TEST(EnvironmentGpu, EnvironmentLitGroupLightsItsMaterialNodesByItself) {
     osg::ref_ptr<osg::Geometry> geometry = square();
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(geometry);
-    geode->getOrCreateStateSet()->addUniform(
-        new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
     node->addChild(geode);
     group->addChild(node);
     ASSERT_EQ(geometry->getStateSet(), nullptr);
@@ -440,8 +439,6 @@ TEST(EnvironmentGpu, EnvironmentLitGroupRebuildsRotationsFromItsIlluminationPca)
     node->setMaterial(const_cast<PcaMaterial*>(&pca()));
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(square());
-    geode->getOrCreateStateSet()->addUniform(
-        new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
     node->addChild(geode);
     group->addChild(node);
     group->finish();
@@ -529,8 +526,6 @@ TEST(EnvironmentGpu, RepresentativeLightsAreOccludedPerVertex) {
     node->setMaterial(findMethod("lambert").fit(sample4(), FitOptions::parse("")).get());
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(square());
-    geode->getOrCreateStateSet()->addUniform(
-        new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
     node->addChild(geode);
     group->addChild(node);
     osg::ref_ptr<osg::Geometry> wall = square();

@@ -6,8 +6,14 @@
 
 #include <gtest/gtest.h>
 
+#include <osg/Light>
+#include <osg/LightSource>
+#include <osg/ShapeDrawable>
 #include <osg/State>
 #include <osg/Uniform>
+#include <osgShadow/ShadowMap>
+#include <osgShadow/ShadowedScene>
+#include <osgShadow/ViewDependentShadowMap>
 
 #include <algorithm>
 #include <cmath>
@@ -303,6 +309,41 @@ void main() { gl_FragColor = vec4(gl_FragCoord.xy, uv * 100.0); }
     EXPECT_EQ(pixel(*empty, 3, 3, 0), -1.f);
     EXPECT_EQ(pixel(*empty, 3, 3, 3), 4.f);
     EXPECT_EQ(&r.context(), context);
+}
+
+// Nothing of a replaced scene reaches the next one. OSG 3.6.5's ViewDependentShadowMap leaves a
+// render-graph node keyed by the address of a StateSet that is deleted with its scene; a ShadowMap
+// scene drawn next, whose own StateSet landed at that address, was drawn with the deleted
+// technique's program and depth texture (HeadlessRenderer::setScene).
+TEST(HeadlessGl, ASceneAfterAViewDependentShadowMapRendersAsInAFreshRenderer) {
+    auto shadowed = [](osgShadow::ShadowTechnique* technique) {
+        osg::ref_ptr<osgShadow::ShadowedScene> scene = new osgShadow::ShadowedScene;
+        scene->setShadowTechnique(technique);
+        osg::ref_ptr<osg::Light> light = new osg::Light(0);
+        light->setPosition(osg::Vec4(0.57f, 0.0f, 0.82f, 0.0f));
+        osg::ref_ptr<osg::LightSource> source = new osg::LightSource;
+        source->setLight(light.get());
+        scene->addChild(source.get());
+        scene->addChild(createFullScreenQuad().get());
+        osg::ref_ptr<osg::Geode> box = new osg::Geode;
+        box->addDrawable(
+            new osg::ShapeDrawable(new osg::Box(osg::Vec3(0.5f, 0.5f, 0.3f), 0.2f, 0.3f, 0.1f)));
+        scene->addChild(box.get());
+        return scene;
+    };
+    HeadlessRenderer& shared = sharedRenderer();
+    shared.render(shadowed(new osgShadow::ViewDependentShadowMap).get(),
+                  patchViewFrom(10, 0, 8, 0.3).setup);
+    // Made while the ViewDependentShadowMap scene is still shown, as by a test that follows one
+    // that drew it; it is deleted when this one replaces it.
+    osg::ref_ptr<osgShadow::ShadowedScene> scene = shadowed(new osgShadow::ShadowMap);
+    const PatchView camera = patchViewFrom(5, 0, 48, 0.6);
+    osg::ref_ptr<osg::Image> image = shared.render(scene.get(), camera.setup);
+    HeadlessRenderer fresh(glTestBackend());
+    osg::ref_ptr<osg::Image> expected =
+        fresh.render(shadowed(new osgShadow::ShadowMap).get(), camera.setup);
+    EXPECT_GT(pixel(*expected, 24, 8, 0), 0.5f);  // the lit patch
+    EXPECT_LE(maxDifference(*image, *expected), 1e-6);
 }
 
 // Double uniforms reach the shader. Under OSMesa this needs the extension-pointer fix-up
