@@ -162,3 +162,28 @@ TEST(BtfTool, EvalWithAnEnvironment) {
         << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir.file("cmp")));
 }
+
+// A user runs the tool from the build tree with no OSG_LIBRARY_PATH (issue 30 section 5): an EXR
+// environment is read by this project's osgdb_exr, which OSG's own folders do not hold, so the
+// tool has to find its plugins itself (useOwnPlugins, scene/OwnPlugins.h). Before, this failed
+// with "white.exr: no osgDB plugin could read it as an image".
+TEST(BtfTool, FindsItsOwnPluginsWithoutOsgLibraryPath) {
+    TempDir dir;
+    const std::string zip = dir.file("s.zip"), hdr = dir.file("white.hdr");
+    const std::string sky = dir.file("white.exr"), fitted = dir.file("lambert.btfmat");
+    {
+        std::ofstream out(hdr, std::ios::binary);
+        out << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4 +X 8\n";
+        for (int i = 0; i < 32; ++i) out.write("\x80\x80\x80\x81", 4);
+    }
+    ASSERT_EQ(runCommand("oiiotool " + shellQuote(hdr) + " -d half -o " + shellQuote(sky)).exitCode,
+              0);
+    ASSERT_EQ(btf("sample --size 4 --format png -o " + shellQuote(zip)).exitCode, 0);
+    ASSERT_EQ(btf("fit " + shellQuote(zip) + " -m lambert -o " + shellQuote(fitted)).exitCode, 0);
+    const CommandResult r = runCommand(
+        "env -u OSG_LIBRARY_PATH -u LD_LIBRARY_PATH ASAN_OPTIONS=detect_leaks=0 " +
+        std::string(OSGBTF_BTF_TOOL) + " --no-progress eval " + shellQuote(fitted) + " --env " +
+        shellQuote(sky) + " --view 30,0 -o " + shellQuote(dir.file("e.exr")));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("environment " + sky), std::string::npos) << r.output;
+}

@@ -25,6 +25,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MipMapping.h"
+#include "scene/OwnPlugins.h"
 
 namespace {
 
@@ -220,6 +221,7 @@ void run(Options options) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    osgBTF::useOwnPlugins();
     CLI::App app{
         "btf-examples: writes osgBTF's example scenes into a folder.\n"
         "Makes the built-in sample BTF (`btf sample`'s woven cloth) at --size x --size texels, "

@@ -42,6 +42,7 @@
 #include "examples/ExampleScenes.h"
 #include "examples/btfviewer/EnvironmentControl.h"
 #include "scene/MaterialNode.h"
+#include "scene/OwnPlugins.h"
 #include "scene/ShadowTerminator.h"
 #include "streaming/StreamingGroup.h"
 
@@ -444,9 +445,7 @@ osg::ref_ptr<osg::Node> readInput(const std::string& file) {
     if (result.validNode()) return result.getNode();
     switch (result.status()) {
         case osgDB::ReaderWriter::ReadResult::FILE_NOT_HANDLED:
-            osgBTF::fail(file,
-                         "no osgDB plugin reads this file (for osgBTF's materials set "
-                         "OSG_LIBRARY_PATH to osgBTF's lib folder)");
+            osgBTF::fail(file, "no osgDB plugin reads this file");
         case osgDB::ReaderWriter::ReadResult::FILE_NOT_FOUND:
             // A pseudo-loader name: the plugin says which part is missing.
             if (result.message().empty() || result.message() == file + ": no such file")
@@ -891,6 +890,7 @@ int run(osg::ArgumentParser& arguments) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    osgBTF::useOwnPlugins();  // the material readers and osgdb_exr, without OSG_LIBRARY_PATH
     osg::ArgumentParser arguments(&argc, argv);
     try {
         return run(arguments);
