@@ -628,6 +628,36 @@ int techniqueLight(osgUtil::CullVisitor& cv, const std::vector<EyeLight>& lights
     return last;
 }
 
+/** The program ([0]) and the texture of each unit u ([1 + u]) that `sets` bind, a later set's
+ *  winning: what this node's own state draws with. */
+std::vector<osg::StateAttribute*> ownAttributes(std::initializer_list<const osg::StateSet*> sets) {
+    std::vector<osg::StateAttribute*> own(1, nullptr);
+    for (const osg::StateSet* set : sets) {
+        if (!set) continue;
+        if (const osg::StateAttribute* program = set->getAttribute(osg::StateAttribute::PROGRAM))
+            own[0] = const_cast<osg::StateAttribute*>(program);
+        const unsigned units = unsigned(set->getTextureAttributeList().size());
+        if (own.size() < units + 1) own.resize(units + 1, nullptr);
+        for (unsigned unit = 0; unit < units; ++unit)
+            if (const osg::StateAttribute* texture =
+                    set->getTextureAttribute(unit, osg::StateAttribute::TEXTURE))
+                own[unit + 1] = const_cast<osg::StateAttribute*>(texture);
+    }
+    return own;
+}
+
+/** Binds `own`'s textures again, PROTECTED, on their units, and its program too when
+ *  `program`: a shadow technique's OVERRIDE (ShadowMap's depth texture on unit 1, SoftShadowMap's
+ *  jitter texture on unit 2, ViewDependentShadowMap's depth textures from unit 1, any program or
+ *  texture of another technique) then leaves the material's state alone. */
+void protectOwnAttributes(osg::StateSet& state, const std::vector<osg::StateAttribute*>& own,
+                          bool program) {
+    const unsigned protect = osg::StateAttribute::ON | osg::StateAttribute::PROTECTED;
+    if (program && own[0]) state.setAttribute(own[0], protect);
+    for (std::size_t i = 1; i < own.size(); ++i)
+        if (own[i]) state.setTextureAttribute(unsigned(i - 1), own[i], protect);
+}
+
 }  // namespace
 
 osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
@@ -647,19 +677,13 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
         }
     }
     if (!scene || depthPass || !scene->getShadowTechnique()) return nullptr;
+    const std::vector<osg::StateAttribute*> own =
+        ownAttributes({materialStateSet(), _nodeStateSet.get(), _mapStateSet.get()});
     const auto* technique = dynamic_cast<const osgShadow::ShadowMap*>(scene->getShadowTechnique());
-    if (!technique) {
-        if (!_shadowNoticeGiven.exchange(true))
-            OSG_NOTICE << "osgBTF::MaterialNode: shadow technique '"
-                       << scene->getShadowTechnique()->className()
-                       << "' is not supported (osgShadow::ShadowMap is): no cast shadows"
-                       << std::endl;
-        return nullptr;
-    }
-    const int unit = int(technique->getTextureUnit());
     // The depth texture, as the technique's StateSet (pushed before its traversal) binds it.
     osg::Texture* depth = nullptr;
-    for (osgUtil::StateGraph* graph = cv.getCurrentStateGraph(); graph && !depth;
+    const int unit = technique ? int(technique->getTextureUnit()) : -1;
+    for (osgUtil::StateGraph* graph = cv.getCurrentStateGraph(); technique && graph && !depth;
          graph = graph->_parent) {
         const osg::StateSet* stateSet = graph->getStateSet();
         if (!stateSet) continue;
@@ -667,42 +691,55 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
             stateSet->getTextureAttribute(unit, osg::StateAttribute::TEXTURE)));
         if (texture && texture->getShadowComparison()) depth = texture;
     }
-    if (!depth) return nullptr;
+    if (!depth) {
+        // Any other technique: the material is drawn as it is without one, unshadowed, whatever
+        // the technique binds with OVERRIDE (its textures, its program).
+        if (!technique && !_shadowNoticeGiven.exchange(true))
+            OSG_NOTICE << "osgBTF::MaterialNode: shadow technique '"
+                       << scene->getShadowTechnique()->className()
+                       << "' is not supported (osgShadow::ShadowMap and SoftShadowMap are): the "
+                          "node draws without cast shadows"
+                       << std::endl;
+        std::lock_guard<std::mutex> lock(_lightsMutex);
+        CameraLights& entry = _lightsPerCamera[cv.getCurrentCamera()];
+        if (!entry.unshadowedStateSet || entry.unshadowedOwn != own) {
+            entry.unshadowedStateSet = new osg::StateSet;
+            protectOwnAttributes(*entry.unshadowedStateSet, own, true);
+            entry.unshadowedOwn = own;
+            entry.camera = cv.getCurrentCamera();
+        }
+        return entry.unshadowedStateSet.get();
+    }
 
     std::lock_guard<std::mutex> lock(_lightsMutex);
     CameraLights& entry = _lightsPerCamera[cv.getCurrentCamera()];
     osg::ref_ptr<osg::Texture> current;
     const bool stale = !entry.shadowStateSet || !entry.shadowTexture.lock(current) ||
                        current.get() != depth || entry.shadowUnit != unit ||
-                       entry.shadowMapState != _mapStateSet.get();
+                       entry.shadowMapState != _mapStateSet.get() || entry.shadowOwn != own;
     if (stale) {
         osg::ref_ptr<osg::StateSet> state = new osg::StateSet;
         state->setAttributeAndModes(
             shadowMapProgram(_material->methodName(), _mapStateSet.valid()).get(),
-            osg::StateAttribute::ON);
+            osg::StateAttribute::ON | osg::StateAttribute::PROTECTED);
         state->setTextureAttribute(shader::kShadowMapUnit, depth, osg::StateAttribute::ON);
         state->addUniform(new osg::Uniform(shader::kShadowMap, shader::kShadowMapUnit));
         state->addUniform(new osg::Uniform(shader::kShadowTexGenUnit, unit));
         entry.shadowLight = new osg::Uniform(shader::kShadowLight, -1);
         entry.shadowLight->setDataVariance(osg::Object::DYNAMIC);
         state->addUniform(entry.shadowLight.get());
-        // The technique binds its texture on its unit with OVERRIDE; what this node's state put
-        // there (the material's textures use units from 0, ShadowMap's default is 1) is bound
-        // again, PROTECTED, so the material keeps its texture and the shader reads the depth
-        // texture from kShadowMapUnit instead.
-        for (const osg::StateSet* own : std::initializer_list<const osg::StateSet*>{
-                 materialStateSet(), _nodeStateSet.get(), _mapStateSet.get()})
-            if (own)
-                if (const osg::StateAttribute* texture =
-                        own->getTextureAttribute(unit, osg::StateAttribute::TEXTURE))
-                    state->setTextureAttribute(
-                        unit, const_cast<osg::StateAttribute*>(texture),
-                        osg::StateAttribute::ON | osg::StateAttribute::PROTECTED);
+        // The technique binds its texture on its unit with OVERRIDE (SoftShadowMap its jitter
+        // texture on the next one too); what this node's state put there (the material's
+        // textures use units from 0, ShadowMap's default is 1) is bound again, PROTECTED, so the
+        // material keeps its textures and the shader reads the depth texture from kShadowMapUnit
+        // instead.
+        protectOwnAttributes(*state, own, false);
         entry.camera = cv.getCurrentCamera();
         entry.shadowStateSet = state;
         entry.shadowTexture = depth;
         entry.shadowUnit = unit;
         entry.shadowMapState = _mapStateSet.get();
+        entry.shadowOwn = own;
     }
     const int count = int(entry.lights.size());
     const int light = _shadowLight >= 0 ? _shadowLight : techniqueLight(cv, entry.lights);
@@ -775,6 +812,7 @@ void MaterialNode::resizeGLObjectBuffers(unsigned int maxSize) {
     for (auto& [camera, entry] : _lightsPerCamera) {
         if (entry.stateSet) entry.stateSet->resizeGLObjectBuffers(maxSize);
         if (entry.shadowStateSet) entry.shadowStateSet->resizeGLObjectBuffers(maxSize);
+        if (entry.unshadowedStateSet) entry.unshadowedStateSet->resizeGLObjectBuffers(maxSize);
     }
 }
 
@@ -788,6 +826,7 @@ void MaterialNode::releaseGLObjects(osg::State* state) const {
     for (const auto& [camera, entry] : _lightsPerCamera) {
         if (entry.stateSet) entry.stateSet->releaseGLObjects(state);
         if (entry.shadowStateSet) entry.shadowStateSet->releaseGLObjects(state);
+        if (entry.unshadowedStateSet) entry.unshadowedStateSet->releaseGLObjects(state);
     }
 }
 

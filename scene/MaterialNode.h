@@ -16,8 +16,10 @@
 //    (osgViewer's headlight or sky light), or a white headlight when there is no view.
 //  - multiplies each light's term by seed 004's smooth shadow terminator (on by default, alpha
 //    15 degrees; scene/ShadowTerminator.h);
-//  - below an osgShadow::ShadowedScene whose technique is an osgShadow::ShadowMap, samples the
-//    technique's shadow map for the light it shadows (setShadowLight), with any texture unit;
+//  - below an osgShadow::ShadowedScene whose technique is an osgShadow::ShadowMap (or a
+//    SoftShadowMap), samples the technique's shadow map for the light it shadows
+//    (setShadowLight), with any texture unit; under any other technique it draws unshadowed,
+//    its own program and textures PROTECTED from the technique's OVERRIDE, with one notice;
 //  - optionally draws the material through a coordinate map (setCoordinateMap[File]): a large
 //    non-repeating surface from a small sample, at the cost of one dependent fetch.
 // A material that cannot be loaded is reported with OSG_WARN (file and problem); the node then
@@ -218,9 +220,16 @@ protected:
         int shadowUnit = -1;
         const osg::StateSet* shadowMapState = nullptr;
         osg::ref_ptr<osg::Uniform> shadowLight;
+        std::vector<osg::StateAttribute*> shadowOwn;  // the own state shadowStateSet protects
+        // Under a technique the node does not support: the node's own program and textures
+        // again, PROTECTED from the technique's OVERRIDE, for `unshadowedOwn`.
+        osg::ref_ptr<osg::StateSet> unshadowedStateSet;
+        std::vector<osg::StateAttribute*> unshadowedOwn;
     };
-    /** The shadow-map state for this cull, or null when the node is not below a ShadowedScene
-     *  with a ShadowMap, or is being culled for the technique's own depth pass. */
+    /** The shadow-map state for this cull (under a ShadowMap or SoftShadowMap); under another
+     *  technique the node's own state bound again PROTECTED (drawn unshadowed, one notice); null
+     *  when the node is not below a ShadowedScene, or is being culled for the technique's own
+     *  depth pass. */
     osg::StateSet* shadowStateSet(osgUtil::CullVisitor& cv);
     std::atomic<bool> _shadowNoticeGiven{false};  // cull threads of several cameras
     mutable std::mutex _lightsMutex;  // cull threads of several cameras may share this node

@@ -13,9 +13,12 @@
 #include <osg/Light>
 #include <osg/LightSource>
 #include <osg/ShapeDrawable>
+#include <osg/Texture2D>
 #include <osgShadow/ShadowMap>
 #include <osgShadow/ShadowedScene>
+#include <osgShadow/SoftShadowMap>
 #include <osgShadow/ViewDependentShadowMap>
+#include <osgUtil/CullVisitor>
 
 #include "core/Directions.h"
 #include "harness/sample/SampleBtf.h"
@@ -268,10 +271,11 @@ bool rayHitsBox(const osg::Vec3d& origin, const osg::Vec3d& direction) {
  *  shadowed light hits the box, the image of the scene without that light; elsewhere the image
  *  of the scene without any shadowing. Pixels within `margin` of the shadow's outline (the shadow
  *  map's texels and the image's pixels, both under 0.025) are not judged. */
-static void expectBoxShadow(Material* material, double minimumShadowDepth) {
+static void expectBoxShadow(Material* material, double minimumShadowDepth,
+                            osgShadow::ShadowTechnique* technique = nullptr, bool shadowed = true) {
     const osg::Vec4 free = osg::Vec4(-0.3f, 0.2f, 0.9327f, 0.0f);
-    const osg::Vec4 shadowed = directionAt(35);
-    const osg::Vec3d toShadowed(shadowed.x(), shadowed.y(), shadowed.z());
+    const osg::Vec4 shadowedLight = directionAt(35);
+    const osg::Vec3d toShadowed(shadowedLight.x(), shadowedLight.y(), shadowedLight.z());
     const int size = 48;
     const double halfExtent = 0.6;
     const PatchView camera = patchViewFrom(5, 0, size, halfExtent);
@@ -279,7 +283,7 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth) {
 
     auto scene = [&](osg::Group* root, bool withShadowedLight) {
         root->addChild(lightSource(0, free, osg::Vec3(0.3f, 0.6f, 0.9f)).get());
-        if (withShadowedLight) root->addChild(lightSource(1, shadowed).get());
+        if (withShadowedLight) root->addChild(lightSource(1, shadowedLight).get());
         root->addChild(patchNode(material).get());
         osg::ref_ptr<osg::Geode> box = new osg::Geode;
         const osg::Vec3d c = (kBoxMin + kBoxMax) * 0.5, e = kBoxMax - kBoxMin;
@@ -293,9 +297,9 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth) {
         return root;
     };
     osg::ref_ptr<osgShadow::ShadowedScene> shadowedScene = new osgShadow::ShadowedScene;
-    osg::ref_ptr<osgShadow::ShadowMap> technique = new osgShadow::ShadowMap;
-    technique->setTextureSize(osg::Vec2s(512, 512));
-    shadowedScene->setShadowTechnique(technique.get());
+    osg::ref_ptr<osgShadow::ShadowMap> shadowMap = new osgShadow::ShadowMap;
+    shadowMap->setTextureSize(osg::Vec2s(512, 512));
+    shadowedScene->setShadowTechnique(technique ? technique : shadowMap.get());
     scene(shadowedScene.get(), true);
     osg::ref_ptr<osg::Group> unshadowed = scene(new osg::Group, true);
     osg::ref_ptr<osg::Group> withoutLight = scene(new osg::Group, false);
@@ -325,7 +329,7 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth) {
                   osg::Vec3d(0, margin, 0), osg::Vec3d(0, -margin, 0)})
                 hits += rayHitsBox(p + d, toShadowed) ? 1 : 0;
             if (hits != 0 && hits != 5) continue;
-            const osg::Image& expected = hits == 5 ? *darkImage : *litImage;
+            const osg::Image& expected = hits == 5 && shadowed ? *darkImage : *litImage;
             for (int c = 0; c < 3; ++c) {
                 const double d = std::abs(pixel(*shadowImage, i, j, c) - pixel(expected, i, j, c));
                 double& worst = hits == 5 ? worstShadow : worstLit;
@@ -349,6 +353,12 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth) {
     EXPECT_GE(inShadow, 40);
     EXPECT_GE(lit, 400);
     EXPECT_GT(shadowDepth, minimumShadowDepth);
+    // The ground is drawn: much of the image is neither the box nor the background (0).
+    int ground = 0;
+    for (int j = 0; j < size; ++j)
+        for (int i = 0; i < size; ++i)
+            if (pixel(*shadowImage, i, j, 1) > 0.0f) ++ground;
+    EXPECT_GE(ground, 400);
     EXPECT_LE(worstShadow, 1e-5) << where;
     EXPECT_LE(worstLit, 1e-5) << where;
 }
@@ -365,6 +375,92 @@ TEST(ShadowMapGpu, AMaterialTextureOnTheTechniquesUnitIsKept) {
     expectBoxShadow(pcaSample().get(), 0.01);
 }
 
+namespace {
+
+/** A technique MaterialNode does not know: it binds a black texture on units 0 to 3 and a
+ *  program that draws black, all with OVERRIDE, and casts no shadow. */
+class OverridingTechnique : public osgShadow::ShadowTechnique {
+public:
+    OverridingTechnique() = default;
+    OverridingTechnique(const OverridingTechnique& other,
+                        const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : osgShadow::ShadowTechnique(other, copyop) {}
+    META_Object(osgBTFTest, OverridingTechnique);
+
+    void init() override {
+        _state = programStateSet(
+            "", "#version 330 compatibility\nvoid main() { gl_FragColor = vec4(0, 0, 0, 1); }\n");
+        _state->setAttribute(_state->getAttribute(osg::StateAttribute::PROGRAM),
+                             osg::StateAttribute::ON | osg::StateAttribute::OVERRIDE);
+        osg::ref_ptr<osg::Image> image = new osg::Image;
+        image->allocateImage(1, 1, 1, GL_RGBA, GL_FLOAT);
+        std::fill_n(reinterpret_cast<float*>(image->data()), 4, 0.0f);
+        osg::ref_ptr<osg::Texture2D> black = new osg::Texture2D(image.get());
+        for (unsigned unit = 0; unit < 4; ++unit)
+            _state->setTextureAttributeAndModes(
+                unit, black.get(), osg::StateAttribute::ON | osg::StateAttribute::OVERRIDE);
+        _dirty = false;
+    }
+    void update(osg::NodeVisitor& nv) override { _shadowedScene->osg::Group::traverse(nv); }
+    void cull(osgUtil::CullVisitor& cv) override {
+        cv.pushStateSet(_state.get());
+        _shadowedScene->osg::Group::traverse(cv);
+        cv.popStateSet();
+    }
+    void cleanSceneGraph() override {}
+    void resizeGLObjectBuffers(unsigned int maxSize) override {
+        if (_state) _state->resizeGLObjectBuffers(maxSize);
+    }
+    void releaseGLObjects(osg::State* state = nullptr) const override {
+        if (_state) _state->releaseGLObjects(state);
+    }
+
+private:
+    osg::ref_ptr<osg::StateSet> _state;
+};
+
+const std::string kNotSupported =
+    "' is not supported (osgShadow::ShadowMap and SoftShadowMap "
+    "are): the node draws without cast shadows\n";
+
+/** The notice naming `technique`'s class comes exactly once in `text`. */
+void expectNamedOnce(const std::string& text, const std::string& className) {
+    const std::string message =
+        "osgBTF::MaterialNode: shadow technique '" + className + kNotSupported;
+    const std::size_t first = text.find(message);
+    ASSERT_NE(first, std::string::npos) << text;
+    EXPECT_EQ(text.find(message, first + 1), std::string::npos) << "said twice";
+}
+
+}  // namespace
+
+TEST(ShadowMapGpu, SoftShadowMapShadowsLikeShadowMap) {
+    // SoftShadowMap binds its jitter texture with OVERRIDE on the unit after its depth texture's
+    // (2): pca's textures there are kept, and the box's shadow matches the ray test.
+    osg::ref_ptr<osgShadow::SoftShadowMap> technique = new osgShadow::SoftShadowMap;
+    technique->setTextureSize(osg::Vec2s(512, 512));
+    test::ScopedNotifyCapture capture(true);
+    expectBoxShadow(pcaSample().get(), 0.01, technique.get());
+    EXPECT_EQ(capture.text().find("not supported"), std::string::npos) << capture.text();
+}
+
+TEST(ShadowMapGpu, ViewDependentShadowMapDrawsTheGroundUnshadowedWithOneNotice) {
+    // ViewDependentShadowMap binds its depth texture with OVERRIDE on unit 1 (pca's weights):
+    // the ground is drawn, equal to the unshadowed image wherever the box does not hide it.
+    osg::ref_ptr<osgShadow::ViewDependentShadowMap> technique =
+        new osgShadow::ViewDependentShadowMap;
+    test::ScopedNotifyCapture capture(true);
+    expectBoxShadow(pcaSample().get(), 0.01, technique.get(), false);
+    expectNamedOnce(capture.text(), "ViewDependentShadowMap");
+}
+
+TEST(ShadowMapGpu, AnUnknownTechniquesOverridesLeaveTheMaterialDrawnWithOneNotice) {
+    osg::ref_ptr<OverridingTechnique> technique = new OverridingTechnique;
+    test::ScopedNotifyCapture capture(true);
+    expectBoxShadow(pcaSample().get(), 0.01, technique.get(), false);
+    expectNamedOnce(capture.text(), "OverridingTechnique");
+}
+
 TEST(ShadowMapGpu, AnotherTechniqueIsNamedOnceAndTheNodeDrawsWithoutCastShadows) {
     osg::ref_ptr<osgShadow::ShadowedScene> scene = new osgShadow::ShadowedScene;
     scene->setShadowTechnique(new osgShadow::ViewDependentShadowMap);
@@ -374,11 +470,6 @@ TEST(ShadowMapGpu, AnotherTechniqueIsNamedOnceAndTheNodeDrawsWithoutCastShadows)
     test::ScopedNotifyCapture capture(true);
     sharedRenderer().render(scene.get(), camera.setup);
     osg::ref_ptr<osg::Image> image = sharedRenderer().render(scene.get(), camera.setup);
-    const std::string message =
-        "osgBTF::MaterialNode: shadow technique 'ViewDependentShadowMap' is not supported "
-        "(osgShadow::ShadowMap is): no cast shadows\n";
-    const std::size_t first = capture.text().find(message);
-    ASSERT_NE(first, std::string::npos) << capture.text();
-    EXPECT_EQ(capture.text().find(message, first + 1), std::string::npos) << "said twice";
+    expectNamedOnce(capture.text(), "ViewDependentShadowMap");
     EXPECT_GT(centre(*image), 0.0f);
 }
