@@ -7,6 +7,7 @@
 #include <mutex>
 #include <set>
 #include <system_error>
+#include <tuple>
 #include <vector>
 
 #include <osg/Camera>
@@ -56,13 +57,16 @@ SharedObjects<std::string, Material, std::string>& sharedMaterials() {
     return *cache;
 }
 
-/** One texture per coordinate map, shared by every node drawing that map (uploaded once per
- *  context). The stamp is the map itself: the entry keeps it alive, so no other map can take its
- *  address while the texture is cached. */
-using MapTextures =
-    SharedObjects<const CoordinateMap*, osg::Texture2D, std::shared_ptr<const CoordinateMap>>;
-MapTextures& mapTextures() {
-    static auto* const cache = new MapTextures;
+/** One StateSet per coordinate map, method and number of texture units the material binds
+ *  (createCoordinateMapStateSet checks that number against the map's unit): the map's texture,
+ *  uploaded once per context, and the method's map program, shared by every node drawing the
+ *  map. Nodes push it at cull, so the texture's list of parent StateSets, which OSG does not
+ *  guard, never changes when nodes are made or deleted on other threads (issue 31). The stamp is
+ *  the map itself: the entry keeps it alive, so no other map can take its address meanwhile. */
+using MapStateSets = SharedObjects<std::tuple<const CoordinateMap*, std::string, std::size_t>,
+                                   osg::StateSet, std::shared_ptr<const CoordinateMap>>;
+MapStateSets& mapStateSets() {
+    static auto* const cache = new MapStateSets;
     return *cache;
 }
 
@@ -78,14 +82,20 @@ osg::ref_ptr<Material> loadSharedMaterial(const std::string& path,
 }
 
 std::size_t releaseUnusedSharedObjects() {
-    return sharedMaterials().releaseUnused() + mapTextures().releaseUnused() +
-           releaseUnusedTerminatorTextures();
+    return sharedMaterials().releaseUnused() + mapStateSets().releaseUnused() +
+           releaseUnusedTerminatorStateSets();
 }
 
 namespace {
 
-osg::ref_ptr<osg::Texture2D> sharedMapTexture(const std::shared_ptr<const CoordinateMap>& map) {
-    return mapTextures().get(map.get(), map, [&] { return createCoordinateMapTexture(*map); });
+osg::ref_ptr<osg::StateSet> sharedMapStateSet(const std::shared_ptr<const CoordinateMap>& map,
+                                              const Material& material) {
+    const osg::StateSet& materialState = *material.sharedStateSet();
+    const std::size_t units = materialState.getTextureAttributeList().size();
+    return mapStateSets().get({map.get(), material.methodName(), units}, map, [&] {
+        return createCoordinateMapStateSet(material, materialState,
+                                           createCoordinateMapTexture(*map).get());
+    });
 }
 
 constexpr unsigned kTangentAttribute = shader::kTangentAttribute;
@@ -315,12 +325,7 @@ void MaterialNode::updateTerminatorState() {
     const bool on = _terminator && unitFree;
     _terminatorUniform->set(on);
     _terminatorAlphaUniform->set(float(osg::DegreesToRadians(double(_terminatorAlpha))));
-    if (on)
-        _nodeStateSet->setTextureAttribute(shader::kTerminatorUnit,
-                                           terminatorTexture(_terminatorSoftness).get());
-    else
-        _nodeStateSet->removeTextureAttribute(shader::kTerminatorUnit,
-                                              osg::StateAttribute::TEXTURE);
+    _terminatorStateSet = on ? terminatorStateSet(_terminatorSoftness) : nullptr;
 }
 
 void MaterialNode::setShadowTerminator(bool enabled) {
@@ -442,8 +447,7 @@ void MaterialNode::updateMapState() {
     try {
         checkCoordinateMapMatches(*_material, *_map,
                                   _mapFile.empty() ? std::string("coordinate map") : _mapFile);
-        _mapStateSet = createCoordinateMapStateSet(*_material, *_material->sharedStateSet(),
-                                                   sharedMapTexture(_map).get());
+        _mapStateSet = sharedMapStateSet(_map, *_material);
     } catch (const std::exception& e) {
         _mapError = e.what();
         OSGBTF_NOTIFY(osg::WARN,
@@ -677,8 +681,8 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
         }
     }
     if (!scene || depthPass || !scene->getShadowTechnique()) return nullptr;
-    const std::vector<osg::StateAttribute*> own =
-        ownAttributes({materialStateSet(), _nodeStateSet.get(), _mapStateSet.get()});
+    const std::vector<osg::StateAttribute*> own = ownAttributes(
+        {materialStateSet(), _nodeStateSet.get(), _terminatorStateSet.get(), _mapStateSet.get()});
     const auto* technique = dynamic_cast<const osgShadow::ShadowMap*>(scene->getShadowTechnique());
     // The depth texture, as the technique's StateSet (pushed before its traversal) binds it.
     osg::Texture* depth = nullptr;
@@ -758,10 +762,12 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
             if (auto* compile = dynamic_cast<osgUtil::GLObjectsVisitor*>(&nv)) {
                 compile->apply(*material);
                 compile->apply(*_nodeStateSet);
+                if (_terminatorStateSet) compile->apply(*_terminatorStateSet);
                 if (_mapStateSet) compile->apply(*_mapStateSet);
             } else if (auto* collect = dynamic_cast<osgUtil::StateToCompile*>(&nv)) {
                 collect->apply(*material);
                 collect->apply(*_nodeStateSet);
+                if (_terminatorStateSet) collect->apply(*_terminatorStateSet);
                 if (_mapStateSet) collect->apply(*_mapStateSet);
             }
         }
@@ -770,6 +776,7 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
     }
     cv->pushStateSet(_material->sharedStateSet());
     cv->pushStateSet(_nodeStateSet.get());
+    if (_terminatorStateSet) cv->pushStateSet(_terminatorStateSet.get());
     if (_mapStateSet) cv->pushStateSet(_mapStateSet.get());
     cv->pushStateSet(lightStateSet(*cv));
     osg::StateSet* shadow = shadowStateSet(*cv);
@@ -778,6 +785,7 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
     if (shadow) cv->popStateSet();
     cv->popStateSet();
     if (_mapStateSet) cv->popStateSet();
+    if (_terminatorStateSet) cv->popStateSet();
     cv->popStateSet();
     cv->popStateSet();
 }
@@ -807,6 +815,7 @@ void MaterialNode::resizeGLObjectBuffers(unsigned int maxSize) {
     osg::Group::resizeGLObjectBuffers(maxSize);
     if (osg::StateSet* material = materialStateSet()) material->resizeGLObjectBuffers(maxSize);
     _nodeStateSet->resizeGLObjectBuffers(maxSize);
+    if (_terminatorStateSet) _terminatorStateSet->resizeGLObjectBuffers(maxSize);
     if (_mapStateSet) _mapStateSet->resizeGLObjectBuffers(maxSize);
     std::lock_guard<std::mutex> lock(_lightsMutex);
     for (auto& [camera, entry] : _lightsPerCamera) {
@@ -820,6 +829,7 @@ void MaterialNode::releaseGLObjects(osg::State* state) const {
     osg::Group::releaseGLObjects(state);
     if (const osg::StateSet* material = materialStateSet()) material->releaseGLObjects(state);
     _nodeStateSet->releaseGLObjects(state);
+    if (_terminatorStateSet) _terminatorStateSet->releaseGLObjects(state);
     if (_mapStateSet) _mapStateSet->releaseGLObjects(state);
     std::lock_guard<std::mutex> lock(_lightsMutex);
     pruneCameraLights();

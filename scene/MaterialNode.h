@@ -202,7 +202,9 @@ protected:
     float _terminatorSoftness;
     int _shadowLight = -1;
     osg::ref_ptr<osg::Uniform> _terminatorUniform, _terminatorAlphaUniform;
-    /** Refreshes the terminator state of _nodeStateSet (texture, uniforms). */
+    /** The terminator's texture, shared (terminatorStateSet); null while the terminator is off. */
+    osg::ref_ptr<osg::StateSet> _terminatorStateSet;
+    /** Refreshes the terminator state (uniforms of _nodeStateSet, _terminatorStateSet). */
     void updateTerminatorState();
 
     struct CameraLights {

@@ -8,6 +8,7 @@
 #include <glm/geometric.hpp>
 #include <osg/Image>
 
+#include "materials/ShaderInterface.h"
 #include "scene/SharedObjects.h"
 
 namespace osgBTF {
@@ -52,10 +53,10 @@ float terminatorFactor(float u, float softness) {
 
 namespace {
 
-/** One texture per softness, shared by every node (scene/SharedObjects.h; never destroyed, as
- *  the other caches there). */
-SharedObjects<float, osg::Texture1D, bool>& terminatorTextures() {
-    static auto* const cache = new SharedObjects<float, osg::Texture1D, bool>;
+/** One StateSet (and texture) per softness, shared by every node (scene/SharedObjects.h; never
+ *  destroyed, as the other caches there). */
+SharedObjects<float, osg::StateSet, bool>& terminatorStateSets() {
+    static auto* const cache = new SharedObjects<float, osg::StateSet, bool>;
     return *cache;
 }
 
@@ -80,13 +81,24 @@ osg::ref_ptr<osg::Texture1D> createTerminatorTexture(float softness) {
 
 }  // namespace
 
-osg::ref_ptr<osg::Texture1D> terminatorTexture(float softness) {
-    return terminatorTextures().get(softness, true,
-                                    [softness] { return createTerminatorTexture(softness); });
+osg::ref_ptr<osg::StateSet> terminatorStateSet(float softness) {
+    return terminatorStateSets().get(softness, true, [softness] {
+        osg::ref_ptr<osg::StateSet> state = new osg::StateSet;
+        // Its only parent, for its whole life: this StateSet.
+        state->setTextureAttribute(shader::kTerminatorUnit,
+                                   createTerminatorTexture(softness).get());
+        return state;
+    });
 }
 
-std::size_t releaseUnusedTerminatorTextures() {
-    return terminatorTextures().releaseUnused();
+osg::Texture1D* terminatorTexture(const osg::StateSet& terminatorState) {
+    return dynamic_cast<osg::Texture1D*>(
+        const_cast<osg::StateAttribute*>(terminatorState.getTextureAttribute(
+            shader::kTerminatorUnit, osg::StateAttribute::TEXTURE)));
+}
+
+std::size_t releaseUnusedTerminatorStateSets() {
+    return terminatorStateSets().releaseUnused();
 }
 
 }  // namespace osgBTF

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <osg/StateSet>
 #include <osg/Texture1D>
 #include <osg/ref_ptr>
 
@@ -45,12 +46,18 @@ float sampleTerminatorTexels(const std::vector<float>& texels, float u);
  *  sampleTerminatorTexels(terminatorTexels(softness), u), texels cached per softness. */
 float terminatorFactor(float u, float softness);
 
-/** The 1D texture of terminatorTexels(softness) (R32F, LINEAR, CLAMP_TO_EDGE), shared by every
- *  caller with the same softness while one holds it. */
-osg::ref_ptr<osg::Texture1D> terminatorTexture(float softness);
+/** A StateSet binding the 1D texture of terminatorTexels(softness) (R32F, LINEAR, CLAMP_TO_EDGE)
+ *  on shader::kTerminatorUnit, shared by every caller with the same softness while one holds it.
+ *  Nodes push it at cull rather than binding the shared texture in StateSets of their own: a
+ *  StateAttribute's list of parent StateSets is not thread-safe, and nodes are made and deleted
+ *  on any thread (a DatabasePager's, say), each adding or removing itself there (issue 31). */
+osg::ref_ptr<osg::StateSet> terminatorStateSet(float softness);
 
-/** Deletes the terminator textures no node uses any more (releaseUnusedSharedObjects,
+/** The texture terminatorStateSet(softness) binds. */
+osg::Texture1D* terminatorTexture(const osg::StateSet& terminatorState);
+
+/** Deletes the terminator StateSets no node uses any more (releaseUnusedSharedObjects,
  *  scene/MaterialNode.h, calls it); returns how many. */
-std::size_t releaseUnusedTerminatorTextures();
+std::size_t releaseUnusedTerminatorStateSets();
 
 }  // namespace osgBTF

@@ -11,8 +11,11 @@
 #include <thread>
 #include <vector>
 
+#include <dlfcn.h>
+
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <osg/FrameStamp>
 #include <osg/ProxyNode>
@@ -85,6 +88,19 @@ void expectCompleteCacheEntries(const std::string& cache) {
 }
 
 }  // namespace
+
+#if defined(__SANITIZE_THREAD__)
+// tests/CMakeLists.txt runs these with a libtbb that has no libtbbmalloc beside it: TBB's own
+// allocator recycles memory between threads where ThreadSanitizer cannot see it (issue 31).
+TEST(Concurrency, OneTbbAllocatesThroughMallocUnderThreadSanitizer) {
+    std::atomic<int> sum{0};
+    tbb::parallel_for(0, 64, [&](int i) { sum += i; });  // TBB picks its allocator on first use
+    EXPECT_EQ(sum.load(), 64 * 63 / 2);
+    EXPECT_EQ(dlopen("libtbbmalloc.so.2", RTLD_LAZY | RTLD_NOLOAD), nullptr)
+        << "libtbbmalloc is loaded: run this binary through ctest, which puts "
+           "<build>/tbb-without-tbbmalloc first in LD_LIBRARY_PATH";
+}
+#endif
 
 TEST(Concurrency, ThreadsReadTheSameFilesThroughOsgDB) {
     const Files& f = files();

@@ -8,6 +8,7 @@
 #include <osg/Geode>
 #include <osgDB/ReadFile>
 #include <osgDB/WriteFile>
+#include <osgUtil/IncrementalCompileOperation>
 
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
@@ -135,6 +136,41 @@ TEST(MaterialNodeCoordinateMap, MatchingMapIsUsedAndSharedAndCanBeRemoved) {
     EXPECT_TRUE(node->setCoordinateMap(nullptr));
     EXPECT_FALSE(node->usesCoordinateMap());
     EXPECT_EQ(node->getCoordinateMapFile(), "");
+}
+
+namespace {
+
+/** The coordinate-map texture `node` would compile (osgUtil::StateToCompile sees the StateSets
+ *  it pushes at cull); null if none. */
+osg::Texture* mapTexture(MaterialNode& node) {
+    osgUtil::StateToCompile collect(osgUtil::GLObjectsVisitor::COMPILE_STATE_ATTRIBUTES, nullptr);
+    node.accept(collect);
+    for (osg::Texture* texture : collect._textures)
+        if (texture->getName() == "osgBTF_coordinateMap") return texture;
+    return nullptr;
+}
+
+}  // namespace
+
+// Nodes drawing one map share its texture through one StateSet, which they push at cull: OSG's
+// list of a texture's parent StateSets is not guarded, and nodes are made and deleted on any
+// thread (issue 31), so the texture is bound in that StateSet alone.
+TEST(MaterialNodeCoordinateMap, NodesDrawingOneMapShareATextureWithOneParent) {
+    Files files;
+    osg::ref_ptr<MaterialNode> a = new MaterialNode, b = new MaterialNode;
+    for (MaterialNode* node : {a.get(), b.get()}) {
+        ASSERT_TRUE(node->setMaterialFile(files.material));
+        ASSERT_TRUE(node->setCoordinateMapFile(files.map));
+        node->addChild(new osg::Geode);
+    }
+    osg::Texture* texture = mapTexture(*a);
+    ASSERT_NE(texture, nullptr);
+    EXPECT_EQ(mapTexture(*b), texture);
+    EXPECT_EQ(texture->getNumParents(), 1u);
+    osg::ref_ptr<MaterialNode> copy = new MaterialNode(*b, osg::CopyOp::SHALLOW_COPY);
+    b = nullptr;
+    EXPECT_EQ(mapTexture(*copy), texture);
+    EXPECT_EQ(texture->getNumParents(), 1u);
 }
 
 class CoordinateMapSerializer : public ::testing::TestWithParam<const char*> {};

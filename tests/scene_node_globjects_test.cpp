@@ -137,7 +137,7 @@ TEST(SceneMaterialNodeGLObjects, IncrementalCompileCollectsTheMaterialsTexturesA
             textures.insert(texture);
     ASSERT_FALSE(textures.empty());
     // And the node's own: the smooth terminator's step texture (shared while anything holds it).
-    textures.insert(terminatorTexture(kDefaultTerminatorSoftness).get());
+    textures.insert(terminatorTexture(*terminatorStateSet(kDefaultTerminatorSoftness)));
     EXPECT_EQ(collect._textures, textures);
 }
 

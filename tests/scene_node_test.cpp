@@ -17,6 +17,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
+#include "scene/ShadowTerminator.h"
 #include "tests/NotifyCapture.h"
 #include "tests/TestUtil.h"
 
@@ -358,4 +359,26 @@ TEST(SceneMaterialNode, DroppedSharedMaterialIsReleasedOnRequestOrByTheNextOpen)
     material = nullptr;
     const osg::ref_ptr<Material> second = loadSharedMaterial(other);
     EXPECT_FALSE(watched.valid());
+}
+
+// OSG keeps a StateAttribute's parent StateSets in a plain vector, changed by every StateSet that
+// binds or drops it; nodes are made and deleted on any thread (a DatabasePager's), so the shared
+// terminator texture is bound once, in its own shared StateSet, which the nodes push at cull
+// (issue 31: with the texture in each node's StateSet, two threads changed that vector at once).
+TEST(SceneMaterialNode, NodesShareOneTerminatorStateSetWhoseTextureHasOneParent) {
+    const osg::ref_ptr<Material> material = sampleMaterial();
+    osg::ref_ptr<MaterialNode> a = new MaterialNode(material.get());
+    osg::ref_ptr<MaterialNode> b = new MaterialNode(material.get());
+    osg::ref_ptr<MaterialNode> copy = new MaterialNode(*a, osg::CopyOp::SHALLOW_COPY);
+    const osg::ref_ptr<osg::StateSet> shared = terminatorStateSet(a->getTerminatorSoftness());
+    osg::Texture1D* texture = terminatorTexture(*shared);
+    ASSERT_NE(texture, nullptr);
+    EXPECT_EQ(texture->getNumParents(), 1u);
+    EXPECT_EQ(shared->getNumParents(), 0u) << "pushed at cull, never attached";
+    // Three nodes and this test hold it, the cache once more.
+    EXPECT_EQ(shared->referenceCount(), 5);
+    b->setShadowTerminator(false);
+    copy = nullptr;
+    EXPECT_EQ(shared->referenceCount(), 3);
+    EXPECT_EQ(texture->getNumParents(), 1u);
 }
