@@ -8,6 +8,7 @@
 
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
+#include "materials/MaterialState.h"
 #include "materials/ShaderInterface.h"
 
 namespace osgBTF {
@@ -176,14 +177,17 @@ osg::ref_ptr<osg::StateSet> createCoordinateMapStateSet(const Material& material
                                                         const osg::StateSet& materialState,
                                                         osg::Texture2D* mapTexture) {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    stateSet->setAttributeAndModes(coordinateMapProgram(material.methodName()).get(),
-                                   osg::StateAttribute::ON);
+    const osg::ref_ptr<osg::Program> program = coordinateMapProgram(material.methodName());
+    stateSet->setAttributeAndModes(program.get(), osg::StateAttribute::ON);
     const int unit = shader::kCoordinateMapUnit;
     if (int(materialState.getTextureAttributeList().size()) > unit)
         throw Error("method '" + material.methodName() + "' uses texture unit " +
                     std::to_string(unit) + ", which the coordinate map needs");
     stateSet->setTextureAttribute(unit, mapTexture, osg::StateAttribute::ON);
     stateSet->addUniform(new osg::Uniform(shader::kCoordinateMap, unit));
+    // The compile pass makes this program current with this StateSet's uniforms alone (see
+    // addSamplerUnits): every sampler gets its unit here too.
+    addSamplerUnits(*stateSet, *program, materialState);
     return stateSet;
 }
 

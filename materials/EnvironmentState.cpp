@@ -112,10 +112,11 @@ osg::ref_ptr<osg::StateSet> environmentStateSet(const Material& material,
                         std::to_string(stride));
         std::copy(folded[v].begin(), folded[v].end(), data.data.begin() + v * stride);
     }
+    const osg::ref_ptr<osg::Program> program = environmentProgram(material.methodName());
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    stateSet->setAttributeAndModes(environmentProgram(material.methodName()).get(),
-                                   osg::StateAttribute::ON);
+    stateSet->setAttributeAndModes(program.get(), osg::StateAttribute::ON);
     addTexture(*stateSet, createFloatTexture(data).get(), "osgBTF_envData", kEnvironmentDataUnit);
+    addSamplerUnits(*stateSet, *program, *material.sharedStateSet());
     stateSet->addUniform(new osg::Uniform("osgBTF_envStride", int(texelsPerVertex)));
     stateSet->addUniform(new osg::Uniform("osgBTF_envExposure", exposure));
     // The real eye direction unless set again on this StateSet (a rectified image): a program

@@ -53,7 +53,9 @@ std::size_t foldedStride(const Material& material);
 osg::ref_ptr<osg::Program> environmentProgram(const std::string& method);
 
 /** Program, per-vertex data texture (folded[v] for vertex index v, each of foldedStride values)
- *  and exposure for one geometry. Throws Error for data of the wrong size. */
+ *  and exposure for one geometry, and the program's other samplers on the units the material's
+ *  StateSet gives them (so the program can draw with this StateSet's uniforms alone, as OSG's
+ *  compile pass makes it do). Throws Error for data of the wrong size. */
 osg::ref_ptr<osg::StateSet> environmentStateSet(const Material& material,
                                                 const std::vector<std::vector<float>>& folded,
                                                 float exposure = 1.0f);

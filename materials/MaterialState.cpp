@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <regex>
 
+#include <osg/GLExtensions>
 #include <osg/State>
 #include <osg/Uniform>
 
@@ -67,6 +69,9 @@ osg::ref_ptr<osg::Image> sliceImage(const MaterialTexture& t, int z, int depthFo
 
 void configure(osg::Texture& texture, const MaterialTexture& t, bool linear) {
     texture.setInternalFormat(internalFormat(t));
+    // OSG allocates a texture without texture storage by glTexImage* with no data and this
+    // format, which is the internal (sized, so invalid there) one when left unset.
+    texture.setSourceFormat(pixelFormat(t.channels));
     texture.setSourceType(t.kind == MaterialTexture::UNorm8 ? GL_UNSIGNED_BYTE : GL_FLOAT);
     texture.setResizeNonPowerOfTwoHint(false);
     texture.setUseHardwareMipMapGeneration(false);
@@ -80,6 +85,12 @@ void configure(osg::Texture& texture, const MaterialTexture& t, bool linear) {
 
 class ReuploadingTexture2DArray : public osg::Texture2DArray {
 public:
+    void apply(osg::State& state) const override {
+        if (!getTextureObject(state.getContextID()) && !_subloadCallback && imagesValid())
+            allocate(state);
+        osg::Texture2DArray::apply(state);
+    }
+
     void releaseGLObjects(osg::State* state) const override {
         osg::Texture2DArray::releaseGLObjects(state);
         // One less than the image's count never matches it, now or after later dirty() calls.
@@ -96,6 +107,46 @@ public:
 
 protected:
     ~ReuploadingTexture2DArray() override = default;
+
+private:
+    /** What OSG 3.6.5's Texture2DArray::apply does for a new texture object up to the layers'
+     *  upload, except that it allocates storage only for an object without any. OSG recycles the
+     *  texture object of a deleted texture of the same size and format (another material loaded
+     *  after one was deleted) with its storage, and then specifies that storage again with
+     *  glTexImage3D, an error on the immutable storage glTexStorage3D made. With the object in
+     *  place, the base class's apply() uploads the layers into it. */
+    void allocate(osg::State& state) const {
+        const unsigned context = state.getContextID();
+        const osg::GLExtensions* gl = state.get<osg::GLExtensions>();
+        computeInternalFormat();
+        const GLenum storage = gl->isTextureStorageEnabled && _borderWidth == 0
+                                   ? selectSizedInternalFormat(_images[0].get())
+                                   : 0;
+        computeRequiredTextureDimensions(state, *_images[0], _textureWidth, _textureHeight,
+                                         _numMipmapLevels);
+        const GLsizei depth = computeTextureDepth();
+        const GLenum format = storage ? storage : GLenum(_internalFormat);
+        TextureObject* object =
+            generateAndAssignTextureObject(context, GL_TEXTURE_2D_ARRAY, _numMipmapLevels, format,
+                                           _textureWidth, _textureHeight, depth, _borderWidth);
+        object->bind();
+        applyTexParameters(GL_TEXTURE_2D_ARRAY, state);
+        if (!object->isAllocated()) {
+            if (storage)
+                gl->glTexStorage3D(GL_TEXTURE_2D_ARRAY, std::max(_numMipmapLevels, 1), storage,
+                                   _textureWidth, _textureHeight, depth);
+            else
+                gl->glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, _internalFormat, _textureWidth,
+                                 _textureHeight, depth, _borderWidth, _sourceFormat, _sourceType,
+                                 nullptr);
+            object->setAllocated(_numMipmapLevels, format, _textureWidth, _textureHeight, depth,
+                                 _borderWidth);
+        }
+        // Whatever the object held before, every layer goes into it now.
+        for (std::size_t layer = 0; layer < _modifiedCount.size() && layer < _images.size();
+             ++layer)
+            _modifiedCount[layer][context] = _images[layer]->getModifiedCount() - 1u;
+    }
 };
 
 }  // namespace
@@ -138,6 +189,22 @@ void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::strin
                 int unit) {
     stateSet.setTextureAttribute(unit, texture, osg::StateAttribute::ON);
     stateSet.addUniform(new osg::Uniform(sampler.c_str(), unit));
+}
+
+void addSamplerUnits(osg::StateSet& stateSet, const osg::Program& program,
+                     const osg::StateSet& materialState) {
+    static const std::regex declaration(R"(\buniform\s+[iu]?sampler\w*\s+(\w+))");
+    for (unsigned i = 0; i < program.getNumShaders(); ++i) {
+        const std::string& source = program.getShader(i)->getShaderSource();
+        for (auto it = std::sregex_iterator(source.begin(), source.end(), declaration);
+             it != std::sregex_iterator(); ++it) {
+            const std::string name = (*it)[1].str();
+            const osg::Uniform* unit = materialState.getUniform(name);
+            int value = 0;
+            if (!stateSet.getUniform(name) && unit && unit->get(value))
+                stateSet.addUniform(new osg::Uniform(name.c_str(), value));
+        }
+    }
 }
 
 void addCommonState(osg::StateSet& stateSet, const Material& material) {

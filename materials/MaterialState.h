@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include <osg/Program>
 #include <osg/StateSet>
 #include <osg/Texture2D>
 #include <osg/Texture2DArray>
@@ -25,13 +26,26 @@ osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& texture
 /** An empty osg::Texture2DArray that uploads its layers again into a texture object created after
  *  a release. OSG 3.6.5's Texture2DArray keeps each context's "layer uploaded" counts when its
  *  texture object is released, so the object it creates next for that context ID (a context
- *  opened after another closed gets the freed ID) is allocated but never filled. Every material
- *  array texture is made with this. */
+ *  opened after another closed gets the freed ID) is allocated but never filled. It also fills
+ *  the texture object OSG recycles from a deleted texture of the same size and format without
+ *  specifying that object's storage again (glTexImage3D on immutable storage: a GL error). Every
+ *  material array texture is made with this. */
 osg::ref_ptr<osg::Texture2DArray> newTexture2DArray();
 
 /** A sampler uniform + texture on a unit. */
 void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::string& sampler,
                 int unit);
+
+/** For every sampler the shaders of `program` declare that `materialState` gives a unit and
+ *  `stateSet` does not, a new uniform with that unit on `stateSet`: for a StateSet that sets
+ *  another program for a material (environment lighting, a coordinate map), so that the program
+ *  can draw with that StateSet's uniforms alone. OSG's compile pass (osgUtil::GLObjectsVisitor)
+ *  makes a StateSet's program current with only that StateSet's uniforms and may draw with it
+ *  (osgText's compile does); samplers left at unit 0 differ in type on one unit, which makes the
+ *  draw invalid. New uniforms, not the material's: adding a uniform to a StateSet changes its
+ *  list of parents, which OSG does not guard, and these StateSets are made on any thread. */
+void addSamplerUnits(osg::StateSet& stateSet, const osg::Program& program,
+                     const osg::StateSet& materialState);
 
 class Material;
 

@@ -5,8 +5,6 @@
 
 #include <cmath>
 
-#include <osg/Texture2D>
-#include <osg/Texture2DArray>
 #include <osg/Uniform>
 
 #include "core/Error.h"
@@ -110,22 +108,7 @@ MemoryFootprint LpcaMaterial::memory() const {
 // ---- textures shared with lpca-revised ----------------------------------------------------------
 
 osg::ref_ptr<osg::Texture> createTextureArray(const MaterialTexture& t) {
-    if (t.depth > 1) return createFloatTexture(t);
-    osg::ref_ptr<osg::Texture> single = createFloatTexture(t);
-    osg::Texture2D* texture2D = static_cast<osg::Texture2D*>(single.get());
-    osg::ref_ptr<osg::Texture2DArray> array = newTexture2DArray();
-    array->setTextureSize(t.width, t.height, 1);
-    array->setImage(0, texture2D->getImage());
-    array->setInternalFormat(texture2D->getInternalFormat());
-    array->setSourceType(texture2D->getSourceType());
-    array->setResizeNonPowerOfTwoHint(false);
-    array->setUseHardwareMipMapGeneration(false);
-    for (auto f : {osg::Texture::MIN_FILTER, osg::Texture::MAG_FILTER})
-        array->setFilter(f, osg::Texture::NEAREST);
-    for (auto w : {osg::Texture::WRAP_S, osg::Texture::WRAP_T, osg::Texture::WRAP_R})
-        array->setWrap(w, osg::Texture::CLAMP_TO_EDGE);
-    array->setName(t.name);
-    return array;
+    return createFloatTextureArray(t);
 }
 
 MaterialTexture lpcaClusterTexture(int width, int height,
