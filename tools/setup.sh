@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs osgBTF's Debian 12 dependencies and builds it into build/ (Release with debug info).
 # Usage: bash tools/setup.sh [extra cmake arguments]
+# OSGBTF_BUILD_TARGETS="t1 t2" builds only those targets (and what they need), not everything.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -28,4 +29,6 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@"
-cmake --build build -j "$(nproc)"
+targets=()
+for t in ${OSGBTF_BUILD_TARGETS:-}; do targets+=(--target "$t"); done
+cmake --build build -j "$(nproc)" "${targets[@]}"
