@@ -538,7 +538,7 @@ const bool registered = registerMethod([] {
     MethodInfo m;
     m.name = "fmf";
     m.description =
-        "full-matrix factorisation (Schwartz 2011, seed 003; UBO2014 FMF/DFMF files): rank-C "
+        "full-matrix factorisation (Schwartz et al. 2013, seed 003; UBO2014 FMF/DFMF files): rank-C "
         "SVD of the (view, light, colour) x texel matrix, 3x3 view/light blending of U; 64 "
         "bytes per texel + U at 32 components, half";
     m.options = {OptionSpec::integer("components", 32, 1, OptionSpec::kNoLimit,
