@@ -250,6 +250,16 @@ TEST(GlErrors, APcaObjectAfterALambertOneLitByAnEnvironmentCompilesWithoutAGlErr
     EXPECT_EQ(watch.take(), "");
 }
 
+namespace {
+
+/** `method` fitted on `sample` with its quick test options. */
+osg::ref_ptr<Material> quickFit(const std::string& method, const MeasuredBtf& sample) {
+    const MethodInfo& info = findMethod(method);
+    return info.fit(sample, FitOptions::parse(info.quickFitOptions));
+}
+
+}  // namespace
+
 // OSG gives the texture objects of a deleted texture to the next one of the same size and format,
 // storage and all (OSG 3.6.5 then specified a texture array's immutable storage again).
 TEST(GlErrors, EveryMethodDrawsTheSameInTheTexturesOfADeletedEqualMaterialWithoutAGlError) {
@@ -257,13 +267,11 @@ TEST(GlErrors, EveryMethodDrawsTheSameInTheTexturesOfADeletedEqualMaterialWithou
     GlErrorWatch watch;
     for (const std::string& name : methodNames()) {
         SCOPED_TRACE(name);
-        const MethodInfo& method = findMethod(name);
-        const FitOptions options = FitOptions::parse(method.quickFitOptions);
         // The scene and its material are deleted after each draw.
         const osg::ref_ptr<osg::Image> first =
-            drawFrames(spheresWith(method.fit(sample, options).get()).get());
+            drawFrames(spheresWith(quickFit(name, sample).get()).get());
         const osg::ref_ptr<osg::Image> second =
-            drawFrames(spheresWith(method.fit(sample, options).get()).get());
+            drawFrames(spheresWith(quickFit(name, sample).get()).get());
         EXPECT_EQ(watch.take(), "");
         EXPECT_GT(drawnPixels(*second), 0);
         EXPECT_EQ(maxDifference(*first, *second), 0.0);
@@ -285,12 +293,10 @@ TEST(GlErrors, EveryMethodDrawsTheSameWithoutTextureStorageAndWithoutAGlError) {
     GlErrorWatch watch;
     for (const std::string& name : methodNames()) {
         SCOPED_TRACE(name);
-        const MethodInfo& method = findMethod(name);
-        const FitOptions options = FitOptions::parse(method.quickFitOptions);
         // Two materials, both alive: a texture is allocated once per context, and the texture
         // objects of a deleted one would be taken over allocated.
-        const osg::ref_ptr<Material> first = method.fit(sample, options);
-        const osg::ref_ptr<Material> second = method.fit(sample, options);
+        const osg::ref_ptr<Material> first = quickFit(name, sample);
+        const osg::ref_ptr<Material> second = quickFit(name, sample);
         extensions->isTextureStorageEnabled = restore.enabled;
         const osg::ref_ptr<osg::Image> stored = drawFrames(spheresWith(first.get()).get());
         extensions->isTextureStorageEnabled = false;
