@@ -9,13 +9,14 @@
 #include <osgDB/Registry>
 
 #include "scene/MaterialNode.h"
+#include "tests/TestUtil.h"
 
 namespace osgBTF::test {
 
 /** Puts the build's plugin folder first on OSG's library path (once per process). */
 inline void usePluginsFromBuild() {
     static const bool done = [] {
-        const std::string dir = OSGBTF_BUILD_DIR "/lib";
+        const std::string dir = buildDir() + "/lib";
         setenv("OSG_LIBRARY_PATH", dir.c_str(), 0);
         osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
         if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);

@@ -7,6 +7,14 @@
 
 namespace osgBTF::test {
 
+/** This build's source tree and build folder. Defined in a file CMake writes into the build folder
+ *  (tests/TestPaths.cpp.in), not passed as compile definitions: an absolute path on a compile line
+ *  makes every test object differ between two clones, and ccache could share none of them. */
+const std::string& sourceDir();
+const std::string& buildDir();
+/** An executable of this build, e.g. builtTool("btf"): <build>/bin/NAME. */
+std::string builtTool(const std::string& name);
+
 /** A fresh folder under the system temp dir, removed with its contents on destruction. */
 class TempDir {
 public:

@@ -23,6 +23,7 @@
 
 namespace fs = std::filesystem;
 using namespace osgBTF;
+using osgBTF::test::buildDir;
 using osgBTF::test::runCommand;
 using osgBTF::test::shellQuote;
 using osgBTF::test::TempDir;
@@ -32,7 +33,7 @@ namespace {
 /** The build's osgdb_exr, found through the library path like any installed plugin. */
 osgDB::ReaderWriter* exrPlugin() {
     static osgDB::ReaderWriter* plugin = [] {
-        const std::string dir = OSGBTF_BUILD_DIR "/lib";
+        const std::string dir = buildDir() + "/lib";
         setenv("OSG_LIBRARY_PATH", dir.c_str(), 0);
         // The registry may exist already (other tests), so its search list is edited directly;
         // prepended, so the system plugins other tests use stay reachable.
@@ -47,7 +48,7 @@ class ExrPlugin : public ::testing::Test {
 protected:
     void SetUp() override {
         ASSERT_NE(exrPlugin(), nullptr)
-            << "osgdb_exr not found under " OSGBTF_BUILD_DIR "/lib (build target osgdb_exr)";
+            << "osgdb_exr not found under " << buildDir() << "/lib (build target osgdb_exr)";
     }
     TempDir dir;
 };

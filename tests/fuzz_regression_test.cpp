@@ -24,6 +24,7 @@
 #include "fuzz/FuzzEntries.h"
 #include "loaders/Ubo2003.h"
 #include "loaders/Ubo2014.h"
+#include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
 
@@ -37,7 +38,7 @@ protected:
         _memoryLimit = osgBTF::memoryLimit();
         _progress = osgBTF::Progress::enabled();
         _notify = osg::getNotifyLevel();
-        osgBTF::fuzz::setUp(OSGBTF_SOURCE_DIR "/fuzz/fixtures");
+        osgBTF::fuzz::setUp(osgBTF::test::sourceDir() + "/fuzz/fixtures");
     }
     void TearDown() override {
         osgBTF::setMemoryLimit(_memoryLimit);
@@ -54,7 +55,8 @@ private:
 TEST_P(FuzzRegression, EveryInputIsReadOrRefusedWithAnError) {
     const osgBTF::fuzz::Target* target = osgBTF::fuzz::findTarget(GetParam());
     ASSERT_NE(target, nullptr);
-    const fs::path folder = fs::path(OSGBTF_SOURCE_DIR) / "fuzz" / "regression" / GetParam();
+    const fs::path folder =
+        fs::path(osgBTF::test::sourceDir()) / "fuzz" / "regression" / GetParam();
     std::vector<fs::path> inputs;
     for (const auto& entry : fs::directory_iterator(folder))
         if (entry.is_regular_file()) inputs.push_back(entry.path());
@@ -94,7 +96,7 @@ protected:
     }
     void TearDown() override { osgBTF::setMemoryLimit(_memoryLimit); }
     static std::string input(const std::string& target, const std::string& name) {
-        return OSGBTF_SOURCE_DIR "/fuzz/regression/" + target + "/" + name;
+        return osgBTF::test::sourceDir() + "/fuzz/regression/" + target + "/" + name;
     }
 
 private:

@@ -23,8 +23,8 @@ namespace fs = std::filesystem;
 namespace {
 
 CommandResult btfWithGl(const std::string& arguments) {
-    return runCommand("ASAN_OPTIONS=detect_leaks=0 " + std::string(OSGBTF_BTF_TOOL) +
-                      " --no-progress " + arguments);
+    return runCommand("ASAN_OPTIONS=detect_leaks=0 " + builtTool("btf") + " --no-progress " +
+                      arguments);
 }
 
 /** Folders beside `dir` whose name starts with dir's name (temporary work folders). */
@@ -65,9 +65,7 @@ TEST(Harness, BadInputIsAClearErrorAndCreatesNoFolder) {
 TEST(Harness, UnknownMethodOrMalformedSettingIsAClearError) {
     TempDir dir;
     const std::string zip = dir.file("s.zip");
-    ASSERT_EQ(runCommand(std::string(OSGBTF_BTF_TOOL) + " sample --size 8 -o " + shellQuote(zip))
-                  .exitCode,
-              0);
+    ASSERT_EQ(runCommand(builtTool("btf") + " sample --size 8 -o " + shellQuote(zip)).exitCode, 0);
     const fs::path out = dir.path() / "cmp";
     CommandResult r = btfWithGl("compare " + shellQuote(zip) + " --methods pca,nope --out " +
                                 shellQuote(out.string()));
@@ -100,9 +98,7 @@ TEST(Harness, UnknownMethodOrMalformedSettingIsAClearError) {
 TEST(Harness, TinySampleWritesEveryFileAndTablesMatchTheMethodApis) {
     TempDir dir;
     const std::string zip = dir.file("s.zip");
-    ASSERT_EQ(runCommand(std::string(OSGBTF_BTF_TOOL) + " sample --size 8 -o " + shellQuote(zip))
-                  .exitCode,
-              0);
+    ASSERT_EQ(runCommand(builtTool("btf") + " sample --size 8 -o " + shellQuote(zip)).exitCode, 0);
     const fs::path out = dir.path() / "cmp";
     // lpca with clusters=0 must fail; pca and the lambert baseline must complete anyway.
     const CommandResult r = btfWithGl(

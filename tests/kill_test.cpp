@@ -28,8 +28,8 @@
 #include "materials/Material.h"
 #include "materials/fmf/Fmf.h"
 #include "streaming/TileSet.h"
-#include "tests/RandomFactors.h"
 #include "tests/PluginTestUtil.h"
+#include "tests/RandomFactors.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
@@ -238,7 +238,7 @@ TEST(Kills, FitOutputIsCompleteOrAbsentAfterEveryKill) {
     const fs::path material = out / "fit.btfmat";
     Writer w;
     w.name = "btf fit -o";
-    w.args = {OSGBTF_BTF_TOOL,  "--no-progress", "fit", zip, "-m", "lambert", "-o",
+    w.args = {builtTool("btf"), "--no-progress", "fit", zip, "-m", "lambert", "-o",
               material.string()};
     w.folder = out;
     w.isFinal = [](const std::string& name) { return name == "fit.btfmat"; };
@@ -258,8 +258,8 @@ TEST(Kills, CompareFolderIsCompleteOrAbsentAfterEveryKill) {
     const fs::path report = out / "report";
     Writer w;
     w.name = "btf compare --out";
-    w.args = {OSGBTF_BTF_TOOL, "--no-progress", "compare",      zip, "--methods", "lambert",
-              "--no-gpu",      "--out",         report.string()};
+    w.args = {builtTool("btf"), "--no-progress", "compare",      zip, "--methods", "lambert",
+              "--no-gpu",       "--out",         report.string()};
     w.folder = out;
     w.isFinal = [](const std::string& name) { return name == "report"; };
     // What a complete run writes (recorded from the first one): every file, and the fits load.
@@ -293,14 +293,15 @@ TEST(Kills, TileSetFolderIsCompleteOrAbsentAfterEveryKill) {
     TempDir dir;
     // Large enough for kills to land while it runs: 8 groups x 85 tiles of 64 + 4 texels.
     const std::string material = dir.file("m.btfmat");
-    saveMaterial(*FmfMaterial::fromFactors(randomFactors(FactorModel::Fmf, {32, 0, 0}, 512, 512, 7)),
-                 material);
+    saveMaterial(
+        *FmfMaterial::fromFactors(randomFactors(FactorModel::Fmf, {32, 0, 0}, 512, 512, 7)),
+        material);
     const fs::path out = dir.path() / "out";
     fs::create_directory(out);
     const fs::path tiles = out / "tiles";
     Writer w;
     w.name = "btf tiles -o";
-    w.args = {OSGBTF_BTF_TOOL, "--no-progress", "tiles", material, "-o", tiles.string()};
+    w.args = {builtTool("btf"), "--no-progress", "tiles", material, "-o", tiles.string()};
     w.folder = out;
     w.isFinal = [](const std::string& name) { return name == "tiles"; };
     // Complete: the index reads and every file it lists is there, of its size and CRC, and

@@ -110,7 +110,7 @@ TEST(MethodOptions, FitHelpListsEveryMethodAndOptionFromTheTables) {
 // Every method folder's README holds the option table generated from the method's schema, under
 // "## Options": changing an option without its README (or the other way round) fails here.
 TEST(MethodOptions, EachReadmeOptionTableMatchesTheSchema) {
-    const std::filesystem::path materials = std::filesystem::path(OSGBTF_SOURCE_DIR) / "materials";
+    const std::filesystem::path materials = std::filesystem::path(sourceDir()) / "materials";
     int checked = 0;
     const std::vector<std::string> names = methodNames();
     for (const auto& entry : std::filesystem::directory_iterator(materials)) {

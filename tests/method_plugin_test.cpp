@@ -207,9 +207,8 @@ TEST(MethodPlugin, EmbeddedInAMaterialNodeRoundTripsThroughTheScene) {
 TEST(MethodPlugin, AppearsInTheComparisonTables) {
     TempDir dir;
     const std::string zip = dir.file("sample.zip");
-    const CommandResult made =
-        runCommand(std::string(OSGBTF_BTF_TOOL) +
-                   " --no-progress sample --size 8 --format png -o " + shellQuote(zip));
+    const CommandResult made = runCommand(
+        builtTool("btf") + " --no-progress sample --size 8 --format png -o " + shellQuote(zip));
     ASSERT_EQ(made.exitCode, 0) << made.output;
     const MeasuredBtf btf = loadMeasuredBtf(zip);
     const fs::path out = dir.path() / "compare";

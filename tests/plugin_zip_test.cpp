@@ -16,6 +16,8 @@
 #include "scene/MaterialNode.h"
 #include "tests/TestUtil.h"
 
+using osgBTF::test::buildDir;
+using osgBTF::test::builtTool;
 using osgBTF::test::runCommand;
 using osgBTF::test::shellQuote;
 using osgBTF::test::TempDir;
@@ -24,7 +26,7 @@ using ReadResult = osgDB::ReaderWriter::ReadResult;
 namespace {
 
 osgDB::ReaderWriter* btfZipReader() {
-    const std::string dir = OSGBTF_BUILD_DIR "/lib";
+    const std::string dir = buildDir() + "/lib";
     osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
     if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);
     return osgDB::Registry::instance()->getReaderWriterForExtension("zip");
@@ -73,7 +75,7 @@ public:
 
 TEST(ZipPlugin, PlainZipsAreNotHandled) {
     osgDB::ReaderWriter* reader = btfZipReader();
-    ASSERT_NE(reader, nullptr) << "osgdb_zip not found in " OSGBTF_BUILD_DIR "/lib";
+    ASSERT_NE(reader, nullptr) << "osgdb_zip not found in " << buildDir() << "/lib";
     TempDir dir;
     osg::ref_ptr<osgDB::Options> options = new osgDB::Options("method=lambert cache=off");
     const std::string text = makeZip(dir, "text.zip", {{"README.txt", "hello\n"}});
@@ -104,8 +106,8 @@ TEST(ZipPlugin, OsgDbGoesOnToTheNextReader) {
 
     // A BTF zip is still osgBTF's, and so is a damaged one (its message names the file).
     const std::string btf = dir.file("sample.zip");
-    const auto made = runCommand(std::string(OSGBTF_BTF_TOOL) +
-                                 " --no-progress sample --size 4 -o " + shellQuote(btf));
+    const auto made =
+        runCommand(builtTool("btf") + " --no-progress sample --size 4 -o " + shellQuote(btf));
     ASSERT_EQ(made.exitCode, 0) << made.output;
     EXPECT_TRUE(osgBTF::mayBeUbo2003(btf));
     result = osgDB::Registry::instance()->readNode(btf, options.get());

@@ -43,9 +43,9 @@ osg::ref_ptr<LambertMaterial> sampleMaterial() {
 /** A tiny UBO2003 zip (8x8 texels, the 81x81 Bonn directions) written by the tool. */
 std::string writeSampleZip(const TempDir& dir) {
     const std::string zip = dir.file("sample.zip");
-    const auto result = osgBTF::test::runCommand(std::string(OSGBTF_BTF_TOOL) +
-                                                 " --no-progress sample --size 8 -o " +
-                                                 osgBTF::test::shellQuote(zip));
+    const auto result =
+        osgBTF::test::runCommand(test::builtTool("btf") + " --no-progress sample --size 8 -o " +
+                                 osgBTF::test::shellQuote(zip));
     EXPECT_EQ(result.exitCode, 0) << result.output;
     return zip;
 }

@@ -15,7 +15,7 @@ namespace {
 
 std::string commonShader(const std::string& name) {
     return test::readTextFile(
-        (std::filesystem::path(OSGBTF_SOURCE_DIR) / "shaders" / "common" / name).string());
+        (std::filesystem::path(osgBTF::test::sourceDir()) / "shaders" / "common" / name).string());
 }
 
 bool declares(const std::string& source, const std::string& pattern) {

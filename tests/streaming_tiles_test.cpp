@@ -338,7 +338,7 @@ TEST(TilesCommand, RefusesOtherMethodsAndWritesTheSetOfAnFmfMaterial) {
     const std::string lambert = dir.file("l.btfmat"), fmf = dir.file("f.btfmat");
     saveMaterial(*findMethod("lambert").fit(test::smallSampleBtf(8), FitOptions()), lambert);
     saveMaterial(*formulaMaterial(), fmf);
-    const std::string tool = std::string(OSGBTF_BTF_TOOL) + " --no-progress tiles ";
+    const std::string tool = test::builtTool("btf") + " --no-progress tiles ";
     test::CommandResult r = test::runCommand(tool + lambert + " -o " + dir.file("out"));
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_EQ(r.output, "btf: error: " + lambert +

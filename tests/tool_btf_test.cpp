@@ -11,13 +11,13 @@ using namespace osgBTF::test;
 
 namespace {
 CommandResult btf(const std::string& arguments) {
-    return runCommand(std::string(OSGBTF_BTF_TOOL) + " --no-progress " + arguments);
+    return runCommand(builtTool("btf") + " --no-progress " + arguments);
 }
 /** For commands that open an OpenGL context: Mesa's EGL/llvmpipe leaks a few hundred bytes per
  *  context (docs: headless.md 8), which LeakSanitizer would report in sanitizer builds. */
 CommandResult btfWithGl(const std::string& arguments) {
-    return runCommand("ASAN_OPTIONS=detect_leaks=0 " + std::string(OSGBTF_BTF_TOOL) +
-                      " --no-progress " + arguments);
+    return runCommand("ASAN_OPTIONS=detect_leaks=0 " + builtTool("btf") + " --no-progress " +
+                      arguments);
 }
 }  // namespace
 
@@ -180,10 +180,10 @@ TEST(BtfTool, FindsItsOwnPluginsWithoutOsgLibraryPath) {
               0);
     ASSERT_EQ(btf("sample --size 4 --format png -o " + shellQuote(zip)).exitCode, 0);
     ASSERT_EQ(btf("fit " + shellQuote(zip) + " -m lambert -o " + shellQuote(fitted)).exitCode, 0);
-    const CommandResult r = runCommand(
-        "env -u OSG_LIBRARY_PATH -u LD_LIBRARY_PATH ASAN_OPTIONS=detect_leaks=0 " +
-        std::string(OSGBTF_BTF_TOOL) + " --no-progress eval " + shellQuote(fitted) + " --env " +
-        shellQuote(sky) + " --view 30,0 -o " + shellQuote(dir.file("e.exr")));
+    const CommandResult r =
+        runCommand("env -u OSG_LIBRARY_PATH -u LD_LIBRARY_PATH ASAN_OPTIONS=detect_leaks=0 " +
+                   builtTool("btf") + " --no-progress eval " + shellQuote(fitted) + " --env " +
+                   shellQuote(sky) + " --view 30,0 -o " + shellQuote(dir.file("e.exr")));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("environment " + sky), std::string::npos) << r.output;
 }

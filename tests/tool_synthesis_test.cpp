@@ -16,7 +16,7 @@ using namespace osgBTF::test;
 namespace {
 
 CommandResult btf(const std::string& arguments) {
-    return runCommand(std::string(OSGBTF_BTF_TOOL) + " --no-progress " + arguments);
+    return runCommand(builtTool("btf") + " --no-progress " + arguments);
 }
 
 /** The 16x16 built-in sample as a zip, written once per test process. */

@@ -19,12 +19,12 @@ using namespace osgBTF::test;
 namespace {
 
 CommandResult btf(const std::string& arguments) {
-    return runCommand(std::string(OSGBTF_BTF_TOOL) + " --no-progress " + arguments);
+    return runCommand(builtTool("btf") + " --no-progress " + arguments);
 }
 /** For commands that open an OpenGL context (Mesa's EGL leaks a little per context). */
 CommandResult btfWithGl(const std::string& arguments) {
-    return runCommand("ASAN_OPTIONS=detect_leaks=0 " + std::string(OSGBTF_BTF_TOOL) +
-                      " --no-progress " + arguments);
+    return runCommand("ASAN_OPTIONS=detect_leaks=0 " + builtTool("btf") + " --no-progress " +
+                      arguments);
 }
 
 nlohmann::json infoJson(const std::string& arguments) {

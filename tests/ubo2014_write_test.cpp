@@ -352,7 +352,7 @@ TEST(Ubo2014Write, FittedFmfMaterialWritesExactlyItsFactors) {
 
 TEST(Ubo2014Write, BtfFitWritesAUbo2014FileOnlyForFmf) {
     TempDir dir;
-    const std::string tool = std::string(OSGBTF_BTF_TOOL) + " --no-progress ";
+    const std::string tool = test::builtTool("btf") + " --no-progress ";
     const std::string zip = dir.file("s.zip"), out = dir.file("out.btf");
     auto r = test::runCommand(tool + "sample --size 8 -o " + test::shellQuote(zip));
     ASSERT_EQ(r.exitCode, 0) << r.output;

@@ -130,7 +130,7 @@ const TempDir& examples() {
     static const TempDir dir;
     static const bool written = [] {
         const CommandResult result =
-            runCommand(shellQuote(OSGBTF_BTF_EXAMPLES) + " --out " + shellQuote(dir.path()) +
+            runCommand(shellQuote(builtTool("btf-examples")) + " --out " + shellQuote(dir.path()) +
                        " --size 8 --methods lambert,pca --no-progress");
         if (result.exitCode != 0) throw std::runtime_error("btf-examples failed: " + result.output);
         return true;

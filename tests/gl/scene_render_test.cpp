@@ -28,6 +28,7 @@
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
 #include "tests/NotifyCapture.h"
+#include "tests/TestUtil.h"
 #include "tests/gl/GlTestEnv.h"
 
 namespace fs = std::filesystem;
@@ -56,7 +57,7 @@ struct ScratchDir {
 
 void usePluginsFromBuild() {
     static const bool done = [] {
-        const std::string dir = OSGBTF_BUILD_DIR "/lib";
+        const std::string dir = buildDir() + "/lib";
         setenv("OSG_LIBRARY_PATH", dir.c_str(), 0);
         osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
         if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);
@@ -368,7 +369,7 @@ TEST(SceneRender, PseudoLoaderAndOsgconvRoundTripRenderTheSame) {
     EXPECT_LE(r.worst, 4e-3) << r.where;
 
     ASSERT_TRUE(osgDB::writeNodeFile(*scene.root, dir.file("scene.osgt")));
-    const std::string command = "OSG_LIBRARY_PATH=" OSGBTF_BUILD_DIR "/lib osgconv " +
+    const std::string command = "OSG_LIBRARY_PATH=" + buildDir() + "/lib osgconv " +
                                 dir.file("scene.osgt") + " " + dir.file("converted.osgb") + " > " +
                                 dir.file("osgconv.log") + " 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;

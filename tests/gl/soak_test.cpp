@@ -12,6 +12,7 @@
 #include "harness/Soak.h"
 #include "materials/Material.h"
 #include "tests/SmallSample.h"
+#include "tests/TestUtil.h"
 #include "tests/gl/GlTestEnv.h"
 
 using namespace osgBTF;
@@ -19,7 +20,7 @@ using namespace osgBTF::test;
 namespace fs = std::filesystem;
 
 TEST(Soak, MemoryAndGlObjectsStayFlatWhileSwitchingAndReloading) {
-    osgDB::Registry::instance()->getLibraryFilePathList().push_front(OSGBTF_BUILD_DIR "/lib");
+    osgDB::Registry::instance()->getLibraryFilePathList().push_front(buildDir() + "/lib");
     const fs::path folder =
         fs::temp_directory_path() / ("osgbtf-soak-test-" + std::to_string(getpid()));
     fs::create_directories(folder);

@@ -8,7 +8,7 @@
 // frame. btfviewer writes its own capture (--capture). Every GL test skips when Xvfb is absent.
 //
 // Needs the ctest fixture viewer.make_examples (tests/viewer/CMakeLists.txt), which writes the
-// example scenes (sample 8x8, lambert and pca) into OSGBTF_EXAMPLES_DIR.
+// example scenes (sample 8x8, lambert and pca) into <build>/tests/viewer/examples.
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -45,6 +45,8 @@
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
+using osgBTF::test::buildDir;
+using osgBTF::test::builtTool;
 using osgBTF::test::CommandResult;
 using osgBTF::test::runCommand;
 using osgBTF::test::shellQuote;
@@ -52,9 +54,9 @@ using osgBTF::test::TempDir;
 
 namespace {
 
-const std::string kBuildDir = OSGBTF_BUILD_DIR;
-const std::string kExamplesDir = OSGBTF_EXAMPLES_DIR;
-const std::string kScreensDir = OSGBTF_SCREENS_DIR;
+const std::string kBuildDir = buildDir();
+const std::string kExamplesDir = buildDir() + "/tests/viewer/examples";
+const std::string kScreensDir = buildDir() + "/tests/viewer/screens";
 const std::string kPluginDir = kBuildDir + "/lib";
 const std::vector<std::string> kMethods = {"lambert", "pca"};  // what the fixture fitted
 
@@ -367,7 +369,7 @@ public:
 TEST(Examples, AnUnknownMethodFailsBeforeAnythingIsWritten) {
     TempDir dir;
     const std::string out = dir.file("out");
-    const CommandResult result = runCommand(std::string(OSGBTF_BTF_EXAMPLES) + " --out " +
+    const CommandResult result = runCommand(builtTool("btf-examples") + " --out " +
                                             shellQuote(out) + " --size 8 --methods lambert,nosuch");
     EXPECT_EQ(result.exitCode, 1) << result.output;
     EXPECT_NE(result.output.find("btf-examples: unknown method 'nosuch' (known: "),
@@ -381,7 +383,7 @@ TEST(Examples, BenchFpsWritesOneRowPerSceneAndMethod) {
     TempDir dir;
     const std::string out = dir.file("bench");
     const CommandResult result = runCommand(
-        std::string(OSGBTF_BTF_EXAMPLES) + " --no-progress --out " + shellQuote(out) +
+        builtTool("btf-examples") + " --no-progress --out " + shellQuote(out) +
         " --size 8 --methods lambert,pca --bench-fps --bench-resolution 64x36 --bench-frames 1 "
         "--bench-warmup 0 --bench-lights 1,8");
     ASSERT_EQ(result.exitCode, 0) << result.output;
@@ -437,7 +439,7 @@ TEST(Examples, BadBenchOptionsFailBeforeAnythingIsWritten) {
          "rgba8, rgba16f or rgba32f"}};
     for (const auto& [option, message] : cases) {
         const CommandResult result =
-            runCommand(std::string(OSGBTF_BTF_EXAMPLES) + " --out " + shellQuote(out) +
+            runCommand(builtTool("btf-examples") + " --out " + shellQuote(out) +
                        " --size 8 --methods lambert --bench-fps " + option);
         EXPECT_EQ(result.exitCode, 1) << result.output;
         EXPECT_NE(result.output.find(message), std::string::npos) << result.output;
@@ -718,7 +720,7 @@ TEST(StockOsgviewer, ShowsAModelUnderAUbo2014FileAsStored) {
 
 // ---- btfviewer ---------------------------------------------------------------------------
 
-const std::string kBtfviewer = OSGBTF_BTFVIEWER;
+const std::string kBtfviewer = builtTool("btfviewer");
 
 CommandResult runBtfviewer(const std::string& display, const std::string& arguments) {
     return runCommand("cd " + shellQuote(kExamplesDir) + " && DISPLAY=" + display +
