@@ -1,9 +1,12 @@
 // osgBTF: GLSL sources, embedded at build time and overridable from disk.
 //
-// shaderSource("laf.frag") returns shaders/laf.frag as built into the library, unless a file
+// shaderSource("laf.frag") returns laf.frag as built into the library, unless a file
 // "shaders/laf.frag" is found on OSG_FILE_PATH (osgDB's data path), which then wins: edit a shader
 // and rerun without rebuilding (the osgEarth pattern). Lines `#pragma include "common/x.glsl"` are
-// replaced by that file, found the same way, recursively.
+// replaced by that file, found the same way, recursively. The built-in names are the paths under
+// shaders/ in the source tree ("common/btf.vert"), and for a method's shaders in its folder
+// materials/<m>/, "<m>.frag" and "environment/<m>.frag" (cmake/EmbedShaders.cmake); an override
+// file is always shaders/NAME.
 #pragma once
 
 #include <string>

@@ -33,8 +33,6 @@ std::vector<std::string> allCompareMethods() {
 
 namespace {
 
-constexpr const char* kBaseline = "lambert";
-
 std::string formatNumber(double value, int precision) {
     std::ostringstream out;
     out << std::setprecision(precision) << value;
@@ -51,7 +49,7 @@ void writeText(const std::string& path, const std::string& text) {
 }
 
 std::vector<std::string> orderedMethods(const CompareOptions& options) {
-    std::vector<std::string> methods{kBaseline};
+    std::vector<std::string> methods{baselineMethod().name};
     for (const std::string& m : options.methods) {
         findMethod(m);  // throws "unknown method 'x' (known: ...)"
         if (std::find(methods.begin(), methods.end(), m) == methods.end()) methods.push_back(m);
@@ -289,7 +287,7 @@ void gpuStage(const CompareOptions& options, const BtfSource& btf, const fs::pat
         writeFloatImage(sheet, (work / "pictures/spheres.png").string(), false, true);
         std::string caption = "Sphere rendered with every method (columns: ";
         for (std::size_t i = 0; i < labels.size(); ++i) caption += (i ? ", " : "") + labels[i];
-        caption += "; lambert is the plain lit texture baseline). Rows: ";
+        caption += "; " + baselineMethod().name + " is the plain lit texture baseline). Rows: ";
         for (std::size_t i = 0; i < settings.size(); ++i)
             caption += (i ? ", " : "") + settings[i].name;
         caption += ". sRGB-encoded preview of linear values, texture repeated " +

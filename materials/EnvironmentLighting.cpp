@@ -7,9 +7,6 @@
 
 #include "core/Error.h"
 #include "materials/Material.h"
-#include "materials/fmf/Fmf.h"
-#include "materials/lpca/Lpca.h"
-#include "materials/pca/Pca.h"
 
 namespace osgBTF {
 
@@ -242,160 +239,20 @@ glm::vec3 environmentReference(const Material& material, int x, int y, const glm
     return glm::vec3(sum);
 }
 
-glm::vec3 evaluateProjected(const Material& material, int x, int y, const glm::vec3& view,
-                            const std::vector<glm::vec3>& g) {
-    if (g.size() != material.lights().size())
-        throw Error("environment: " + std::to_string(g.size()) + " projected values for " +
-                    std::to_string(material.lights().size()) + " measured light directions");
-    glm::dvec3 sum(0.0);
-    for (std::size_t i = 0; i < g.size(); ++i)
-        if (g[i] != glm::vec3(0.0f))
-            sum += glm::dvec3(g[i] * material.evaluate(x, y, view, material.lights().vector(i)));
-    return glm::vec3(sum);
-}
-
-std::vector<float> foldPca(const PcaMaterial& material, const std::vector<glm::vec3>& g) {
-    const std::size_t lights = material.lights().size(), views = material.views().size();
-    if (g.size() != lights)
-        throw Error("environment: " + std::to_string(g.size()) + " projected values for " +
-                    std::to_string(lights) + " measured light directions");
-    const int slots = material.components() + 1;
-    std::vector<float> folded(views * std::size_t(slots) * 3, 0.0f);
-    for (std::size_t j = 0; j < views; ++j)
-        for (int k = 0; k < slots; ++k) {
-            glm::dvec3 sum(0.0);
-            for (std::size_t i = 0; i < lights; ++i) {
-                const float* w = material.weights.data.data() + material.weightIndex(j, i, k);
-                sum += glm::dvec3(g[i]) * glm::dvec3(w[0], w[1], w[2]);
-            }
-            float* out = folded.data() + (j * std::size_t(slots) + std::size_t(k)) * 3;
-            for (int ch = 0; ch < 3; ++ch) out[ch] = float(sum[ch]);
-        }
-    return folded;
-}
-
-glm::vec3 evaluateFoldedPca(const PcaMaterial& material, const std::vector<float>& folded, int x,
-                            int y, const glm::vec3& view) {
-    const int c = material.components();
-    const std::size_t slots = std::size_t(c + 1);
-    if (folded.size() != material.views().size() * slots * 3)
-        throw Error("environment: folded pca data of the wrong size");
-    const InterpolationWeights wv = material.viewLookup().weights(view);
-    glm::vec3 sum(0.0f);
-    for (int m = 0; m < 3; ++m) {
-        if (!(wv.weight[m] > 0.0f)) continue;
-        const std::size_t j = std::size_t(wv.index[m]);
-        const float* gamma = folded.data() + j * slots * 3;
-        glm::vec3 value(gamma[c * 3], gamma[c * 3 + 1], gamma[c * 3 + 2]);
-        for (int k = 0; k < c; ++k)
-            value += glm::vec3(gamma[k * 3], gamma[k * 3 + 1], gamma[k * 3 + 2]) *
-                     material.eigenTexel(j, k, x, y);
-        sum += wv.weight[m] * value;
-    }
-    return sum;
-}
-
-namespace {
-
 void checkProjected(const Material& material, const std::vector<glm::vec3>& g) {
     if (g.size() != material.lights().size())
         throw Error("environment: " + std::to_string(g.size()) + " projected values for " +
                     std::to_string(material.lights().size()) + " measured light directions");
 }
 
-}  // namespace
-
-bool fmfFoldable(const FmfMaterial& material) {
-    return material.factors().model == FactorModel::Fmf && !material.factors().drr();
-}
-
-std::vector<float> foldFmf(const FmfMaterial& material, const std::vector<glm::vec3>& g) {
-    const FactoredBtf& f = material.factors();
-    if (f.model != FactorModel::Fmf)
-        throw Error(
-            "environment: dfmf (a colour model per channel) has no folded environment "
-            "lighting, only plain fmf");
-    if (f.drr())
-        throw Error(
-            "environment: fmf with dynamic-range reduction (log values) is not linear "
-            "in the light and has no folded environment lighting");
+glm::vec3 evaluateProjected(const Material& material, int x, int y, const glm::vec3& view,
+                            const std::vector<glm::vec3>& g) {
     checkProjected(material, g);
-    const FactorMatrix& u = f.factors[0].U;
-    const std::size_t lights = material.lights().size(), views = material.views().size();
-    const std::size_t k = std::size_t(u.cols());
-    // evaluate() at a measured light l_i divides by its cosine when the data hold it: a constant
-    // per light, so it scales g_i.
-    std::vector<glm::dvec3> scaled(lights);
-    for (std::size_t i = 0; i < lights; ++i)
-        scaled[i] = glm::dvec3(g[i]) * double(f.cosineScale(material.lights().vector(i).z));
-    std::vector<float> folded(views * k * 3, 0.0f);
-    std::vector<double> sum(k * 3);
-    for (std::size_t j = 0; j < views; ++j) {
-        std::fill(sum.begin(), sum.end(), 0.0);
-        for (std::size_t i = 0; i < lights; ++i)
-            for (int c = 0; c < 3; ++c) {
-                if (scaled[i][c] == 0.0) continue;
-                const float* row = u.data() + ((j * lights + i) * 3 + std::size_t(c)) * k;
-                for (std::size_t q = 0; q < k; ++q)
-                    sum[q * 3 + std::size_t(c)] += scaled[i][c] * row[q];
-            }
-        for (std::size_t q = 0; q < k * 3; ++q) folded[j * k * 3 + q] = float(sum[q]);
-    }
-    return folded;
-}
-
-glm::vec3 evaluateFoldedFmf(const FmfMaterial& material, const std::vector<float>& folded, int x,
-                            int y, const glm::vec3& view) {
-    const FactoredBtf& f = material.factors();
-    const FactorMatrix& sxv = f.factors[0].SxV;
-    const std::size_t k = std::size_t(sxv.cols());
-    if (folded.size() != material.views().size() * k * 3)
-        throw Error("environment: folded fmf data of the wrong size");
-    const float* s = sxv.data() + f.factorRow(x, y) * k;
-    const InterpolationWeights wv = material.viewLookup().weights(view);
-    glm::vec3 sum(0.0f);
-    for (int m = 0; m < 3; ++m) {
-        if (!(wv.weight[m] > 0.0f)) continue;
-        const float* u = folded.data() + std::size_t(wv.index[m]) * k * 3;
-        glm::vec3 value(0.0f);
-        for (std::size_t q = 0; q < k; ++q)
-            value += glm::vec3(u[q * 3], u[q * 3 + 1], u[q * 3 + 2]) * s[q];
-        sum += wv.weight[m] * value;
-    }
-    return sum;
-}
-
-std::vector<float> foldLpca(const LpcaMaterial& material, const std::vector<glm::vec3>& g) {
-    checkProjected(material, g);
-    std::vector<float> folded;
-    folded.reserve(g.size() * 3);
-    for (const glm::vec3& v : g) folded.insert(folded.end(), {v.x, v.y, v.z});
-    return folded;
-}
-
-glm::vec3 evaluateFoldedLpca(const LpcaMaterial& material, const std::vector<float>& folded, int x,
-                             int y, const glm::vec3& view) {
-    const std::size_t lights = material.lights().size();
-    if (folded.size() != lights * 3) throw Error("environment: folded lpca data of the wrong size");
-    const std::size_t t = std::size_t(y) * std::size_t(material.width()) + std::size_t(x);
-    const int cluster = material.clusterOf[t];
-    const int components = material.components();
-    const InterpolationWeights wv = material.viewLookup().weights(view);
-    glm::vec3 sum(0.0f);
-    for (int m = 0; m < 3; ++m) {
-        if (!(wv.weight[m] > 0.0f)) continue;
-        glm::vec3 value(0.0f);
-        for (int q = 0; q < components; ++q) {
-            const float* e = material.eigenBrdf(cluster, q) + std::size_t(wv.index[m]) * lights * 3;
-            glm::vec3 folded_q(0.0f);
-            for (std::size_t i = 0; i < lights; ++i)
-                folded_q += glm::vec3(folded[i * 3], folded[i * 3 + 1], folded[i * 3 + 2]) *
-                            glm::vec3(e[i * 3], e[i * 3 + 1], e[i * 3 + 2]);
-            value += material.weights[t * std::size_t(components) + std::size_t(q)] * folded_q;
-        }
-        sum += wv.weight[m] * value;
-    }
-    return sum;
+    glm::dvec3 sum(0.0);
+    for (std::size_t i = 0; i < g.size(); ++i)
+        if (g[i] != glm::vec3(0.0f))
+            sum += glm::dvec3(g[i] * material.evaluate(x, y, view, material.lights().vector(i)));
+    return glm::vec3(sum);
 }
 
 namespace {

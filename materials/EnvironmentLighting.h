@@ -12,8 +12,9 @@
 //     T(x, v) = sum_i g_i BTF(x, v, l_i),   g_i = sum_{visible texels t} w_i(d_t) L_t Omega_t
 //
 // (projectEnvironment: the environment projected onto the measured light directions, RGB, no
-// extra cosine). Linear methods fold g into their light basis once per vertex and view (foldPca:
-// gamma*_kj = sum_i g_i p_ikj), after which a view costs what one point light costs.
+// extra cosine). Linear methods fold g into their light basis once per vertex and view (pca's
+// foldPca: gamma*_kj = sum_i g_i p_ikj), after which a view costs what one point light costs; each
+// such method does so in its own folder (MethodInfo::environment, materials/EnvironmentState.h).
 //
 // The sum runs over the texels of the lat-long map (each with its exact solid angle), not over a
 // local hemicube as in the seed: a texel's radiance then reaches the measured directions with the
@@ -34,10 +35,7 @@
 
 namespace osgBTF {
 
-class FmfMaterial;
-class LpcaMaterial;
 class Material;
-class PcaMaterial;
 
 /** A lat-long (equirectangular) HDR map in world space, +Z up (OSG's convention). Rows are
  *  bottom-up as in osg::Image: row r spans polar angles (from +Z) [pi (H-1-r)/H, pi (H-r)/H], so
@@ -108,47 +106,15 @@ std::vector<glm::vec3> projectEnvironment(const std::vector<EnvironmentSample>& 
 glm::vec3 environmentReference(const Material& material, int x, int y, const glm::vec3& view,
                                const std::vector<EnvironmentSample>& samples);
 
+/** Throws Error "environment: N projected values for M measured light directions" unless g
+ *  holds one value per measured light direction of the material (what every fold needs). */
+void checkProjected(const Material& material, const std::vector<glm::vec3>& g);
+
 /** sum_i g_i BTF(x, v, l_i) with the material's evaluate() at the measured light directions:
  *  equal to environmentReference up to rounding for every method whose point-light rendering is
  *  linear in the light interpolation weights (pca, fmf, lpca, ...). */
 glm::vec3 evaluateProjected(const Material& material, int x, int y, const glm::vec3& view,
                             const std::vector<glm::vec3>& g);
-
-/** PCA environment folding for one vertex: per measured view j and slot k (0..c-1 the
- *  components, c the bias of unorm8 storage), gamma*_kj = sum_i g_i alpha_k(j, i) (RGB, channel by
- *  channel). Layout: ((j * (c + 1)) + k) * 3. */
-std::vector<float> foldPca(const PcaMaterial& material, const std::vector<glm::vec3>& g);
-
-/** Renders folded PCA data: sum over the view's interpolation neighbours j of
- *  w_j (gamma*_cj + sum_k gamma*_kj E_kj(x)). What the per-vertex shader path computes. */
-glm::vec3 evaluateFoldedPca(const PcaMaterial& material, const std::vector<float>& folded, int x,
-                            int y, const glm::vec3& view);
-
-/** Whether fmf's factors render linearly in the light weights (model Fmf without dynamic-range
- *  reduction; the cosine flag is a per-light factor and folds into g). */
-bool fmfFoldable(const FmfMaterial& material);
-
-/** FMF environment folding for one vertex (U folded per view, channel by channel): per measured
- *  view j and component q, u*_jq[c] = sum_i g_i[c] s_i U[(j, i, c), q] with s_i the cosine
- *  division at l_i (1 without the cosine flag). Layout: ((j * K) + q) * 3, K the components.
- *  Throws Error for factors that fmfFoldable rejects (the message says why). */
-std::vector<float> foldFmf(const FmfMaterial& material, const std::vector<glm::vec3>& g);
-
-/** Renders folded FMF data: sum over the view's neighbours j of w_j sum_q u*_jq SxV_q(x). */
-glm::vec3 evaluateFoldedFmf(const FmfMaterial& material, const std::vector<float>& folded, int x,
-                            int y, const glm::vec3& view);
-
-/** LPCA's per-vertex environment data are g itself (lights x RGB): folding into every cluster's
- *  Eigen-BRDFs would store clusters x components x views RGB values per vertex (20 736 for
- *  32 x 8 x 81, 256 times g's 81), and a triangle spans texels of many clusters, so the fragment
- *  folds g into its own cluster's Eigen-BRDFs (evaluateFoldedLpca; g blended across the triangle
- *  first, which equals blending folded data because folding is linear). */
-std::vector<float> foldLpca(const LpcaMaterial& material, const std::vector<glm::vec3>& g);
-
-/** sum over the view's neighbours j of w_j sum_q alpha_q(x) sum_i g_i E_{q,k(x)}(j, i): the
- *  shaders/environment/lpca.frag loops. */
-glm::vec3 evaluateFoldedLpca(const LpcaMaterial& material, const std::vector<float>& folded, int x,
-                             int y, const glm::vec3& view);
 
 /** A representative light: a directional light standing for one region of the environment. */
 struct RepresentativeLight {

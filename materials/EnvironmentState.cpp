@@ -8,13 +8,9 @@
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
-#include "materials/EnvironmentLighting.h"
 #include "materials/Material.h"
 #include "materials/MaterialState.h"
 #include "materials/ShaderInterface.h"
-#include "materials/fmf/Fmf.h"
-#include "materials/lpca/Lpca.h"
-#include "materials/pca/Pca.h"
 
 namespace osgBTF {
 
@@ -27,42 +23,37 @@ constexpr int kDataWidth = 4096;
     throw Error("environment: method '" + method + "' has no folded environment lighting");
 }
 
+const EnvironmentHooks& hooksOf(const Material& material) {
+    const std::string method = material.methodName();
+    const MethodInfo* info = findMethodIfRegistered(method);
+    if (!info || !info->environment) noFolding(method);
+    return *info->environment;
+}
+
 }  // namespace
 
 bool hasFoldedEnvironment(const std::string& method) {
-    return method == "pca" || method == "fmf" || method == "lpca";
+    const MethodInfo* info = findMethodIfRegistered(method);
+    return info && info->environment;
 }
 
 bool foldsEnvironment(const Material& material) {
-    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material)) return fmfFoldable(*fmf);
-    return hasFoldedEnvironment(material.methodName());
+    const MethodInfo* info = findMethodIfRegistered(material.methodName());
+    if (!info || !info->environment) return false;
+    return !info->environment->folds || info->environment->folds(material);
 }
 
 std::vector<float> foldEnvironment(const Material& material, const std::vector<glm::vec3>& g) {
-    if (const auto* pca = dynamic_cast<const PcaMaterial*>(&material)) return foldPca(*pca, g);
-    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material)) return foldFmf(*fmf, g);
-    if (const auto* lpca = dynamic_cast<const LpcaMaterial*>(&material)) return foldLpca(*lpca, g);
-    noFolding(material.methodName());
+    return hooksOf(material).fold(material, g);
 }
 
 glm::vec3 evaluateFolded(const Material& material, const std::vector<float>& folded, int x, int y,
                          const glm::vec3& view) {
-    if (const auto* pca = dynamic_cast<const PcaMaterial*>(&material))
-        return evaluateFoldedPca(*pca, folded, x, y, view);
-    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material))
-        return evaluateFoldedFmf(*fmf, folded, x, y, view);
-    if (const auto* lpca = dynamic_cast<const LpcaMaterial*>(&material))
-        return evaluateFoldedLpca(*lpca, folded, x, y, view);
-    noFolding(material.methodName());
+    return hooksOf(material).evaluateFolded(material, folded, x, y, view);
 }
 
 std::size_t foldedStride(const Material& material) {
-    if (const auto* pca = dynamic_cast<const PcaMaterial*>(&material))
-        return pca->views().size() * std::size_t(pca->components() + 1) * 3;
-    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material))
-        return fmf->views().size() * std::size_t(fmf->factors().factors[0].U.cols()) * 3;
-    if (dynamic_cast<const LpcaMaterial*>(&material)) return material.lights().size() * 3;
-    noFolding(material.methodName());
+    return hooksOf(material).foldedStride(material);
 }
 
 osg::ref_ptr<osg::Program> environmentProgram(const std::string& method) {
@@ -122,11 +113,8 @@ osg::ref_ptr<osg::StateSet> environmentStateSet(const Material& material,
     // The real eye direction unless set again on this StateSet (a rectified image): a program
     // keeps the last value any StateSet gave a uniform (addCommonState).
     stateSet->addUniform(new osg::Uniform(shader::kFixedView, osg::Vec4(0.0f, 0.0f, 0.0f, 0.0f)));
-    if (const auto* fmf = dynamic_cast<const FmfMaterial*>(&material))
-        stateSet->addUniform(
-            new osg::Uniform("fmfComponents", int(fmf->factors().factors[0].U.cols())));
-    if (dynamic_cast<const LpcaMaterial*>(&material))
-        stateSet->addUniform(new osg::Uniform("lpcaLights", int(material.lights().size())));
+    const EnvironmentHooks& hooks = hooksOf(material);
+    if (hooks.addUniforms) hooks.addUniforms(material, *stateSet);
     return stateSet;
 }
 

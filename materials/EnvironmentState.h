@@ -3,7 +3,8 @@
 // Per vertex, the environment folded into the method's light basis (foldEnvironment) is far too
 // large for vertex attributes or varyings (pca: views x (c + 1) RGB = 81 x 17 x 3 floats), so it
 // goes into one float texture per geometry, addressed linearly by vertex index. The program
-// (shaders/common/environment.vert, environment_geom.glsl, shaders/environment/<method>.frag)
+// (shaders/common/environment.vert, environment_geom.glsl, materials/<method>/
+// <method>_environment.frag, embedded as environment/<method>.frag)
 // hands every fragment the three vertex indices of its triangle (flat) and its barycentric
 // coordinates; the fragment blends the three vertices' folded values across the triangle and
 // interpolates views as the method's point-light shader does. Only the nearest views of each
@@ -11,6 +12,10 @@
 //
 // Use: the material's sharedStateSet() above the geometry (textures, tables, uniforms), the
 // environmentStateSet() on the geometry (program, data texture, exposure).
+//
+// What differs between methods (the folding, its CPU reference, the data's size, extra uniforms)
+// is the method's own: MethodInfo::environment (materials/Material.h), set in its folder; the
+// functions below look it up by the material's method name.
 #pragma once
 
 #include <string>
@@ -28,24 +33,26 @@ class Material;
 constexpr int kEnvironmentDataUnit = 12;
 
 /** Whether the method's environment lighting is folded per vertex (exact) rather than drawn
- *  with representative lights. */
+ *  with representative lights: it registered MethodInfo::environment. False for an unknown
+ *  name. */
 bool hasFoldedEnvironment(const std::string& method);
 
-/** Whether this material's environment lighting folds (hasFoldedEnvironment, and for fmf the
- *  plain model: fmfFoldable). */
+/** Whether this material's environment lighting folds (hasFoldedEnvironment, and the method's
+ *  EnvironmentHooks::folds: for fmf the plain model, fmfFoldable). */
 bool foldsEnvironment(const Material& material);
 
-/** Folded data of one vertex (pca: foldPca, fmf: foldFmf, lpca: foldLpca). Throws Error
- * "environment: method 'X' has no folded environment lighting" for the others. */
+/** Folded data of one vertex: the method's EnvironmentHooks::fold (pca: foldPca, fmf: foldFmf,
+ *  lpca: foldLpca). Throws Error "environment: method 'X' has no folded environment lighting"
+ *  for the others. */
 std::vector<float> foldEnvironment(const Material& material, const std::vector<glm::vec3>& g);
 
 /** What the method's environment shader draws from one vertex's folded data (no blending across
- *  the triangle): evaluateFoldedPca, evaluateFoldedFmf or evaluateFoldedLpca. Throws Error as
- *  foldEnvironment. */
+ *  the triangle): EnvironmentHooks::evaluateFolded (evaluateFoldedPca, evaluateFoldedFmf,
+ *  evaluateFoldedLpca). Throws Error as foldEnvironment. */
 glm::vec3 evaluateFolded(const Material& material, const std::vector<float>& folded, int x, int y,
                          const glm::vec3& view);
 
-/** RGB values per vertex in foldEnvironment's result. */
+/** RGB values per vertex in foldEnvironment's result. Throws Error as foldEnvironment. */
 std::size_t foldedStride(const Material& material);
 
 /** The method's environment program, built once per process and method. Throws Error as

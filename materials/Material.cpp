@@ -197,13 +197,36 @@ std::vector<std::string> methodNamesInOrder() {
 }
 
 const MethodInfo& findMethod(const std::string& name) {
-    const auto it = registry().find(name);
-    if (it == registry().end()) {
+    const MethodInfo* method = findMethodIfRegistered(name);
+    if (!method) {
         std::string known;
         for (const auto& n : methodNames()) known += (known.empty() ? "" : ", ") + n;
         throw Error("unknown method '" + name + "' (known: " + known + ")");
     }
-    return it->second;
+    return *method;
+}
+
+const MethodInfo* findMethodIfRegistered(const std::string& name) {
+    const auto it = registry().find(name);
+    return it == registry().end() ? nullptr : &it->second;
+}
+
+namespace {
+
+const MethodInfo& methodWith(bool MethodInfo::*flag, const std::string& role) {
+    for (const std::string& name : methodNamesInOrder())
+        if (registry().at(name).*flag) return registry().at(name);
+    throw Error("no method is registered as the " + role);
+}
+
+}  // namespace
+
+const MethodInfo& baselineMethod() {
+    return methodWith(&MethodInfo::baseline, "baseline");
+}
+
+const MethodInfo& pluginDefaultMethod() {
+    return methodWith(&MethodInfo::pluginDefault, "plugins' default");
 }
 
 void saveMaterial(const Material& material, const std::string& path) {

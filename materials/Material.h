@@ -10,6 +10,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -153,6 +154,29 @@ private:
     mutable osg::ref_ptr<osg::StateSet> _sharedStateSet;
 };
 
+/** Environment lighting folded per vertex (materials/EnvironmentState.h, seed 004 section 5.2),
+ *  for a method whose point-light rendering is linear in the light interpolation weights: the
+ *  environment projected onto the measured lights (g) folds into the method's own light basis.
+ *  Its shader is "environment/<name>.frag" (materials/<name>/<name>_environment.frag). The
+ *  functions get materials of the method's own class. */
+struct EnvironmentHooks {
+    /** Whether this material folds (empty: every material of the method does); e.g. fmf only
+     *  without dynamic-range reduction. */
+    std::function<bool(const Material&)> folds;
+    /** One vertex's data from g (one RGB value per measured light); throws Error for g of the
+     *  wrong size or a material that does not fold. */
+    std::function<std::vector<float>(const Material&, const std::vector<glm::vec3>& g)> fold;
+    /** What the environment shader draws from one vertex's data: its CPU reference. */
+    std::function<glm::vec3(const Material&, const std::vector<float>& folded, int x, int y,
+                            const glm::vec3& view)>
+        evaluateFolded;
+    /** RGB values per vertex in fold's result. */
+    std::function<std::size_t(const Material&)> foldedStride;
+    /** Adds the uniforms the environment shader needs beyond the material's StateSet and the
+     *  common ones (e.g. a size its loops run to); empty: none. */
+    std::function<void(const Material&, osg::StateSet&)> addUniforms;
+};
+
 /** A compression method: everything the tools, the harness, the serializers and the tests need
  *  to know about it, so that a new method is one folder that registers one of these. */
 struct MethodInfo {
@@ -171,10 +195,20 @@ struct MethodInfo {
     osg::Object* (*createInstance)() = nullptr;
     /** Static ALU/TEX count of one fragment of a fitted material's shader (harness Table 3). */
     std::function<ShaderCost(const Material&)> shaderCost;
-    /** The fragment shader's source when it is not built into the library as
-     *  shaders/<name>.frag (a method defined outside the library's sources). An override file
-     *  shaders/<name>.frag on OSG_FILE_PATH still wins, as for the built-in shaders. */
+    /** The fragment shader's source when it is not built into the library as <name>.frag (from
+     *  materials/<name>/<name>.frag; a method defined outside the library's sources). An override
+     *  file shaders/<name>.frag on OSG_FILE_PATH still wins, as for the built-in shaders. */
     std::string fragmentShader;
+    /** Folded environment lighting; none: the method is lit by representative lights. */
+    std::optional<EnvironmentHooks> environment;
+    /** The baseline every comparison starts with (baselineMethod()); one method sets it. */
+    bool baseline = false;
+    /** The method whose fits `btf fit` can save as a UBO2014 .btf file (its factors are the
+     *  format's). */
+    bool writesUbo2014 = false;
+    /** The method the .btf/.btfmaterial plugins fit when the options name none
+     *  (pluginDefaultMethod()); one method sets it. */
+    bool pluginDefault = false;
     /** Part of `btf compare --methods all` (false for the baseline, which is always added). */
     bool compareAll = true;
     /** Position in `--methods all` and other lists that follow the paper's order. */
@@ -187,6 +221,12 @@ struct MethodInfo {
 bool registerMethod(MethodInfo info);
 /** Throws Error "unknown method 'X' (known: laf, slaf, ...)". */
 const MethodInfo& findMethod(const std::string& name);
+/** findMethod without the error: nullptr for a name no method registered. */
+const MethodInfo* findMethodIfRegistered(const std::string& name);
+/** The method with MethodInfo::baseline; throws Error when none is registered. */
+const MethodInfo& baselineMethod();
+/** The method with MethodInfo::pluginDefault; throws Error when none is registered. */
+const MethodInfo& pluginDefaultMethod();
 /** Registered method names, alphabetically. */
 std::vector<std::string> methodNames();
 /** Registered method names by MethodInfo::order (then name). */
@@ -198,7 +238,7 @@ void saveMaterial(const Material& material, const std::string& path);
 osg::ref_ptr<Material> loadMaterial(const std::string& path);
 osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file);
 
-/** The method's shared program: shaders/common/btf.vert + shaders/<method>.frag (or the
+/** The method's shared program: common/btf.vert + <method>.frag (materials/<method>/, or the
  *  method's MethodInfo::fragmentShader), the tangent bound to shader::kTangentAttribute. Compiled
  * by OSG at first use; built once per process and method. Throws Error if a source is missing. */
 osg::ref_ptr<osg::Program> methodProgram(const std::string& method);

@@ -315,7 +315,7 @@ std::vector<float> TileSetIndex::decodeUPacket(int group, const std::vector<std:
 osg::ref_ptr<FmfMaterial> TileSetIndex::material(std::vector<float> u, std::vector<float> sxv,
                                                  const std::string& source) const {
     FittedMaterial file;
-    file.method = "fmf";
+    file.method = kFmfMethodName;
     file.parameters = parameters;
     file.views = views;
     file.lights = lights;

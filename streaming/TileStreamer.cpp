@@ -167,7 +167,7 @@ osg::ref_ptr<StreamedFmfMaterial> TileStreamer::open(const std::string& location
         if (it == index.parameters.end()) fail(indexName, "parameter '" + key + "' is missing");
         return it->second;
     };
-    if (parameter("model") != "fmf")
+    if (parameter("model") != kFmfPlainModel)
         fail(indexName, "model '" + parameter("model") + "': BSVTF streams fmf materials");
 
     std::vector<float> weights(layout.tileCount()), norms(layout.tileCount());

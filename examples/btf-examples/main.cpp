@@ -25,6 +25,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MipMapping.h"
+#include "materials/pca/Pca.h"
 #include "scene/OwnPlugins.h"
 
 namespace {
@@ -181,8 +182,9 @@ void run(Options options) {
     }
     // 3. The shadowed cloth (seed 004: cast shadows and the smooth terminator) with the pca fit
     //    when there is one, and the procedural sky it is lit like (for environment lighting).
-    const auto shadowed = std::find_if(items.begin(), items.end(),
-                                       [](const SceneItem& item) { return item.label == "pca"; });
+    const auto shadowed = std::find_if(items.begin(), items.end(), [](const SceneItem& item) {
+        return item.label == kPcaMethodName;
+    });
     const std::string clothMaterial =
         (shadowed != items.end() ? *shadowed : items.front()).materialFile;
     writeNodeAtomically(*createShadowedClothScene(clothMaterial, 4.0f, readOptions.get()),

@@ -159,7 +159,7 @@ int FmfMaterial::directionCombinations(const glm::vec3& view, const glm::vec3& l
 
 void FmfMaterial::factorSums(std::size_t row, const std::size_t* images, const float* weights,
                              int count, float sums[3]) const {
-    // As shaders/fmf.frag: per group of 4 components, the U rows blended over the combinations,
+    // As fmf.frag: per group of 4 components, the U rows blended over the combinations,
     // then one dot product with the texel's SxV (the same order of operations as the GPU).
     const bool fmf = _factors.model == FactorModel::Fmf;
     for (int c = 0; c < 3; ++c) {
@@ -287,7 +287,7 @@ MemoryFootprint FmfMaterial::memory() const {
 FittedMaterial FmfMaterial::toFittedMaterial() const {
     FittedMaterial file = writeCommon();
     const bool fmf = _factors.model == FactorModel::Fmf;
-    file.parameters["model"] = fmf ? "fmf" : "dfmf";
+    file.parameters["model"] = fmf ? kFmfPlainModel : "dfmf";
     const int ks[3] = {_factors.components(0), _factors.components(1), _factors.components(2)};
     file.parameters["components"] =
         fmf ? std::to_string(ks[0])
@@ -324,9 +324,9 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(const FittedMaterial& file) {
     factors.width = m->_width;
     factors.height = m->_height;
     const std::string& model = file.parameter("model");
-    if (model != "fmf" && model != "dfmf")
+    if (model != kFmfPlainModel && model != "dfmf")
         fail(file.source, "parameter 'model' must be fmf or dfmf, got " + model);
-    factors.model = model == "fmf" ? FactorModel::Fmf : FactorModel::Dfmf;
+    factors.model = model == kFmfPlainModel ? FactorModel::Fmf : FactorModel::Dfmf;
     const bool fmf = factors.model == FactorModel::Fmf;
     auto numbers = [&](const std::string& key, std::size_t n) {
         std::vector<float> values;
@@ -536,11 +536,11 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const BtfSource& btf, const FitOption
 namespace {
 const bool registered = registerMethod([] {
     MethodInfo m;
-    m.name = "fmf";
+    m.name = kFmfMethodName;
     m.description =
-        "full-matrix factorisation (Schwartz et al. 2013, seed 003; UBO2014 FMF/DFMF files): rank-C "
-        "SVD of the (view, light, colour) x texel matrix, 3x3 view/light blending of U; 64 "
-        "bytes per texel + U at 32 components, half";
+        "full-matrix factorisation (Schwartz et al. 2013, seed 003; UBO2014 FMF/DFMF files): "
+        "rank-C SVD of the (view, light, colour) x texel matrix, 3x3 view/light blending of U; "
+        "64 bytes per texel + U at 32 components, half";
     m.options = {OptionSpec::integer("components", 32, 1, OptionSpec::kNoLimit,
                                      "rank C: Eigen-Textures / Eigen-ABRDFs (at most the "
                                      "texels, or 3 x views x lights if fewer; seed 003 uses "
@@ -555,7 +555,7 @@ const bool registered = registerMethod([] {
     };
     m.createInstance = []() -> osg::Object* { return new FmfMaterial; };
     m.shaderCost = [](const Material& material) {
-        // shaders/fmf.frag. View + light lookups 2 x 11; the 9 combinations: weight product,
+        // fmf.frag. View + light lookups 2 x 11; the 9 combinations: weight product,
         // test, row address, count (4 x 9); decode at worst (model 11): 5 model tests, exp, 3
         // adds, 2 products, YUV 8; cosine: 3 tests, divide, multiply. Shared SxV (fmf): per group
         // of 4 components 1 SxV fetch and per channel 9 x (U fetch, address add, multiply, add)
@@ -575,6 +575,30 @@ const bool registered = registerMethod([] {
                    : "ALU 30g+60+L, TEX 10g+T (g = sum of the channels' components / 4" + lookups);
     };
     // Seed 003 is the latest of the papers: last in the paper order.
+    // Linear in the light weights for the plain model: an environment folds into U per view once
+    // per vertex (FmfEnvironment.cpp, fmf_environment.frag).
+    EnvironmentHooks environment;
+    environment.folds = [](const Material& material) {
+        return fmfFoldable(static_cast<const FmfMaterial&>(material));
+    };
+    environment.fold = [](const Material& material, const std::vector<glm::vec3>& g) {
+        return foldFmf(static_cast<const FmfMaterial&>(material), g);
+    };
+    environment.evaluateFolded = [](const Material& material, const std::vector<float>& folded,
+                                    int x, int y, const glm::vec3& view) {
+        return evaluateFoldedFmf(static_cast<const FmfMaterial&>(material), folded, x, y, view);
+    };
+    environment.foldedStride = [](const Material& material) {
+        const FmfMaterial& fmf = static_cast<const FmfMaterial&>(material);
+        return fmf.views().size() * std::size_t(fmf.factors().factors[0].U.cols()) * 3;
+    };
+    environment.addUniforms = [](const Material& material, osg::StateSet& stateSet) {
+        const FmfMaterial& fmf = static_cast<const FmfMaterial&>(material);
+        stateSet.addUniform(
+            new osg::Uniform("fmfComponents", int(fmf.factors().factors[0].U.cols())));
+    };
+    m.environment = std::move(environment);
+    m.writesUbo2014 = true;  // FmfMaterial::factors() are what a UBO2014 .btf file stores
     m.order = 70;
     m.quickFitOptions = "components=2";
     return m;

@@ -27,6 +27,11 @@
 
 namespace osgBTF {
 
+/** The method's registry name: what a BSVTF tile set (streaming/) is a material of. */
+inline constexpr char kFmfMethodName[] = "fmf";
+/** Parameter "model" of a file whose factors are FactorModel::Fmf ("dfmf": Dfmf). */
+inline constexpr char kFmfPlainModel[] = "fmf";
+
 class FmfMaterial : public Material {
 public:
     FmfMaterial() = default;
@@ -53,7 +58,7 @@ public:
     const FactoredBtf& factors() const { return _factors; }
     MaterialTexture::PixelKind storage() const { return _storage; }
 
-    std::string methodName() const override { return "fmf"; }
+    std::string methodName() const override { return kFmfMethodName; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
@@ -100,5 +105,21 @@ private:
     MaterialTexture::PixelKind _storage = MaterialTexture::Half;
     DirectionLookup _viewLookup, _lightLookup;
 };
+
+/** Whether fmf's factors render linearly in the light weights (model Fmf without dynamic-range
+ *  reduction; the cosine flag is a per-light factor and folds into g): whether the material's
+ *  environment lighting folds (materials/EnvironmentState.h). */
+bool fmfFoldable(const FmfMaterial& material);
+
+/** FMF environment folding for one vertex (U folded per view, channel by channel; g: the
+ *  environment projected onto the measured light directions, materials/EnvironmentLighting.h):
+ *  per measured view j and component q, u*_jq[c] = sum_i g_i[c] s_i U[(j, i, c), q] with s_i the
+ *  cosine division at l_i (1 without the cosine flag). Layout: ((j * K) + q) * 3, K the
+ *  components. Throws Error for factors that fmfFoldable rejects (the message says why). */
+std::vector<float> foldFmf(const FmfMaterial& material, const std::vector<glm::vec3>& g);
+
+/** Renders folded FMF data: sum over the view's neighbours j of w_j sum_q u*_jq SxV_q(x). */
+glm::vec3 evaluateFoldedFmf(const FmfMaterial& material, const std::vector<float>& folded, int x,
+                            int y, const glm::vec3& view);
 
 }  // namespace osgBTF

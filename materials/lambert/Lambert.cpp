@@ -98,6 +98,7 @@ const bool registered = registerMethod([] {
     m.createInstance = []() -> osg::Object* { return new LambertMaterial; };
     // One albedo fetch, times l_z.
     m.shaderCost = [](const Material&) { return ShaderCost::ofEvaluate(1, 1, "ALU 11, TEX 1"); };
+    m.baseline = true;
     m.compareAll = false;  // the comparison always adds it as its baseline
     m.order = 0;
     return m;

@@ -10,7 +10,7 @@
 // The seed's text extraction shows region 1 only; the other regions are Shirley & Chiu's
 // (A Low Distortion Map Between Disk and Square, 1997). Inverting the elevation needs no
 // trigonometry: rho^2 = 1 - z and rho sqrt(2 - rho^2) = sqrt(1 - z^2), so the disc point is
-// (x, y) / sqrt(1 + z). The GLSL copy is in shaders/lpca-revised.frag.
+// (x, y) / sqrt(1 + z). The GLSL copy is in lpca-revised.frag.
 #pragma once
 
 #include <glm/vec2.hpp>

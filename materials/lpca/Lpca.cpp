@@ -272,6 +272,25 @@ const bool registered = registerMethod([] {
             "ALU 49c+12+L, TEX 10c+1+T (c components; L = " + std::to_string(v.alu + l.alu) +
                 ", T = " + std::to_string(v.tex + l.tex) + ": view and light lookups)");
     };
+    // Linear in the light weights; the fragment folds g into its own cluster's Eigen-BRDFs
+    // (LpcaEnvironment.cpp, lpca_environment.frag), which loop over the lights.
+    EnvironmentHooks environment;
+    environment.fold = [](const Material& material, const std::vector<glm::vec3>& g) {
+        return foldLpca(static_cast<const LpcaMaterial&>(material), g);
+    };
+    environment.evaluateFolded = [](const Material& material, const std::vector<float>& folded,
+                                    int x, int y, const glm::vec3& view) {
+        return evaluateFoldedLpca(static_cast<const LpcaMaterial&>(material), folded, x, y, view);
+    };
+    environment.foldedStride = [](const Material& material) {
+        return material.lights().size() * 3;
+    };
+    environment.addUniforms = [](const Material& material, osg::StateSet& stateSet) {
+        stateSet.addUniform(new osg::Uniform("lpcaLights", int(material.lights().size())));
+    };
+    m.environment = std::move(environment);
+    // What the .btf/.zip plugins fit when the options name no method (docs/scene-graph.md).
+    m.pluginDefault = true;
     m.order = 50;
     m.quickFitOptions = "clusters=2 components=2";
     return m;

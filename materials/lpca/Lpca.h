@@ -114,4 +114,17 @@ MaterialTexture lpcaWeightTexture(int width, int height, int components,
 std::vector<std::uint8_t> lpcaClusterFromTexture(const FittedMaterial& file, int clusters);
 std::vector<float> lpcaWeightsFromTexture(const FittedMaterial& file, int components);
 
+/** LPCA's per-vertex environment data are g itself (lights x RGB; g: the environment projected
+ *  onto the measured light directions, materials/EnvironmentLighting.h): folding into every
+ *  cluster's Eigen-BRDFs would store clusters x components x views RGB values per vertex (20 736
+ *  for 32 x 8 x 81, 256 times g's 81), and a triangle spans texels of many clusters, so the
+ *  fragment folds g into its own cluster's Eigen-BRDFs (evaluateFoldedLpca; g blended across the
+ *  triangle first, which equals blending folded data because folding is linear). */
+std::vector<float> foldLpca(const LpcaMaterial& material, const std::vector<glm::vec3>& g);
+
+/** sum over the view's neighbours j of w_j sum_q alpha_q(x) sum_i g_i E_{q,k(x)}(j, i): the
+ *  lpca_environment.frag loops. */
+glm::vec3 evaluateFoldedLpca(const LpcaMaterial& material, const std::vector<float>& folded, int x,
+                             int y, const glm::vec3& view);
+
 }  // namespace osgBTF

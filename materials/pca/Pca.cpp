@@ -373,7 +373,7 @@ osg::ref_ptr<osg::StateSet> PcaMaterial::createStateSet() const {
 namespace {
 const bool registered = registerMethod([] {
     MethodInfo m;
-    m.name = "pca";
+    m.name = kPcaMethodName;
     m.description =
         "per-view Eigen-Textures (Sattler 2003): rank-c PCA of each view's light images, "
         "3x3 view/light interpolation; 3888 values / 3888 bytes per texel at 81 views, 16 "
@@ -403,6 +403,21 @@ const bool registered = registerMethod([] {
             "ALU 54c+49+L, TEX 18c+9+T (c components; L = " + std::to_string(v.alu + l.alu) +
                 ", T = " + std::to_string(v.tex + l.tex) + ": view and light lookups)");
     };
+    // Linear in the light weights: an environment folds into each view's weights once per vertex
+    // (PcaEnvironment.cpp, pca_environment.frag).
+    EnvironmentHooks environment;
+    environment.fold = [](const Material& material, const std::vector<glm::vec3>& g) {
+        return foldPca(static_cast<const PcaMaterial&>(material), g);
+    };
+    environment.evaluateFolded = [](const Material& material, const std::vector<float>& folded,
+                                    int x, int y, const glm::vec3& view) {
+        return evaluateFoldedPca(static_cast<const PcaMaterial&>(material), folded, x, y, view);
+    };
+    environment.foldedStride = [](const Material& material) {
+        const PcaMaterial& pca = static_cast<const PcaMaterial&>(material);
+        return pca.views().size() * std::size_t(pca.components() + 1) * 3;
+    };
+    m.environment = std::move(environment);
     m.order = 40;
     m.quickFitOptions = "components=2";
     return m;

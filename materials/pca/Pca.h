@@ -32,6 +32,9 @@
 
 namespace osgBTF {
 
+/** The method's registry name, for code outside this folder that singles pca out. */
+inline constexpr char kPcaMethodName[] = "pca";
+
 class PcaMaterial : public Material {
 public:
     PcaMaterial() = default;
@@ -52,7 +55,7 @@ public:
     void setShape(int width, int height, const DirectionSet& views, const DirectionSet& lights,
                   int components, MaterialTexture::PixelKind storage);
 
-    std::string methodName() const override { return "pca"; }
+    std::string methodName() const override { return kPcaMethodName; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
@@ -112,5 +115,16 @@ private:
     int _tileColumns = 1;
     DirectionLookup _viewLookup, _lightLookup;
 };
+
+/** PCA environment folding for one vertex (g: the environment projected onto the measured light
+ *  directions, materials/EnvironmentLighting.h): per measured view j and slot k (0..c-1 the
+ *  components, c the bias of unorm8 storage), gamma*_kj = sum_i g_i alpha_k(j, i) (RGB, channel by
+ *  channel). Layout: ((j * (c + 1)) + k) * 3. */
+std::vector<float> foldPca(const PcaMaterial& material, const std::vector<glm::vec3>& g);
+
+/** Renders folded PCA data: sum over the view's interpolation neighbours j of
+ *  w_j (gamma*_cj + sum_k gamma*_kj E_kj(x)). What pca_environment.frag computes per vertex. */
+glm::vec3 evaluateFoldedPca(const PcaMaterial& material, const std::vector<float>& folded, int x,
+                            int y, const glm::vec3& view);
 
 }  // namespace osgBTF

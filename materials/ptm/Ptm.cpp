@@ -295,7 +295,7 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fit(const BtfSource& btf, const FitOption
 // ---- CPU evaluator -----------------------------------------------------------------------------
 
 glm::vec3 PtmMaterial::field(std::size_t texel, int slot, float lx, float ly) const {
-    // shaders/ptm.frag's ptmField, operation for operation.
+    // ptm.frag's ptmField, operation for operation.
     const float mx = lx * lx, my = ly * ly, mxy = lx * ly;
     const std::size_t texels = texelCount();
     if (_shape.luminance) {

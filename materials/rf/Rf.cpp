@@ -29,7 +29,7 @@ namespace {
  *  save, load, memory accounting and the StateSet builder all read, so they cannot disagree. */
 struct StoredArray {
     const char* name;     ///< texture name in the file
-    const char* sampler;  ///< GLSL sampler in shaders/rf.frag
+    const char* sampler;  ///< GLSL sampler in rf.frag
     int depth;            ///< layers (a Texture2DArray on the GPU when > 1)
     int channels;
     MaterialTexture::PixelKind kind;
@@ -68,7 +68,7 @@ float toHalf(float v) {
     return float(Imath::half(std::clamp(v, -65504.0f, 65504.0f)));
 }
 
-/** One lobe, in float and in the order the shader computes it (shaders/rf.frag). */
+/** One lobe, in float and in the order the shader computes it (rf.frag). */
 inline float lobeValue(const float* p, const glm::vec3& l) {
     const float base = p[0] * l.x + p[1] * l.y + p[2] * l.z;
     return base > 0.0f ? std::pow(base, p[3]) : 0.0f;
@@ -614,7 +614,7 @@ float RfMaterial::lobeSum(std::size_t texel, std::size_t view, const glm::vec3& 
 glm::vec3 RfMaterial::reflectanceField(std::size_t texel, std::size_t view,
                                        const glm::vec3& light) const {
     const float* rho = &rhoV[(view * texelCount() + texel) * 3];
-    // rho_c times the lobe sum of channel c, in the shader's order (shaders/rf.frag).
+    // rho_c times the lobe sum of channel c, in the shader's order (rf.frag).
     const glm::vec3 sum =
         _variant.rgb ? glm::vec3(lobeSum(texel, view, light, 0), lobeSum(texel, view, light, 1),
                                  lobeSum(texel, view, light, 2))

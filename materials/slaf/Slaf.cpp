@@ -55,7 +55,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const BtfSource& btf, const FitOpti
 glm::vec3 SlafMaterial::evaluate(int x, int y, const glm::vec3& view,
                                  const glm::vec3& light) const {
     const std::size_t t = std::size_t(y) * _width + x, texels = texelCount();
-    // The same interpolation and blend order as shaders/slaf.frag.
+    // The same interpolation and blend order as slaf.frag.
     const InterpolationWeights w = _viewLookup.weights(view);
     glm::vec3 T(0.0f);
     for (int i = 0; i < 3; ++i) {

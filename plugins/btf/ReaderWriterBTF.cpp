@@ -32,7 +32,7 @@ const char* const kPseudoSyntax = "MODEL.(MATERIAL[,scale=S][,KEY=VALUE...]).btf
 
 /** What the option string asks of these readers. */
 struct Settings {
-    std::string method = "lpca";
+    std::string method = pluginDefaultMethod().name;
     bool methodGiven = false;  // a UBO2014 file without method= opens as stored (fmf)
     std::map<std::string, std::string> values;  // every KEY=VALUE word, method options among them
     float textureScale = 1.0f;

@@ -1,5 +1,6 @@
 // Shared fragment stage: builds the local frame, loops over the lights, and calls the method's
-// btfEvaluate(texel, view, light). Included by shaders/<method>.frag after its #version line.
+// btfEvaluate(texel, view, light). Included by each method's <method>.frag (materials/<method>/)
+// after its #version line.
 
 in vec2 btfTexCoord;
 in vec3 btfEyePosition;
@@ -36,14 +37,19 @@ float btfTerminatorFactor(int i) {
 }
 
 #ifdef OSGBTF_SHADOW_MAP
-// Cast shadows of an osgShadow::ShadowMap for light osgBTF_shadowLight: its depth texture
+// Cast shadows of an osgShadow::ShadowMap, SoftShadowMap or ViewDependentShadowMap (its first
+// map) for light osgBTF_shadowLight: the technique's depth texture
 // (compare mode on, so the lookup returns the lit fraction; outside the map its border is 1, lit).
 uniform sampler2DShadow osgBTF_shadowMap;
 uniform int osgBTF_shadowLight = -1;
 in vec4 btfShadowCoordinate;
 
 float btfShadowFactor(int i) {
-    return i == osgBTF_shadowLight ? textureProj(osgBTF_shadowMap, btfShadowCoordinate) : 1.0;
+    // q <= 0: the TexGen unit holds no projection this frame (GL's default Q plane is 0, and a
+    // ViewDependentShadowMap that made no map sets none), or the point lies behind a positional
+    // light's shadow camera, which cannot see occluders there: lit, rather than a division by 0.
+    if (i != osgBTF_shadowLight || btfShadowCoordinate.w <= 0.0) return 1.0;
+    return textureProj(osgBTF_shadowMap, btfShadowCoordinate);
 }
 #else
 float btfShadowFactor(int i) {

@@ -1,9 +1,9 @@
-// The evaluation of shaders/fmf.frag and shaders/bsvtf.frag (materials/fmf/Fmf.h): the same loops
-// as FmfMaterial::evaluate/factorSums on the CPU. The U rows of the 9 (view, light) combinations
-// are blended per group of 4 components, dotted with the texel's Eigen-Texture values, then
-// decoded once (colour model or exp), then divided by the light's cosine when the data include
-// it. The includer defines where the Eigen-Textures come from (a texture array, or BSVTF's tile
-// cache through a lookup table):
+// The evaluation of materials/fmf/fmf.frag and shaders/bsvtf.frag (materials/fmf/Fmf.h): the
+// same loops as FmfMaterial::evaluate/factorSums on the CPU. The U rows of the 9 (view, light)
+// combinations are blended per group of 4 components, dotted with the texel's Eigen-Texture
+// values, then decoded once (colour model or exp), then divided by the light's cosine when the
+// data include it. The includer defines where the Eigen-Textures come from (a texture array, or
+// BSVTF's tile cache through a lookup table):
 vec4 fmfEigenTexture(ivec2 texel, int layer);
 
 // Layer = measured view; texel (group g, light * 3 + channel) = components 4g..4g+3 of the row.

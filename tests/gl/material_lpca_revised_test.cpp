@@ -1,4 +1,4 @@
-// Revised LPCA on the GPU (shaders/lpca-revised.frag, hardware trilinear filtering of the 3D
+// Revised LPCA on the GPU (materials/lpca-revised/lpca-revised.frag, hardware trilinear filtering of the 3D
 // grid) equals LpcaRevisedMaterial::evaluate on the CPU; the 8-bit grid within its quantisation
 // bound (GPUs may filter 8-bit textures with 8-bit fractional weights).
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// LPCA on the GPU (shaders/lpca.frag) equals LpcaMaterial::evaluate on the CPU.
+// LPCA on the GPU (materials/lpca/lpca.frag) equals LpcaMaterial::evaluate on the CPU.
 #include <gtest/gtest.h>
 
 #include "harness/sample/SampleBtf.h"

@@ -1,4 +1,4 @@
-// Method "ptm": the fragment shader (shaders/ptm.frag) equals PtmMaterial::evaluate for both
+// Method "ptm": the fragment shader (materials/ptm/ptm.frag) equals PtmMaterial::evaluate for both
 // colour variants and both view models, at measured (view, light) pairs and between them.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Method "rf": the fragment shader (shaders/rf.frag) equals RfMaterial::evaluate, at measured
+// Method "rf": the fragment shader (materials/rf/rf.frag) equals RfMaterial::evaluate, at measured
 // (view, light) pairs and between them (view interpolation through the baked table), for the
 // default model and seed 002's variants.
 #include <gtest/gtest.h>

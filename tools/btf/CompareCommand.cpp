@@ -182,7 +182,7 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
             options->methods == "all" ? allCompareMethods() : splitList(options->methods);
         if (compare.methods.empty()) throw Error("--methods: no method named");
         std::vector<std::string> all = compare.methods;
-        all.insert(all.begin(), "lambert");
+        all.insert(all.begin(), baselineMethod().name);
         for (const std::string& m : all) {
             findMethod(m);
             const std::pair<const char*, int> shortcuts[] = {{"lobes", options->lobes},

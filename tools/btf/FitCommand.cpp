@@ -96,7 +96,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         if (btfOutput && options->mipmap)
             fail(options->output,
                  "a UBO2014 .btf file has no mip levels; save a --mipmap fit as .btfmat or .exr");
-        if (btfOutput && method.name != "fmf")
+        if (btfOutput && !method.writesUbo2014)
             fail(options->output,
                  "only method fmf writes a UBO2014 .btf file (its factors are "
                  "the format's); save " +
