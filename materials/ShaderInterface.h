@@ -50,7 +50,8 @@ constexpr const char* kTerminatorTexture = "osgBTF_terminatorTexture";  ///< sam
  *  where the methods keep other sampler types, and GL refuses such draws. */
 constexpr int kTerminatorUnit = 14;
 
-/** Cast shadows from an osgShadow::ShadowMap (scene/README.md): the program variant compiled with
+/** Cast shadows from osgShadow::ShadowMap, SoftShadowMap or ViewDependentShadowMap (its first map;
+ *  scene/README.md): the program variant compiled with
  *  kShadowMapDefine samples the technique's depth texture, rebound by MaterialNode on
  *  kShadowMapUnit, at the coordinates of the technique's eye-linear TexGen (read in btf.vert from
  *  gl_EyePlane*[kShadowTexGenUnit]), for light kShadowLight only. */

@@ -19,6 +19,7 @@
 #include <osgDB/FileUtils>
 #include <osgShadow/ShadowMap>
 #include <osgShadow/ShadowedScene>
+#include <osgShadow/ViewDependentShadowMap>
 #include <osgUtil/CullVisitor>
 #include <osgUtil/GLObjectsVisitor>
 #include <osgUtil/IncrementalCompileOperation>
@@ -608,21 +609,24 @@ osg::StateSet* MaterialNode::lightStateSet(osgUtil::CullVisitor& cv) {
 
 namespace {
 
-/** Which of `lights` an osgShadow::ShadowMap given no light of its own shadows: the last
- *  osg::Light of the render stage's positional state, found after culling the shadowed scene;
- *  here the last one culled so far (the same when the scene's LightSources come before its
- *  models), matched to `lights` by its eye-space position. Else the last of `lights`. */
-int techniqueLight(osgUtil::CullVisitor& cv, const std::vector<EyeLight>& lights) {
+/** Which of `lights` a technique given no light of its own shadows: the last osg::Light of the
+ *  render stage's positional state (ShadowMap's choice, and ViewDependentShadowMap's first light),
+ *  only lights numbered `lightNum` when it is >= 0 (ShadowSettings::setLightNum), found after
+ *  culling the shadowed scene; here the last one culled so far (the same when the scene's
+ *  LightSources come before its models), matched to `lights` by its eye-space position. Else the
+ *  last of `lights`. */
+int techniqueLight(osgUtil::CullVisitor& cv, const std::vector<EyeLight>& lights, int lightNum) {
     const int last = int(lights.size()) - 1;
     osgUtil::RenderStage* stage = cv.getRenderStage();
     if (!stage || !stage->getPositionalStateContainer()) return last;
     const osg::Light* selected = nullptr;
     const osg::RefMatrix* matrix = nullptr;
     for (const auto& [attribute, at] : stage->getPositionalStateContainer()->getAttrMatrixList())
-        if (const auto* light = dynamic_cast<const osg::Light*>(attribute.get())) {
-            selected = light;
-            matrix = at.get();
-        }
+        if (const auto* light = dynamic_cast<const osg::Light*>(attribute.get()))
+            if (lightNum < 0 || light->getLightNum() == lightNum) {
+                selected = light;
+                matrix = at.get();
+            }
     if (!selected) return last;
     const EyeLight eye = toEyeLight(*selected, matrix ? osg::Matrixd(*matrix) : osg::Matrixd());
     for (int i = last; i >= 0; --i) {
@@ -630,6 +634,66 @@ int techniqueLight(osgUtil::CullVisitor& cv, const std::vector<EyeLight>& lights
         if (d.length2() < 1e-8f * std::max(1.0f, eye.position.length2())) return i;
     }
     return last;
+}
+
+/** The depth texture a technique MaterialNode supports samples for this cull, its TexGen unit
+ *  and the osg::Light number it shadows (-1: any); no texture under other techniques, and when
+ *  the technique makes no usable depth map (ShadowSettings' debug draw, units from 8). */
+struct TechniqueShadow {
+    bool supported = false;
+    osg::Texture* depth = nullptr;
+    int unit = -1;
+    int lightNum = -1;
+};
+
+/** ShadowMap (and SoftShadowMap) pushes its StateSet, the depth texture on its unit, before it
+ *  traverses the shadowed scene: the texture is in the cull's state graph. */
+TechniqueShadow shadowMapShadow(const osgShadow::ShadowMap& technique, osgUtil::CullVisitor& cv) {
+    TechniqueShadow shadow;
+    shadow.supported = true;
+    shadow.unit = int(technique.getTextureUnit());
+    for (osgUtil::StateGraph* graph = cv.getCurrentStateGraph(); graph && !shadow.depth;
+         graph = graph->_parent) {
+        const osg::StateSet* stateSet = graph->getStateSet();
+        if (!stateSet) continue;
+        auto* texture = dynamic_cast<osg::Texture*>(const_cast<osg::StateAttribute*>(
+            stateSet->getTextureAttribute(unsigned(shadow.unit), osg::StateAttribute::TEXTURE)));
+        if (texture && texture->getShadowComparison()) shadow.depth = texture;
+    }
+    return shadow;
+}
+
+/** ViewDependentShadowMap (OSG 3.6) culls the shadowed scene first, under an empty placeholder
+ *  StateSet, and only then makes this frame's shadow cameras and binds their depth textures (on
+ *  ShadowSettings::getBaseShadowTextureUnit() and up, one per map, with eye-linear TexGen placed
+ *  in the render stage like ShadowMap's, and the same comparison: LEQUAL, border 1). So nothing
+ *  is bound yet when this node is culled; but each frame takes its maps' ShadowData, in order,
+ *  from the previous frame's list of this view, whose first entry is therefore the first map
+ *  of this frame: its texture is the one sampled, found before it is drawn. On a view's first
+ *  frame the list is empty, and gets the ShadowData the technique would have made (the same
+ *  constructor, from the same ShadowSettings), so that frame is shadowed too. Only the first map
+ *  is read: it shadows the first light (techniqueLight, or the settings' light number), the one
+ *  VDSM's own shader shadows; with two maps per light the second's share of the view is lit. */
+TechniqueShadow viewDependentShadow(osgShadow::ViewDependentShadowMap& technique,
+                                    const osgShadow::ShadowedScene& scene,
+                                    osgUtil::CullVisitor& cv) {
+    TechniqueShadow shadow;
+    shadow.supported = true;
+    const osgShadow::ShadowSettings* settings = scene.getShadowSettings();
+    // Without settings VDSM itself cannot run (it reads them unchecked); a debug-draw map is a
+    // colour texture; units from 8 get no TexGen, so VDSM drops their maps.
+    if (!settings || settings->getDebugDraw() || settings->getBaseShadowTextureUnit() >= 8)
+        return shadow;
+    osgShadow::ViewDependentShadowMap::ViewDependentData* data =
+        technique.getViewDependentData(&cv);
+    if (!data) return shadow;
+    osgShadow::ViewDependentShadowMap::ShadowDataList& maps = data->getShadowDataList();
+    if (maps.empty()) maps.push_back(new osgShadow::ViewDependentShadowMap::ShadowData(data));
+    osg::Texture* texture = maps.front()->_texture.get();
+    if (texture && texture->getShadowComparison()) shadow.depth = texture;
+    shadow.unit = int(settings->getBaseShadowTextureUnit());
+    shadow.lightNum = settings->getLightNum();
+    return shadow;
 }
 
 /** The program ([0]) and the texture of each unit u ([1 + u]) that `sets` bind, a later set's
@@ -668,12 +732,13 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
     // Below a ShadowedScene, and not in its technique's depth pass: ShadowMap culls the shadowed
     // scene twice, once for the view (its StateSet with the depth texture and TexGen pushed) and
     // once below its own render-to-texture Camera, which then follows the ShadowedScene on the
-    // node path. That pass only needs depth, and must not sample the texture it writes.
+    // node path; ViewDependentShadowMap likewise, once per map, below its shadow cameras. That
+    // pass only needs depth, and must not sample the texture it writes.
     const osg::NodePath& path = cv.getNodePath();
-    const osgShadow::ShadowedScene* scene = nullptr;
+    osgShadow::ShadowedScene* scene = nullptr;
     bool depthPass = false;
-    for (const osg::Node* node : path) {
-        if (auto* shadowed = dynamic_cast<const osgShadow::ShadowedScene*>(node)) {
+    for (osg::Node* node : path) {
+        if (auto* shadowed = dynamic_cast<osgShadow::ShadowedScene*>(node)) {
             scene = shadowed;
             depthPass = false;
         } else if (scene && dynamic_cast<const osg::Camera*>(node)) {
@@ -683,26 +748,21 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
     if (!scene || depthPass || !scene->getShadowTechnique()) return nullptr;
     const std::vector<osg::StateAttribute*> own = ownAttributes(
         {materialStateSet(), _nodeStateSet.get(), _terminatorStateSet.get(), _mapStateSet.get()});
-    const auto* technique = dynamic_cast<const osgShadow::ShadowMap*>(scene->getShadowTechnique());
-    // The depth texture, as the technique's StateSet (pushed before its traversal) binds it.
-    osg::Texture* depth = nullptr;
-    const int unit = technique ? int(technique->getTextureUnit()) : -1;
-    for (osgUtil::StateGraph* graph = cv.getCurrentStateGraph(); technique && graph && !depth;
-         graph = graph->_parent) {
-        const osg::StateSet* stateSet = graph->getStateSet();
-        if (!stateSet) continue;
-        auto* texture = dynamic_cast<osg::Texture*>(const_cast<osg::StateAttribute*>(
-            stateSet->getTextureAttribute(unit, osg::StateAttribute::TEXTURE)));
-        if (texture && texture->getShadowComparison()) depth = texture;
-    }
+    osgShadow::ShadowTechnique* anyTechnique = scene->getShadowTechnique();
+    TechniqueShadow shadow;
+    if (const auto* technique = dynamic_cast<const osgShadow::ShadowMap*>(anyTechnique))
+        shadow = shadowMapShadow(*technique, cv);
+    else if (auto* technique = dynamic_cast<osgShadow::ViewDependentShadowMap*>(anyTechnique))
+        shadow = viewDependentShadow(*technique, *scene, cv);
+    osg::Texture* depth = shadow.depth;
+    const int unit = shadow.unit;
     if (!depth) {
         // Any other technique: the material is drawn as it is without one, unshadowed, whatever
         // the technique binds with OVERRIDE (its textures, its program).
-        if (!technique && !_shadowNoticeGiven.exchange(true))
-            OSG_NOTICE << "osgBTF::MaterialNode: shadow technique '"
-                       << scene->getShadowTechnique()->className()
-                       << "' is not supported (osgShadow::ShadowMap and SoftShadowMap are): the "
-                          "node draws without cast shadows"
+        if (!shadow.supported && !_shadowNoticeGiven.exchange(true))
+            OSG_NOTICE << "osgBTF::MaterialNode: shadow technique '" << anyTechnique->className()
+                       << "' is not supported (osgShadow::ShadowMap, SoftShadowMap and "
+                          "ViewDependentShadowMap are): the node draws without cast shadows"
                        << std::endl;
         std::lock_guard<std::mutex> lock(_lightsMutex);
         CameraLights& entry = _lightsPerCamera[cv.getCurrentCamera()];
@@ -733,10 +793,11 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
         entry.shadowLight->setDataVariance(osg::Object::DYNAMIC);
         state->addUniform(entry.shadowLight.get());
         // The technique binds its texture on its unit with OVERRIDE (SoftShadowMap its jitter
-        // texture on the next one too); what this node's state put there (the material's
-        // textures use units from 0, ShadowMap's default is 1) is bound again, PROTECTED, so the
-        // material keeps its textures and the shader reads the depth texture from kShadowMapUnit
-        // instead.
+        // texture on the next one too, ViewDependentShadowMap a white texture on unit 0 and its
+        // maps with OVERRIDE unless its settings say otherwise); what this node's state put there
+        // (the material's textures use units from 0, the techniques' default is 1) is bound again,
+        // PROTECTED, so the material keeps its textures and the shader reads the depth texture
+        // from kShadowMapUnit instead.
         protectOwnAttributes(*state, own, false);
         entry.camera = cv.getCurrentCamera();
         entry.shadowStateSet = state;
@@ -746,7 +807,8 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
         entry.shadowOwn = own;
     }
     const int count = int(entry.lights.size());
-    const int light = _shadowLight >= 0 ? _shadowLight : techniqueLight(cv, entry.lights);
+    const int light =
+        _shadowLight >= 0 ? _shadowLight : techniqueLight(cv, entry.lights, shadow.lightNum);
     entry.shadowLight->set(light < count ? light : -1);
     return entry.shadowStateSet.get();
 }

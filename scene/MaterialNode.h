@@ -16,10 +16,11 @@
 //    (osgViewer's headlight or sky light), or a white headlight when there is no view.
 //  - multiplies each light's term by seed 004's smooth shadow terminator (on by default, alpha
 //    15 degrees; scene/ShadowTerminator.h);
-//  - below an osgShadow::ShadowedScene whose technique is an osgShadow::ShadowMap (or a
-//    SoftShadowMap), samples the technique's shadow map for the light it shadows
-//    (setShadowLight), with any texture unit; under any other technique it draws unshadowed,
-//    its own program and textures PROTECTED from the technique's OVERRIDE, with one notice;
+//  - below an osgShadow::ShadowedScene whose technique is an osgShadow::ShadowMap, SoftShadowMap
+//    or ViewDependentShadowMap (its first map), samples the technique's shadow map for the light
+//    it shadows (setShadowLight), with any texture unit; under any other technique it draws
+//    unshadowed, its own program and textures PROTECTED from the technique's OVERRIDE, with one
+//    notice;
 //  - optionally draws the material through a coordinate map (setCoordinateMap[File]): a large
 //    non-repeating surface from a small sample, at the cost of one dependent fetch.
 // A material that cannot be loaded is reported with OSG_WARN (file and problem); the node then
@@ -130,11 +131,12 @@ public:
     void setTerminatorSoftness(float softness);
     float getTerminatorSoftness() const { return _terminatorSoftness; }
 
-    /** Which of the node's lights (in collectLights' order) an osgShadow::ShadowMap above the
-     *  node shadows. Default -1: the light ShadowMap picks when it was given none (the last
-     *  osg::Light culled in the camera's render stage), found in cull when the scene's
-     *  LightSources come before the shadowed models, else the node's last light. Set it when
-     *  ShadowMap::setLight chooses another. */
+    /** Which of the node's lights (in collectLights' order) the shadow technique above the node
+     *  shadows. Default -1: the light the technique picks when it was given none (the last
+     *  osg::Light culled in the camera's render stage; for a ViewDependentShadowMap the last one
+     *  whose number is ShadowSettings::getLightNum(), when that is >= 0), found in cull when the
+     *  scene's LightSources come before the shadowed models, else the node's last light. Set it
+     *  when ShadowMap::setLight chooses another. */
     void setShadowLight(int index) { _shadowLight = index; }
     int getShadowLight() const { return _shadowLight; }
 
@@ -228,10 +230,10 @@ protected:
         osg::ref_ptr<osg::StateSet> unshadowedStateSet;
         std::vector<osg::StateAttribute*> unshadowedOwn;
     };
-    /** The shadow-map state for this cull (under a ShadowMap or SoftShadowMap); under another
-     *  technique the node's own state bound again PROTECTED (drawn unshadowed, one notice); null
-     *  when the node is not below a ShadowedScene, or is being culled for the technique's own
-     *  depth pass. */
+    /** The shadow-map state for this cull (under a ShadowMap, SoftShadowMap or
+     *  ViewDependentShadowMap); under another technique the node's own state bound again
+     *  PROTECTED (drawn unshadowed, one notice); null when the node is not below a ShadowedScene,
+     *  or is being culled for the technique's own depth pass. */
     osg::StateSet* shadowStateSet(osgUtil::CullVisitor& cv);
     std::atomic<bool> _shadowNoticeGiven{false};  // cull threads of several cameras
     mutable std::mutex _lightsMutex;  // cull threads of several cameras may share this node

@@ -34,7 +34,8 @@ uniform int osgBTF_lightVisibilitySlot[osgBTF_maxLights];
 out float btfLightVisibility[osgBTF_maxLights];
 
 #ifdef OSGBTF_SHADOW_MAP
-// osgShadow::ShadowMap's eye-linear TexGen on its texture unit: planes already in eye space.
+// The shadow technique's eye-linear TexGen on its texture unit (ShadowMap's, or the first map's
+// of a ViewDependentShadowMap): planes already in eye space.
 uniform int osgBTF_shadowTexGenUnit = 1;
 out vec4 btfShadowCoordinate;
 #endif

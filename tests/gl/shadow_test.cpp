@@ -1,7 +1,9 @@
 // Seed 004 sec. 4.3 on the GPU: the smooth shadow terminator (GPU factor == CPU reference, no jump
 // along a path of light angles, off and alpha = 0 reproduce the image without it) and cast shadows
 // through osgShadow::ShadowedScene + ShadowMap (a box over the patch: the shadowed light is gone
-// exactly where the box hides it, and nothing else changes). Built twice (EGL and OSMesa).
+// exactly where the box hides it, and nothing else changes), the same under SoftShadowMap and
+// ViewDependentShadowMap, and unshadowed with one notice under other techniques. Built twice (EGL
+// and OSMesa).
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -15,6 +17,8 @@
 #include <osg/ShapeDrawable>
 #include <osg/Texture2D>
 #include <osgShadow/ShadowMap>
+#include <osgShadow/ShadowSettings>
+#include <osgShadow/ShadowTexture>
 #include <osgShadow/ShadowedScene>
 #include <osgShadow/SoftShadowMap>
 #include <osgShadow/ViewDependentShadowMap>
@@ -266,13 +270,19 @@ bool rayHitsBox(const osg::Vec3d& origin, const osg::Vec3d& direction) {
 
 }  // namespace
 
-/** Two directional lights; ShadowMap shadows the last one (ShadowMap's own choice, and
- *  MaterialNode's default). Expected per pixel, from the geometry alone: where the ray toward the
- *  shadowed light hits the box, the image of the scene without that light; elsewhere the image
- *  of the scene without any shadowing. Pixels within `margin` of the shadow's outline (the shadow
- *  map's texels and the image's pixels, both under 0.025) are not judged. */
+/** Two directional lights, numbers 0 and 1; the technique shadows number 1, the last one
+ *  unless `shadowedLightFirst` (its own choice when given none, and MaterialNode's default).
+ *  Expected per pixel, from the geometry alone (a CPU ray test from the ground point seen in the
+ *  pixel toward the shadowed light): where the ray hits the box, the image of the scene without
+ *  that light; elsewhere the image of the scene without any shadowing. Pixels within `margin`
+ *  (0.05, 2 pixels) of the shadow's outline are not judged (the shadow map's texels and
+ *  filter, PCF or soft, and the image's pixels, all under 0.025), only counted: whether they are
+ *  nearer the dark or the lit image, against the ray from the pixel's centre. With `shadowed`
+ *  false the technique casts no shadow: lit everywhere. */
 static void expectBoxShadow(Material* material, double minimumShadowDepth,
-                            osgShadow::ShadowTechnique* technique = nullptr, bool shadowed = true) {
+                            osgShadow::ShadowTechnique* technique, bool shadowed = true,
+                            osgShadow::ShadowSettings* settings = nullptr,
+                            bool shadowedLightFirst = false) {
     const osg::Vec4 free = osg::Vec4(-0.3f, 0.2f, 0.9327f, 0.0f);
     const osg::Vec4 shadowedLight = directionAt(35);
     const osg::Vec3d toShadowed(shadowedLight.x(), shadowedLight.y(), shadowedLight.z());
@@ -282,8 +292,11 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth,
     const osg::Vec3d toEye(camera.toEye.x, camera.toEye.y, camera.toEye.z);
 
     auto scene = [&](osg::Group* root, bool withShadowedLight) {
+        if (withShadowedLight && shadowedLightFirst)
+            root->addChild(lightSource(1, shadowedLight).get());
         root->addChild(lightSource(0, free, osg::Vec3(0.3f, 0.6f, 0.9f)).get());
-        if (withShadowedLight) root->addChild(lightSource(1, shadowedLight).get());
+        if (withShadowedLight && !shadowedLightFirst)
+            root->addChild(lightSource(1, shadowedLight).get());
         root->addChild(patchNode(material).get());
         osg::ref_ptr<osg::Geode> box = new osg::Geode;
         const osg::Vec3d c = (kBoxMin + kBoxMax) * 0.5, e = kBoxMax - kBoxMin;
@@ -297,9 +310,8 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth,
         return root;
     };
     osg::ref_ptr<osgShadow::ShadowedScene> shadowedScene = new osgShadow::ShadowedScene;
-    osg::ref_ptr<osgShadow::ShadowMap> shadowMap = new osgShadow::ShadowMap;
-    shadowMap->setTextureSize(osg::Vec2s(512, 512));
-    shadowedScene->setShadowTechnique(technique ? technique : shadowMap.get());
+    if (settings) shadowedScene->setShadowSettings(settings);
+    shadowedScene->setShadowTechnique(technique);
     scene(shadowedScene.get(), true);
     osg::ref_ptr<osg::Group> unshadowed = scene(new osg::Group, true);
     osg::ref_ptr<osg::Group> withoutLight = scene(new osg::Group, false);
@@ -311,7 +323,7 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth,
 
     const osg::Matrixd eyeToWorld = osg::Matrixd::inverse(camera.setup.view);
     const double margin = 0.05;
-    int inShadow = 0, lit = 0;
+    int inShadow = 0, lit = 0, band = 0, bandAgreeing = 0, rayShadowed = 0, drawnShadowed = 0;
     double worstShadow = 0, worstLit = 0, shadowDepth = 1e30;
     std::string where;
     for (int j = 0; j < size; ++j)
@@ -323,12 +335,25 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth,
             if (p.x() < margin || p.x() > 1 - margin || p.y() < margin || p.y() > 1 - margin)
                 continue;
             if (rayHitsBox(p, toEye)) continue;  // the box itself is in front
+            // Whether the pixel is drawn nearer the image without the light than the lit one:
+            // the drawn shadow, for the counts (green: the shadowed light is white, the free one
+            // adds less there than in blue).
+            const float drawn = pixel(*shadowImage, i, j, 1);
+            const bool drawnDark = std::abs(drawn - pixel(*darkImage, i, j, 1)) <
+                                   std::abs(drawn - pixel(*litImage, i, j, 1));
+            const bool rayDark = shadowed && rayHitsBox(p, toShadowed);
+            rayShadowed += rayDark ? 1 : 0;
+            drawnShadowed += drawnDark ? 1 : 0;
             int hits = 0;
             for (const osg::Vec3d& d :
                  {osg::Vec3d(0, 0, 0), osg::Vec3d(margin, 0, 0), osg::Vec3d(-margin, 0, 0),
                   osg::Vec3d(0, margin, 0), osg::Vec3d(0, -margin, 0)})
                 hits += rayHitsBox(p + d, toShadowed) ? 1 : 0;
-            if (hits != 0 && hits != 5) continue;
+            if (hits != 0 && hits != 5) {
+                ++band;
+                bandAgreeing += drawnDark == rayDark ? 1 : 0;
+                continue;
+            }
             const osg::Image& expected = hits == 5 && shadowed ? *darkImage : *litImage;
             for (int c = 0; c < 3; ++c) {
                 const double d = std::abs(pixel(*shadowImage, i, j, c) - pixel(expected, i, j, c));
@@ -350,6 +375,13 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth,
                 ++lit;
             }
         }
+    // For the report (--gtest_output=xml): the shadowed area drawn against the ray test's.
+    ::testing::Test::RecordProperty("judged_shadow_pixels", inShadow);
+    ::testing::Test::RecordProperty("judged_lit_pixels", lit);
+    ::testing::Test::RecordProperty("band_pixels", band);
+    ::testing::Test::RecordProperty("band_pixels_agreeing", bandAgreeing);
+    ::testing::Test::RecordProperty("ray_shadowed_pixels", rayShadowed);
+    ::testing::Test::RecordProperty("drawn_shadowed_pixels", drawnShadowed);
     EXPECT_GE(inShadow, 40);
     EXPECT_GE(lit, 400);
     EXPECT_GT(shadowDepth, minimumShadowDepth);
@@ -361,18 +393,73 @@ static void expectBoxShadow(Material* material, double minimumShadowDepth,
     EXPECT_GE(ground, 400);
     EXPECT_LE(worstShadow, 1e-5) << where;
     EXPECT_LE(worstLit, 1e-5) << where;
+    // The band is a few pixels wide around the outline, and mostly follows the ray test even
+    // there (a half-texel shift of the outline moves at most about half of it).
+    EXPECT_GE(bandAgreeing, band / 2) << band << " band pixels";
+    if (!shadowed) {
+        EXPECT_EQ(drawnShadowed, 0);
+    }
 }
 
-TEST(ShadowMapGpu, TheBoxShadowsItsLightAndNothingElse) {
+namespace {
+
+/** The techniques MaterialNode samples, by class name, as an application would set them up (a
+ *  512 x 512 map for the fixed-frustum ones, VDSM's defaults: a 2048 x 2048 map fitted to the
+ *  view). */
+osg::ref_ptr<osgShadow::ShadowTechnique> makeTechnique(const std::string& name) {
+    if (name == "ShadowMap") {
+        osg::ref_ptr<osgShadow::ShadowMap> technique = new osgShadow::ShadowMap;
+        technique->setTextureSize(osg::Vec2s(512, 512));
+        return technique;
+    }
+    if (name == "SoftShadowMap") {
+        osg::ref_ptr<osgShadow::SoftShadowMap> technique = new osgShadow::SoftShadowMap;
+        technique->setTextureSize(osg::Vec2s(512, 512));
+        return technique;
+    }
+    return new osgShadow::ViewDependentShadowMap;
+}
+
+}  // namespace
+
+// One fixture for the suite: the tests over every supported technique and those of a single
+// scene share the name ShadowMapGpu (gtest needs one fixture class per suite name).
+class ShadowMapGpu : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ShadowMapGpu, TheBoxShadowsItsLightAndNothingElse) {
     // The shadowed light adds 0.5 * cos(35 deg) = 0.41 (green): mistaking lit for shadow would
     // be an error of 0.4; the shadow test returns exactly 0 or 1 away from the outline.
-    expectBoxShadow(constantLambert(0.5f).get(), 0.3);
+    osg::ref_ptr<osgShadow::ShadowTechnique> technique = makeTechnique(GetParam());
+    test::ScopedNotifyCapture capture(true);
+    expectBoxShadow(constantLambert(0.5f).get(), 0.3, technique.get());
+    EXPECT_EQ(capture.text().find("not supported"), std::string::npos) << capture.text();
 }
 
-TEST(ShadowMapGpu, AMaterialTextureOnTheTechniquesUnitIsKept) {
-    // pca keeps its weights on unit 1, where ShadowMap binds its depth texture with OVERRIDE:
-    // the node binds them again PROTECTED (else the lit pixels would differ).
-    expectBoxShadow(pcaSample().get(), 0.01);
+TEST_P(ShadowMapGpu, AMaterialTextureOnTheTechniquesUnitIsKept) {
+    // pca keeps its weights on unit 1, where each technique binds its depth texture with
+    // OVERRIDE (SoftShadowMap also its jitter texture on 2, VDSM a white texture on 0): the node
+    // binds them again PROTECTED (else the lit pixels would differ).
+    osg::ref_ptr<osgShadow::ShadowTechnique> technique = makeTechnique(GetParam());
+    expectBoxShadow(pcaSample().get(), 0.01, technique.get());
+}
+
+INSTANTIATE_TEST_SUITE_P(, ShadowMapGpu,
+                         ::testing::Values("ShadowMap", "SoftShadowMap", "ViewDependentShadowMap"),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                             return info.param;
+                         });
+
+TEST_F(ShadowMapGpu, ViewDependentShadowMapFollowsItsSettings) {
+    // Maps from unit 3 without OVERRIDE (the default has it), and light number 1 named while
+    // light 0 comes last (VDSM's choice otherwise): the same shadow, of the named light, read
+    // through another TexGen unit.
+    osg::ref_ptr<osgShadow::ShadowSettings> settings = new osgShadow::ShadowSettings;
+    settings->setBaseShadowTextureUnit(3);
+    settings->setUseOverrideForShadowMapTexture(false);
+    settings->setLightNum(1);
+    osg::ref_ptr<osgShadow::ViewDependentShadowMap> technique =
+        new osgShadow::ViewDependentShadowMap;
+    expectBoxShadow(pcaSample().get(), 0.01, technique.get(), true, settings.get(), true);
 }
 
 namespace {
@@ -420,8 +507,8 @@ private:
 };
 
 const std::string kNotSupported =
-    "' is not supported (osgShadow::ShadowMap and SoftShadowMap "
-    "are): the node draws without cast shadows\n";
+    "' is not supported (osgShadow::ShadowMap, SoftShadowMap and ViewDependentShadowMap are): the "
+    "node draws without cast shadows\n";
 
 /** The notice naming `technique`'s class comes exactly once in `text`. */
 void expectNamedOnce(const std::string& text, const std::string& className) {
@@ -434,42 +521,22 @@ void expectNamedOnce(const std::string& text, const std::string& className) {
 
 }  // namespace
 
-TEST(ShadowMapGpu, SoftShadowMapShadowsLikeShadowMap) {
-    // SoftShadowMap binds its jitter texture with OVERRIDE on the unit after its depth texture's
-    // (2): pca's textures there are kept, and the box's shadow matches the ray test.
-    osg::ref_ptr<osgShadow::SoftShadowMap> technique = new osgShadow::SoftShadowMap;
-    technique->setTextureSize(osg::Vec2s(512, 512));
-    test::ScopedNotifyCapture capture(true);
-    expectBoxShadow(pcaSample().get(), 0.01, technique.get());
-    EXPECT_EQ(capture.text().find("not supported"), std::string::npos) << capture.text();
-}
-
-TEST(ShadowMapGpu, ViewDependentShadowMapDrawsTheGroundUnshadowedWithOneNotice) {
-    // ViewDependentShadowMap binds its depth texture with OVERRIDE on unit 1 (pca's weights):
-    // the ground is drawn, equal to the unshadowed image wherever the box does not hide it.
-    osg::ref_ptr<osgShadow::ViewDependentShadowMap> technique =
-        new osgShadow::ViewDependentShadowMap;
-    test::ScopedNotifyCapture capture(true);
-    expectBoxShadow(pcaSample().get(), 0.01, technique.get(), false);
-    expectNamedOnce(capture.text(), "ViewDependentShadowMap");
-}
-
-TEST(ShadowMapGpu, AnUnknownTechniquesOverridesLeaveTheMaterialDrawnWithOneNotice) {
+TEST_F(ShadowMapGpu, AnUnknownTechniquesOverridesLeaveTheMaterialDrawnWithOneNotice) {
     osg::ref_ptr<OverridingTechnique> technique = new OverridingTechnique;
     test::ScopedNotifyCapture capture(true);
     expectBoxShadow(pcaSample().get(), 0.01, technique.get(), false);
     expectNamedOnce(capture.text(), "OverridingTechnique");
 }
 
-TEST(ShadowMapGpu, AnotherTechniqueIsNamedOnceAndTheNodeDrawsWithoutCastShadows) {
+TEST_F(ShadowMapGpu, AnotherTechniqueIsNamedOnceAndTheNodeDrawsWithoutCastShadows) {
     osg::ref_ptr<osgShadow::ShadowedScene> scene = new osgShadow::ShadowedScene;
-    scene->setShadowTechnique(new osgShadow::ViewDependentShadowMap);
+    scene->setShadowTechnique(new osgShadow::ShadowTexture);
     scene->addChild(lightSource(0, directionAt(30)).get());
     scene->addChild(patchNode(constantLambert(0.5f).get()).get());
     const PatchView camera = patchViewFrom(10, 0, 8, 0.3);
     test::ScopedNotifyCapture capture(true);
     sharedRenderer().render(scene.get(), camera.setup);
     osg::ref_ptr<osg::Image> image = sharedRenderer().render(scene.get(), camera.setup);
-    expectNamedOnce(capture.text(), "ViewDependentShadowMap");
+    expectNamedOnce(capture.text(), "ShadowTexture");
     EXPECT_GT(centre(*image), 0.0f);
 }
