@@ -80,6 +80,11 @@ TileVotes finestVotes(const TileStreamer& streamer) {
     return votes;
 }
 
+/** How long a test drives a streamer before it gives up on it settling: a bound for a hung
+ *  streamer, not a timing (a streamer that settles ends the loop at once). The whole material
+ *  takes ~10 s under ASan on two busy cores, so 10 s failed there now and then. */
+constexpr double kSettleDeadlineSeconds = 120;
+
 /** Calls update() until settled() or `seconds` have passed, sleeping 2 ms in between (the files
  *  arrive in the background) and calling `each` after every update; returns the update count. */
 template <class Each>
@@ -323,13 +328,13 @@ protected:
     }
 
     /** A streamer of url() driven with votes for every finest tile until it settles (at most
-     *  10 s; the caller asserts settled()). */
+     *  kSettleDeadlineSeconds; the caller asserts settled()). */
     osg::ref_ptr<TileStreamer> streamUntilSettled() {
         osg::ref_ptr<TileStreamer> streamer = new TileStreamer(streamerOptions());
         streamer->open(url());
         const TileVotes votes = finestVotes(*streamer);
         int updates = 0;
-        EXPECT_NO_THROW(updates = driveUntilSettled(*streamer, votes, 10));
+        EXPECT_NO_THROW(updates = driveUntilSettled(*streamer, votes, kSettleDeadlineSeconds));
         EXPECT_TRUE(streamer->settled()) << "not settled after " << updates << " updates";
         return streamer;
     }
@@ -457,7 +462,7 @@ TEST_F(StreamingHttp, AMissingLevel0TileLeavesItsGroupAtZeroAndTheOtherConverges
     streamer->open(url());
     const TileVotes votes = finestVotes(*streamer);
     int updates = 0;
-    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, 10));
+    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, kSettleDeadlineSeconds));
     ASSERT_TRUE(streamer->settled()) << "not settled after " << updates << " updates";
     EXPECT_EQ(capture.text(), "osgBTF: " + url(path) + ": HTTP 404\n");
     EXPECT_EQ(streamer->stats().failures, 1u);
@@ -555,7 +560,7 @@ TEST_F(StreamingHttp, AServerThatStopsMidwayLeavesWhatArrivedRendering) {
     server.stop();
     std::vector<int> levels = lutLevels(*streamer);
     int updates = 0;
-    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, 10, [&] {
+    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, kSettleDeadlineSeconds, [&] {
                         const std::vector<int> now = lutLevels(*streamer);
                         for (std::size_t i = 0; i < now.size(); ++i)
                             EXPECT_GE(now[i], levels[i]) << "LUT entry " << i;
@@ -644,7 +649,7 @@ TEST_F(StreamingHttp, FailedTilesDoNotStarveTheOthers) {
         // Control: one request at a time streams the whole material when nothing fails.
         osg::ref_ptr<TileStreamer> control = new TileStreamer(options);
         control->open(pristine());
-        ASSERT_NO_THROW(driveUntilSettled(*control, finestVotes(*control), 10));
+        ASSERT_NO_THROW(driveUntilSettled(*control, finestVotes(*control), kSettleDeadlineSeconds));
         ASSERT_TRUE(control->settled());
         ASSERT_EQ(residentFinestTiles(*control), kGroups * kFinestX * kFinestY);
     }
@@ -661,7 +666,7 @@ TEST_F(StreamingHttp, FailedTilesDoNotStarveTheOthers) {
     ASSERT_TRUE(std::filesystem::remove(file(path)));
 
     int updates = 0;
-    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, 10));
+    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, kSettleDeadlineSeconds));
     ASSERT_TRUE(streamer->settled()) << "not settled after " << updates << " updates";
     EXPECT_EQ(capture.text(), "osgBTF: " + url(path) + ": HTTP 404\n");
     EXPECT_EQ(streamer->stats().failures, 1u);
@@ -697,7 +702,7 @@ TEST_F(StreamingHttp, StreamsTheWholeMaterialProgressivelyFetchingEachFileOnce) 
     for (int level : levels) EXPECT_EQ(level, 0);
     StreamingStats last = streamer->stats();
     int updates = 0, partial = 0;
-    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, 10, [&] {
+    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, kSettleDeadlineSeconds, [&] {
                         // Resolution (the LUT's levels) and rank (U packets) only rise.
                         const std::vector<int> now = lutLevels(*streamer);
                         for (std::size_t i = 0; i < now.size(); ++i)
@@ -771,7 +776,7 @@ TEST_F(StreamingHttp, BytesReceivedCountsTheIndex) {
     const std::uint64_t indexBytes = readFileBytes(file(TileSetIndex::kIndexName)).size();
     EXPECT_EQ(streamer->stats().bytesReceived, indexBytes) << "after open()";
     const TileVotes votes = finestVotes(*streamer);
-    ASSERT_NO_THROW(driveUntilSettled(*streamer, votes, 10));
+    ASSERT_NO_THROW(driveUntilSettled(*streamer, votes, kSettleDeadlineSeconds));
     ASSERT_TRUE(streamer->settled());
     const TileSetIndex index = readIndex(folder());
     std::uint64_t total = indexBytes;
