@@ -80,6 +80,26 @@ void Material::setMipLayout(const MipLayout& layout) {
 glm::vec3 Material::evaluateFiltered(float u, float v, float lod, const glm::vec3& view,
                                      const glm::vec3& light) const {
     int x, y;
+    if (filtersBilinearly()) {
+        // GL_LINEAR with GL_REPEAT: texel centres at (i + 0.5) / W, the weights frac(u W - 0.5)
+        // in float as GL specifies them (the texel blend is exact where they are multiples of a
+        // power of two, which the hardware's fixed-point weights represent too).
+        const float su = u * float(_width) - 0.5f, sv = v * float(_height) - 0.5f;
+        const float fu = std::floor(su), fv = std::floor(sv);
+        const float a = su - fu, b = sv - fv;
+        const auto wrap = [](float i, int n) {
+            const int m = int(std::fmod(double(i), double(n)));
+            return m < 0 ? m + n : m;
+        };
+        const int x0 = wrap(fu, _width), x1 = (x0 + 1) % _width;
+        const int y0 = wrap(fv, _height), y1 = (y0 + 1) % _height;
+        // The filter's order: both rows blended along u, then the rows along v.
+        const glm::vec3 bottom = (1.0f - a) * evaluateLinear(x0, y0, view, light) +
+                                 a * evaluateLinear(x1, y0, view, light);
+        const glm::vec3 top = (1.0f - a) * evaluateLinear(x0, y1, view, light) +
+                              a * evaluateLinear(x1, y1, view, light);
+        return finishLinear((1.0f - b) * bottom + b * top, view, light);
+    }
     if (!_mipLayout.mipMapped()) {
         const MipLayout base = MipLayout::forBase(_width, _height);
         base.texelAt(u, v, 0, x, y);
@@ -97,6 +117,11 @@ glm::vec3 Material::evaluateFiltered(float u, float v, float lod, const glm::vec
         value = glm::mix(value, evaluate(x, y, view, light), blend);
     }
     return value;
+}
+
+bool Material::filtersBilinearly() const {
+    const MethodInfo* method = findMethodIfRegistered(methodName());
+    return method && method->filtersLinearly && !_mipLayout.mipMapped() && linearInParameters();
 }
 
 void Material::throwMethodMismatch(const Material& other) const {

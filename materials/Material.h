@@ -89,10 +89,18 @@ public:
     void setMipLayout(const MipLayout& layout);
     /** CPU reference of the shader's texture lookup at texture coordinate uv and level of detail
      *  `lod` (log2 of base texels per pixel, as GL computes it): a material without levels
-     *  evaluates its nearest texel; a mip-mapped one blends levels floor(lod) and floor(lod) + 1
-     *  (clamped to its levels) as GL_LINEAR_MIPMAP_LINEAR does, each level's nearest texel. */
+     *  blends its four texels around uv bilinearly with wrap-around when filtersBilinearly(),
+     *  else evaluates its nearest texel; a mip-mapped one blends levels floor(lod) and
+     *  floor(lod) + 1 (clamped to its levels) as GL_LINEAR_MIPMAP_LINEAR does, each level's
+     *  nearest texel. */
     glm::vec3 evaluateFiltered(float u, float v, float lod, const glm::vec3& view,
                                const glm::vec3& light) const;
+    /** Whether evaluateFiltered and the shader blend the four texels around a texture coordinate
+     *  bilinearly, with wrap-around (GL_LINEAR, GL_REPEAT on the per-texel parameter textures):
+     *  the method sets MethodInfo::filtersLinearly, the material has no mip levels (that path
+     *  reads the nearest texel of two levels) and linearInParameters(). Otherwise they read the
+     *  nearest texel. */
+    bool filtersBilinearly() const;
 
     virtual MemoryFootprint memory() const = 0;
     virtual FittedMaterial toFittedMaterial() const = 0;
@@ -123,6 +131,22 @@ public:
 
 protected:
     ~Material() override = default;  // reference counted, like every osg::Object
+    /** False for a material of a filtering method whose value is not linear in its per-texel
+     *  parameters (e.g. ptm's luminance times colour, a product of two of them): filtering the
+     *  parameters would then not blend the texels' values, so it reads the nearest texel. */
+    virtual bool linearInParameters() const { return true; }
+    /** evaluate() = finishLinear(evaluateLinear()), split where the value stops being linear in
+     *  the texel's parameters (ptm's clamp at 0, fmf's colour decoding and exp): the hardware
+     *  filter blends the parameters, which blends evaluateLinear's values, and the shader then
+     *  applies the rest to the blend. The defaults: evaluate() is linear all the way. */
+    virtual glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,
+                                     const glm::vec3& light) const {
+        return evaluate(x, y, view, light);
+    }
+    virtual glm::vec3 finishLinear(const glm::vec3& linear, const glm::vec3& /*view*/,
+                                   const glm::vec3& /*light*/) const {
+        return linear;
+    }
     void setGeometry(int width, int height, DirectionSet views, DirectionSet lights);
     /** Copies width/height/directions/fit info from a file, checking the method name. */
     void readCommon(const FittedMaterial& file);
@@ -201,6 +225,10 @@ struct MethodInfo {
     std::string fragmentShader;
     /** Folded environment lighting; none: the method is lit by representative lights. */
     std::optional<EnvironmentHooks> environment;
+    /** The shader reads the per-texel parameters with GL's bilinear filter and wrap-around
+     *  (Material::filtersBilinearly): for a method whose value is linear in them (up to
+     *  Material::finishLinear), so that filtering the parameters blends the texels' values. */
+    bool filtersLinearly = false;
     /** The baseline every comparison starts with (baselineMethod()); one method sets it. */
     bool baseline = false;
     /** The method whose fits `btf fit` can save as a UBO2014 .btf file (its factors are the

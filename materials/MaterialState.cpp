@@ -67,7 +67,7 @@ osg::ref_ptr<osg::Image> sliceImage(const MaterialTexture& t, int z, int depthFo
     return image;
 }
 
-void configure(osg::Texture& texture, const MaterialTexture& t, bool linear) {
+void configure(osg::Texture& texture, const MaterialTexture& t, bool linear, bool repeat = false) {
     texture.setInternalFormat(internalFormat(t));
     // OSG allocates a texture without texture storage by glTexImage* with no data and this
     // format, which is the internal (sized, so invalid there) one when left unset.
@@ -78,8 +78,10 @@ void configure(osg::Texture& texture, const MaterialTexture& t, bool linear) {
     const auto filter = linear ? osg::Texture::LINEAR : osg::Texture::NEAREST;
     texture.setFilter(osg::Texture::MIN_FILTER, filter);
     texture.setFilter(osg::Texture::MAG_FILTER, filter);
-    texture.setWrap(osg::Texture::WRAP_S, osg::Texture::CLAMP_TO_EDGE);
-    texture.setWrap(osg::Texture::WRAP_T, osg::Texture::CLAMP_TO_EDGE);
+    // A tiled material's last texel blends with its first (Material::evaluateFiltered).
+    const auto wrap = repeat ? osg::Texture::REPEAT : osg::Texture::CLAMP_TO_EDGE;
+    texture.setWrap(osg::Texture::WRAP_S, wrap);
+    texture.setWrap(osg::Texture::WRAP_T, wrap);
     texture.setWrap(osg::Texture::WRAP_R, osg::Texture::CLAMP_TO_EDGE);
 }
 
@@ -155,25 +157,25 @@ osg::ref_ptr<osg::Texture2DArray> newTexture2DArray() {
     return new ReuploadingTexture2DArray;
 }
 
-osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t) {
+osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& t, bool bilinear) {
     if (t.storedCount() != t.valueCount())
         throw Error("texture '" + t.name + "': data size does not match its dimensions");
     if (t.depth == 1) {
         osg::ref_ptr<osg::Texture2D> texture = new osg::Texture2D(sliceImage(t, 0, 1));
-        configure(*texture, t, false);
+        configure(*texture, t, bilinear, bilinear);
         texture->setName(t.name);
         return texture;
     }
-    return createFloatTextureArray(t);
+    return createFloatTextureArray(t, bilinear);
 }
 
-osg::ref_ptr<osg::Texture2DArray> createFloatTextureArray(const MaterialTexture& t) {
+osg::ref_ptr<osg::Texture2DArray> createFloatTextureArray(const MaterialTexture& t, bool bilinear) {
     if (t.storedCount() != t.valueCount())
         throw Error("texture '" + t.name + "': data size does not match its dimensions");
     osg::ref_ptr<osg::Texture2DArray> array = newTexture2DArray();
     array->setTextureSize(t.width, t.height, t.depth);
     for (int z = 0; z < t.depth; ++z) array->setImage(z, sliceImage(t, z, 1));
-    configure(*array, t, false);
+    configure(*array, t, bilinear, bilinear);
     array->setName(t.name);
     return array;
 }
@@ -225,6 +227,9 @@ void addCommonState(osg::StateSet& stateSet, const Material& material) {
     stateSet.addUniform(rectangles.get());
     stateSet.addUniform(new osg::Uniform(shader::kMipLevels, levels));
     stateSet.addUniform(new osg::Uniform(shader::kTextureScale, 1.0f));
+    // btf_main.glsl: the method's per-texel lookups sample the filtered textures at the texture
+    // coordinate instead of fetching the nearest texel.
+    stateSet.addUniform(new osg::Uniform(shader::kBilinear, material.filtersBilinearly()));
     // The real eye direction unless a rectified image fixes the view (addRectifiedLighting,
     // harness/MaterialImage.h: on this StateSet, below it, or above it with OVERRIDE). Set here
     // for the same reason as the terminator below: a draw after a rectified one would otherwise

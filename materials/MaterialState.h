@@ -14,13 +14,16 @@
 
 namespace osgBTF {
 
-/** NEAREST-filtered, clamped float texture of 1-4 channels (GL_R32F ... GL_RGBA32F, or the 16F
- *  formats for half data), NPOT resize off (float data would be normalised otherwise). For a
- *  texture with depth > 1 a Texture2DArray, one layer per slice. */
-osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& texture);
+/** NEAREST-filtered, clamped float texture (bilinear: per-texel parameters of a material that
+ *  Material::filtersBilinearly, LINEAR and REPEAT, no mipmaps) of 1-4 channels (GL_R32F ...
+ * GL_RGBA32F, or the 16F formats for half data), NPOT resize off (float data would be normalised
+ * otherwise). For a texture with depth > 1 a Texture2DArray, one layer per slice. */
+osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& texture,
+                                              bool bilinear = false);
 /** The same as a Texture2DArray whatever the depth: for shaders that declare a sampler2DArray
  *  and whose layer count depends on the data (one layer is a valid array). */
-osg::ref_ptr<osg::Texture2DArray> createFloatTextureArray(const MaterialTexture& texture);
+osg::ref_ptr<osg::Texture2DArray> createFloatTextureArray(const MaterialTexture& texture,
+                                                          bool bilinear = false);
 osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& texture, bool linear);
 
 /** An empty osg::Texture2DArray that uploads its layers again into a texture object created after

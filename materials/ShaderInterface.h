@@ -23,6 +23,8 @@ constexpr const char* kLightColor = "osgBTF_lightColor";        ///< vec3[kMaxLi
 constexpr const char* kSize = "osgBTF_size";                    ///< ivec2, texels of the material
 constexpr const char* kFixedView = "osgBTF_fixedView";          ///< vec4, w = 1: fixed local view
 constexpr const char* kTextureScale = "osgBTF_textureScale";    ///< float, tiling
+/** bool: the method's per-texel lookups filter bilinearly (Material::filtersBilinearly). */
+constexpr const char* kBilinear = "osgBTF_bilinear";
 /** Mip-mapped materials (core/MipPyramid.h): the level count (1: not mip-mapped) and each level's
  *  rectangle (x, y, width, height) in the material's texels; level 0 is the base. */
 constexpr const char* kMipLevels = "osgBTF_mipLevels";  ///< int

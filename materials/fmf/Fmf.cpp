@@ -182,6 +182,11 @@ void FmfMaterial::factorSums(std::size_t row, const std::size_t* images, const f
 }
 
 glm::vec3 FmfMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
+    return finishLinear(evaluateLinear(x, y, view, light), view, light);
+}
+
+glm::vec3 FmfMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
+                                      const glm::vec3& light) const {
     // Seed 003 interpolates U, the factor rows, and the sums are linear in them: blending the 9
     // rows and decoding (colour model / exp) once is cheaper than decoding 9 values, and exact at
     // measured directions, where one combination has weight 1. The cosine division uses the
@@ -191,6 +196,12 @@ glm::vec3 FmfMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::
     const int count = directionCombinations(view, light, images, weights);
     float sums[3];
     factorSums(_factors.factorRow(x, y), images.data(), weights.data(), count, sums);
+    return glm::vec3(sums[0], sums[1], sums[2]);
+}
+
+glm::vec3 FmfMaterial::finishLinear(const glm::vec3& linear, const glm::vec3&,
+                                    const glm::vec3& light) const {
+    const float sums[3] = {linear.x, linear.y, linear.z};
     float rgb[3];
     _factors.decodeColor(sums, rgb);
     const float scale = _factors.cosineScale(light.z);
@@ -430,7 +441,8 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
     addCommonState(*stateSet, *this);
     // Arrays even with one layer (rank <= 4, one view): fmf.frag samples sampler2DArrays.
     addTexture(*stateSet, createFloatTextureArray(uTexture()).get(), "fmfU", 0);
-    addTexture(*stateSet, createFloatTextureArray(sxvTexture()).get(), "fmfSxV", 1);
+    addTexture(*stateSet, createFloatTextureArray(sxvTexture(), filtersBilinearly()).get(),
+               "fmfSxV", 1);
     _viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
     _lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
     const bool fmf = _factors.model == FactorModel::Fmf;
@@ -554,6 +566,9 @@ const bool registered = registerMethod([] {
         return FmfMaterial::fromFile(f);
     };
     m.createInstance = []() -> osg::Object* { return new FmfMaterial; };
+    // Per-texel SxV rows times per-direction U rows; the colour decoding and exp come after the
+    // sums (FmfMaterial::finishLinear).
+    m.filtersLinearly = true;
     m.shaderCost = [](const Material& material) {
         // fmf.frag. View + light lookups 2 x 11; the 9 combinations: weight product,
         // test, row address, count (4 x 9); decode at worst (model 11): 5 model tests, exp, 3

@@ -88,6 +88,11 @@ public:
 
 protected:
     ~FmfMaterial() override = default;
+    /** The three factor sums, before colour decoding (and exp) and the cosine division. */
+    glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,
+                             const glm::vec3& light) const override;
+    glm::vec3 finishLinear(const glm::vec3& linear, const glm::vec3& view,
+                           const glm::vec3& light) const override;
 
 private:
     /** Sets the factors after checks and rounding; prepares the direction lookups. */

@@ -7,8 +7,12 @@
 // Layer = group of 4 components (dfmf: channel c's groups start at fmfLayerOffset[c]).
 uniform sampler2DArray fmfSxV;
 
+// Filtered (btfBilinear): the sums are linear in SxV (half or float, filtered as the floats they
+// are), so filtering it blends the texels' sums; fmf_eval.glsl decodes the blend
+// (FmfMaterial::finishLinear). U, a per-direction table, is still fetched unfiltered.
 vec4 fmfEigenTexture(ivec2 texel, int layer) {
-    return texelFetch(fmfSxV, ivec3(texel, layer), 0);
+    return btfBilinear ? textureLod(fmfSxV, vec3(btfBilinearCoordinate, float(layer)), 0.0)
+                       : texelFetch(fmfSxV, ivec3(texel, layer), 0);
 }
 
 #pragma include "common/fmf_eval.glsl"

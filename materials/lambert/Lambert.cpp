@@ -77,10 +77,11 @@ osg::ref_ptr<LambertMaterial> LambertMaterial::fromFile(const FittedMaterial& fi
 osg::ref_ptr<osg::StateSet> LambertMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
-    addTexture(
-        *stateSet,
-        createFloatTexture({"albedo", _width, _height, 1, 3, MaterialTexture::Half, albedo}).get(),
-        "lambertAlbedo", 0);
+    addTexture(*stateSet,
+               createFloatTexture({"albedo", _width, _height, 1, 3, MaterialTexture::Half, albedo},
+                                  filtersBilinearly())
+                   .get(),
+               "lambertAlbedo", 0);
     return stateSet;
 }
 
@@ -98,6 +99,7 @@ const bool registered = registerMethod([] {
     m.createInstance = []() -> osg::Object* { return new LambertMaterial; };
     // One albedo fetch, times l_z.
     m.shaderCost = [](const Material&) { return ShaderCost::ofEvaluate(1, 1, "ALU 11, TEX 1"); };
+    m.filtersLinearly = true;  // the value is the albedo times l_z
     m.baseline = true;
     m.compareAll = false;  // the comparison always adds it as its baseline
     m.order = 0;

@@ -5,5 +5,9 @@
 uniform sampler2D lambertAlbedo;
 
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
-    return texelFetch(lambertAlbedo, texel, 0).rgb * light.z;
+    // The value is linear in the albedo (half floats: filtered as the floats they are), so the
+    // filtered albedo gives the bilinear blend of the texels' values.
+    vec3 albedo = btfBilinear ? textureLod(lambertAlbedo, btfBilinearCoordinate, 0.0).rgb
+                              : texelFetch(lambertAlbedo, texel, 0).rgb;
+    return albedo * light.z;
 }

@@ -391,6 +391,9 @@ const bool registered = registerMethod([] {
         return PcaMaterial::fromFile(f);
     };
     m.createInstance = []() -> osg::Object* { return new PcaMaterial; };
+    // Per-texel Eigen-Texture values times per-direction weights; pca.frag blends the four
+    // texels itself (tiled components).
+    m.filtersLinearly = true;
     m.shaderCost = [](const Material& material) {
         // View + light lookups; 3 view-weight tests; per (view, light) pair (9): weight product
         // and test, bias fetch, per component: tile address 4, multiply-add 2 and 2 fetches;

@@ -324,13 +324,24 @@ glm::vec3 PtmMaterial::field(std::size_t texel, int slot, float lx, float ly) co
 }
 
 glm::vec3 PtmMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
+    return finishLinear(evaluateLinear(x, y, view, light), view, light);
+}
+
+glm::vec3 PtmMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
+                                      const glm::vec3& light) const {
     const std::size_t t = std::size_t(y) * std::size_t(_width) + std::size_t(x);
-    if (!_shape.perView) return glm::max(field(t, 0, light.x, light.y), glm::vec3(0.0f));
+    if (!_shape.perView) return field(t, 0, light.x, light.y);
     const InterpolationWeights w = _viewLookup.weights(view);
     glm::vec3 sum(0.0f);
     for (int j = 0; j < 3; ++j)
         if (w.weight[j] > 0.0f) sum += w.weight[j] * field(t, w.index[j], light.x, light.y);
-    return glm::max(sum, glm::vec3(0.0f));
+    return sum;
+}
+
+glm::vec3 PtmMaterial::finishLinear(const glm::vec3& linear, const glm::vec3&,
+                                    const glm::vec3&) const {
+    // Measured values are never negative: a polynomial's dip below 0 is clamped.
+    return glm::max(linear, glm::vec3(0.0f));
 }
 
 void PtmMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
@@ -415,7 +426,8 @@ osg::ref_ptr<osg::StateSet> PtmMaterial::createStateSet() const {
     addCommonState(*stateSet, *this);
     addTexture(*stateSet,
                createFloatTextureArray({"coefficients", _width, _height, _slots * layersPerSlot(),
-                                        3, _shape.storage, coefficients})
+                                        3, _shape.storage, coefficients},
+                                       filtersBilinearly())
                    .get(),
                "ptmCoefficients", 0);
     // Samplers the variant never reads still get units of their own: GL refuses to draw when
@@ -465,6 +477,9 @@ const bool registered = registerMethod([] {
         return PtmMaterial::fromFile(f);
     };
     m.createInstance = []() -> osg::Object* { return new PtmMaterial; };
+    // A polynomial in the light whose coefficients are per texel (luminance materials excepted:
+    // PtmMaterial::linearInParameters).
+    m.filtersLinearly = true;
     m.shaderCost = [](const Material& material) {
         // ptmField: monomials 3, variant test 1; rgb: layer base 1, 5 layer offsets, 6 fetches,
         // 5 multiply-adds (10) = 20 ALU, 6 TEX; luminance: layer addresses 3, 5 multiply-adds

@@ -113,6 +113,13 @@ public:
 
 protected:
     ~PtmMaterial() override = default;
+    /** Luminance materials multiply two per-texel parameters (colour and luminance). */
+    bool linearInParameters() const override { return !_shape.luminance; }
+    /** The view-blended field before the clamp at 0. */
+    glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,
+                             const glm::vec3& light) const override;
+    glm::vec3 finishLinear(const glm::vec3& linear, const glm::vec3& view,
+                           const glm::vec3& light) const override;
 
 private:
     void setShape(int width, int height, DirectionSet views, DirectionSet lights, Shape shape,

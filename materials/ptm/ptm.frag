@@ -16,26 +16,35 @@ uniform sampler2D ptmViewTable;    // views=all: view interpolation (common/dire
 uniform int ptmLuminance;          // 1: luminance PTM x colour, 0: one PTM per channel
 uniform int ptmPerView;            // 1: one PTM per measured view, 0: slot 0 for every view
 
+// One layer of the texel's data; filtered (btfBilinear): the field is linear in the coefficients
+// (half or float, filtered as the floats they are), so filtering them blends the texels' fields,
+// and btfEvaluate clamps the blend (PtmMaterial::finishLinear). Luminance materials, a product of
+// colour and coefficients, are not filtered (PtmMaterial::linearInParameters).
+vec3 ptmTexel(sampler2DArray s, ivec2 texel, int layer) {
+    return btfBilinear ? textureLod(s, vec3(btfBilinearCoordinate, float(layer)), 0.0).rgb
+                       : texelFetch(s, ivec3(texel, layer), 0).rgb;
+}
+
 vec3 ptmField(ivec2 texel, int slot, float lx, float ly) {
     float mx = lx * lx, my = ly * ly, mxy = lx * ly;
     if (ptmLuminance != 0) {
-        vec3 a = texelFetch(ptmCoefficients, ivec3(texel, 2 * slot), 0).rgb;
-        vec3 b = texelFetch(ptmCoefficients, ivec3(texel, 2 * slot + 1), 0).rgb;
+        vec3 a = ptmTexel(ptmCoefficients, texel, 2 * slot);
+        vec3 b = ptmTexel(ptmCoefficients, texel, 2 * slot + 1);
         float l = b.z;
         l += a.x * mx;
         l += a.y * my;
         l += a.z * mxy;
         l += b.x * lx;
         l += b.y * ly;
-        return texelFetch(ptmColour, ivec3(texel, slot), 0).rgb * l;
+        return ptmTexel(ptmColour, texel, slot) * l;
     }
     int layer = 6 * slot;
-    vec3 sum = texelFetch(ptmCoefficients, ivec3(texel, layer + 5), 0).rgb;
-    sum += texelFetch(ptmCoefficients, ivec3(texel, layer), 0).rgb * mx;
-    sum += texelFetch(ptmCoefficients, ivec3(texel, layer + 1), 0).rgb * my;
-    sum += texelFetch(ptmCoefficients, ivec3(texel, layer + 2), 0).rgb * mxy;
-    sum += texelFetch(ptmCoefficients, ivec3(texel, layer + 3), 0).rgb * lx;
-    sum += texelFetch(ptmCoefficients, ivec3(texel, layer + 4), 0).rgb * ly;
+    vec3 sum = ptmTexel(ptmCoefficients, texel, layer + 5);
+    sum += ptmTexel(ptmCoefficients, texel, layer) * mx;
+    sum += ptmTexel(ptmCoefficients, texel, layer + 1) * my;
+    sum += ptmTexel(ptmCoefficients, texel, layer + 2) * mxy;
+    sum += ptmTexel(ptmCoefficients, texel, layer + 3) * lx;
+    sum += ptmTexel(ptmCoefficients, texel, layer + 4) * ly;
     return sum;
 }
 

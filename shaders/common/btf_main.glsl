@@ -17,6 +17,15 @@ uniform ivec2 osgBTF_size;  // texels of the material
 // measured BTF image: `btf eval`); w = 0: the real eye direction.
 uniform vec4 osgBTF_fixedView = vec4(0.0);
 
+// Material::filtersBilinearly: the material's per-texel parameter textures are GL_LINEAR and
+// GL_REPEAT, and its btfEvaluate samples them at btfBilinearCoordinate when btfBilinear is set
+// (main() sets it for a fragment that reads the base texels: not a mip-mapped or coordinate-mapped
+// lookup, which stay on the nearest texel). Samples with textureLod at level 0: the lookups sit
+// in non-uniform control flow, where implicit derivatives are undefined.
+uniform bool osgBTF_bilinear = false;
+bool btfBilinear = false;
+vec2 btfBilinearCoordinate = vec2(0.0);
+
 /** The method's BTF value for one texel and local unit directions (view, light: away from the
  *  surface, z > 0). Measured values include the cosine term: nothing multiplies by n.l again. */
 vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light);
@@ -96,6 +105,8 @@ void main() {
         coarserTexel = btfLevelTexel(btfTexCoord, min(level + 1, osgBTF_mipLevels - 1));
         coarserWeight = lod - float(level);
     }
+    btfBilinear = osgBTF_bilinear && osgBTF_mipLevels <= 1;
+    btfBilinearCoordinate = btfTexCoord;
 #endif
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {

@@ -73,6 +73,23 @@ PatchRender orthoPatchRender(const Material& material, const glm::vec3& viewIn,
     return render;
 }
 
+PatchRender magnifiedPatchRender(const Material& material, const glm::vec2& centre,
+                                 float textureScale, const glm::vec3& lightIn, int texels,
+                                 int pixels) {
+    PatchRender render;
+    render.textureScale = textureScale;
+    render.toLight = toOsg(glm::normalize(glm::dvec3(lightIn)));
+    // Patch coordinates are texture coordinates / textureScale (identity model).
+    const osg::Vec3d middle(centre.x / textureScale, centre.y / textureScale, 0.0);
+    const double halfS = 0.5 * texels / (double(material.width()) * textureScale);
+    const double halfT = 0.5 * texels / (double(material.height()) * textureScale);
+    CameraSetup& camera = render.camera;
+    camera.view = osg::Matrixd::lookAt(middle + osg::Vec3d(0, 0, 2), middle, osg::Vec3d(0, 1, 0));
+    camera.projection = osg::Matrixd::ortho(-halfS, halfS, -halfT, halfT, 0.1, 10.0);
+    camera.width = camera.height = pixels;
+    return render;
+}
+
 GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& render) {
     osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
     osg::ref_ptr<osg::Geometry> quad = createFullScreenQuadGeometry();
@@ -89,6 +106,8 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& 
     const CameraSetup& camera = render.camera;
     const osg::Vec3d eyeLight = osg::Matrixd::transform3x3(render.toLight, camera.view);
     stateSet->addUniform(new osg::Uniform("osgBTF_lightCount", 1));
+    stateSet->getOrCreateUniform("osgBTF_textureScale", osg::Uniform::FLOAT)
+        ->set(render.textureScale);
     osg::ref_ptr<osg::Uniform> position =
         new osg::Uniform(osg::Uniform::FLOAT_VEC4, "osgBTF_lightPosition", 8);
     position->setElement(0, osg::Vec4(eyeLight, 0.0f));
@@ -107,6 +126,7 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& 
     // Pixel centre -> the eye ray in patch coordinates, through the inverse of the whole chain.
     const osg::Matrixd clipToWorld = osg::Matrixd::inverse(camera.view * camera.projection);
     const osg::Matrixd worldToPatch = osg::Matrixd::inverse(render.model);
+    const bool filtered = material.filtersBilinearly();
     GpuCpuComparison result;
     for (int j = 0; j < camera.height; ++j) {
         for (int i = 0; i < camera.width; ++i) {
@@ -120,17 +140,21 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& 
             const double s = a.x() + (b.x() - a.x()) * along;
             const double t = a.y() + (b.y() - a.y()) * along;
             if (!(s > 0 && s < 1 && t > 0 && t < 1)) continue;
-            const double fs = s * material.width(), ft = t * material.height();
+            const double u = s * render.textureScale, v = t * render.textureScale;
+            const double fs = u * material.width(), ft = v * material.height();
             const double edge = 0.2;  // skip pixels whose centre is near a texel edge
-            if (fs - std::floor(fs) < edge || std::ceil(fs) - fs < edge ||
-                ft - std::floor(ft) < edge || std::ceil(ft) - ft < edge)
+            // Filtered, no texel edge is a step: every pixel compares.
+            if (!filtered && (fs - std::floor(fs) < edge || std::ceil(fs) - fs < edge ||
+                              ft - std::floor(ft) < edge || std::ceil(ft) - ft < edge))
                 continue;
             const glm::dvec3 toEye = glm::normalize(toGlm(nearWorld - farWorld));
             const glm::vec3 view(glm::dot(toEye, frame[0]), glm::dot(toEye, frame[1]),
                                  glm::dot(toEye, frame[2]));
             if (view.z <= 0.0f) continue;  // the back of the patch renders black
-            const int tx = int(fs), ty = int(ft);
-            const glm::vec3 expected = material.evaluate(tx, ty, view, light);
+            const int tx = int(fs) % material.width(), ty = int(ft) % material.height();
+            const glm::vec3 expected =
+                filtered ? material.evaluateFiltered(float(u), float(v), 0.0f, view, light)
+                         : material.evaluate(tx, ty, view, light);
             for (int c = 0; c < 3; ++c) {
                 const double d = std::abs(double(pixel(*image, i, j, c)) - expected[c]);
                 if (!(d <= result.maxAbsDifference)) {
@@ -168,6 +192,7 @@ void addProbeShaders() {
         addShaderSource("osgbtf-probe-view.frag", head + "view; }\n");
         addShaderSource("osgbtf-probe-light.frag", head + "light; }\n");
         addShaderSource("osgbtf-probe-texel.frag", head + "vec3(vec2(texel), 1.0); }\n");
+        addShaderSource("osgbtf-probe-uv.frag", head + "vec3(btfTexCoord, 1.0); }\n");
         return true;
     }();
     (void)added;
@@ -196,8 +221,10 @@ ProbedRender renderProbed(const Material& material, osg::Drawable* drawable,
     out.view.resize(n);
     out.light.resize(n);
     out.texel.resize(n);
+    out.uv.resize(n);
     out.shaded.resize(n);
-    for (const char* pass : {"", "osgbtf-probe-view", "osgbtf-probe-light", "osgbtf-probe-texel"}) {
+    for (const char* pass :
+         {"", "osgbtf-probe-view", "osgbtf-probe-light", "osgbtf-probe-texel", "osgbtf-probe-uv"}) {
         if (*pass)
             stateSet->setAttributeAndModes(methodProgram(pass).get(), osg::StateAttribute::ON);
         osg::ref_ptr<osg::Image> image = sharedRenderer().render(geode.get(), camera);
@@ -213,8 +240,10 @@ ProbedRender renderProbed(const Material& material, osg::Drawable* drawable,
                     out.shaded[i] = glm::length(v) > 0.5f;
                 } else if (name == "osgbtf-probe-light") {
                     out.light[i] = v;
-                } else {
+                } else if (name == "osgbtf-probe-texel") {
                     out.texel[i] = glm::ivec2(int(std::lround(v.x)), int(std::lround(v.y)));
+                } else {
+                    out.uv[i] = glm::vec2(v.x, v.y);
                 }
             }
     }
@@ -239,7 +268,11 @@ GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRend
             const std::size_t i = render.at(x, y);
             if (!render.shaded[i]) continue;
             const glm::ivec2 t = render.texel[i];
-            const glm::vec3 expected = material.evaluate(t.x, t.y, render.view[i], render.light[i]);
+            const glm::vec2 uv = render.uv[i];
+            const glm::vec3 expected =
+                material.filtersBilinearly()
+                    ? material.evaluateFiltered(uv.x, uv.y, 0.0f, render.view[i], render.light[i])
+                    : material.evaluate(t.x, t.y, render.view[i], render.light[i]);
             for (int c = 0; c < 3; ++c) {
                 const double d = std::abs(double(render.color[i][c]) - expected[c]);
                 if (!(d <= result.maxAbsDifference)) {

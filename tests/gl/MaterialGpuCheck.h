@@ -1,7 +1,8 @@
 // GPU == CPU check shared by every method's tests: render a flat patch of the material under a
 // model transform and a camera (orthographic or perspective) with one directional light into a
-// float FBO, and compare each pixel with Material::evaluate for the texel it shows, seen from the
-// direction its own eye ray comes from, in the surface frame the shader must build.
+// float FBO, and compare each pixel with Material::evaluate for the texel it shows (a filtering
+// material: Material::evaluateFiltered at its texture coordinate), seen from the direction its
+// own eye ray comes from, in the surface frame the shader must build.
 #pragma once
 
 #include <functional>
@@ -33,6 +34,8 @@ struct PatchRender {
     osg::Matrixd model;  ///< patch -> world (identity by default)
     CameraSetup camera;
     osg::Vec3d toLight{0, 0, 1};
+    /** osgBTF_textureScale: the patch shows texture coordinates [0, textureScale]^2. */
+    float textureScale = 1.0f;
 };
 
 /** The local frame (columns: tangent, bitangent, normal; world coordinates) of the patch under
@@ -47,9 +50,20 @@ glm::dmat3 patchFrame(const osg::Matrixd& model);
 PatchRender orthoPatchRender(const Material& material, const glm::vec3& view,
                              const glm::vec3& light, const osg::Matrixd& model = osg::Matrixd());
 
-/** Renders the patch as `render` says and compares every pixel whose centre is on the patch and
- *  not close to a texel edge with the CPU evaluator (view = the pixel's eye ray reversed, light =
- *  `toLight`, both in patchFrame(model)). Uses sharedRenderer(). */
+/** A magnified top-down orthographic view of the patch: `texels` x `texels` texels around
+ *  texture coordinate `centre` (after textureScale; beyond 1 the texture wraps) over `pixels` x
+ *  `pixels` pixels, lit from `light` (local). With a centre on a texel corner and pixels / texels
+ *  a power of two, every pixel centre's bilinear weights are multiples of a power of two, exact
+ *  in any filter's fixed-point weights as in float. */
+PatchRender magnifiedPatchRender(const Material& material, const glm::vec2& centre,
+                                 float textureScale, const glm::vec3& light, int texels = 4,
+                                 int pixels = 64);
+
+/** Renders the patch as `render` says and compares every pixel whose centre is on the patch with
+ *  the CPU reference (view = the pixel's eye ray reversed, light = `toLight`, both in
+ *  patchFrame(model)): for a material that Material::filtersBilinearly, evaluateFiltered at the
+ *  pixel's texture coordinate; otherwise evaluate at the texel it shows, skipping pixels close
+ *  to a texel edge. Uses sharedRenderer(). */
 GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& render);
 
 /** The flat patch seen orthographically from `view`, lit from `light` (local unit vectors). */
@@ -65,7 +79,8 @@ struct ProbedRender {
     int width = 0, height = 0;
     std::vector<glm::vec3> color, view, light;
     std::vector<glm::ivec2> texel;
-    std::vector<char> shaded;  ///< btfEvaluate ran (geometry, view and light above the horizon)
+    std::vector<glm::vec2> uv;  ///< the fragment's texture coordinate (after osgBTF_textureScale)
+    std::vector<char> shaded;   ///< btfEvaluate ran (geometry, view and light above the horizon)
     std::size_t at(int x, int y) const { return std::size_t(y) * width + x; }
 };
 
@@ -80,7 +95,9 @@ ProbedRender renderProbed(const Material& material, osg::Drawable* drawable,
 ProbedRender renderProbedSphere(const Material& material, const SphereSetting& setting, int size,
                                 float textureScale);
 
-/** Every shaded pixel of `render` against Material::evaluate at its own texel and directions. */
+/** Every shaded pixel of `render` against the CPU reference at its own directions: at its own
+ *  texel (Material::evaluate), or for a material that Material::filtersBilinearly at its own
+ *  texture coordinate (Material::evaluateFiltered: the texels around it, blended). */
 GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRender& render);
 
 }  // namespace osgBTF::test

@@ -50,6 +50,10 @@ osg::ref_ptr<osg::Geode> patch(const Material& material, const glm::vec3& view,
                                const glm::vec3& light, float repeats = 1.0f) {
     osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
     stateSet->addUniform(new osg::Uniform(shader::kTextureScale, repeats));
+    // BSVTF's tile cache reads the nearest texel; the fmf material it must converge to is read the
+    // same way here. Filtered, a pixel centre on a texel centre would still blend in rounding
+    // shares (~1e-6) of the neighbours: the interpolated coordinate is not exact.
+    stateSet->addUniform(new osg::Uniform(shader::kBilinear, false));
     addRectifiedLighting(*stateSet, view, light);
     osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
     geode->setStateSet(stateSet.get());
@@ -173,7 +177,10 @@ TEST_F(BsvtfGpu, AMaterialNodeTakesAStreamedMaterialLikeAnyOther) {
     ASSERT_TRUE(group->settled()) << "not converged after " << frames << " frames";
     const osg::ref_ptr<osg::Image> streamedImage = renderer.render();
     osg::ref_ptr<MaterialNode> fmfNode = new MaterialNode(original().get());
-    fmfNode->addChild(rectifiedPatch().get());
+    osg::ref_ptr<osg::Geode> fmfPatch = rectifiedPatch();
+    // The nearest texel, as BSVTF's tile cache reads it (see patch()).
+    fmfPatch->getOrCreateStateSet()->addUniform(new osg::Uniform(shader::kBilinear, false));
+    fmfNode->addChild(fmfPatch.get());
     const osg::ref_ptr<osg::Image> fmfImage =
         renderer.render(fmfNode.get(), orthoUnitSquare(kWidth, kHeight));
     double largest = 0;

@@ -86,8 +86,10 @@ TEST_P(DirectionInterpolationGpu, NoStepsAlongADensePathOfViewDirections) {
     const Material& m = fitted(GetParam());
     // A large plane z = 0 (tangent +X) under a wide perspective camera 1 above it, pitched 50
     // degrees down and turned 17 degrees: one image row sees the view direction sweep a great
-    // circle from horizon to horizon over 2000 pixels. Texture scale 0 keeps every fragment on
-    // texel (0, 0), so only the direction changes along the row.
+    // circle from horizon to horizon over 2000 pixels. Every vertex at the centre of texel (0, 0)
+    // keeps every fragment there, so only the direction changes along the row. At its centre, not
+    // at texture coordinate 0: a bilinearly filtering method (pca) blends the four texels around
+    // a corner.
     osg::ref_ptr<osg::Geometry> plane = new osg::Geometry;
     osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array;
     for (const auto& [x, y] : {std::pair{-50, -50}, {50, -50}, {50, 50}, {-50, 50}})
@@ -96,7 +98,10 @@ TEST_P(DirectionInterpolationGpu, NoStepsAlongADensePathOfViewDirections) {
     osg::ref_ptr<osg::Vec3Array> normals = new osg::Vec3Array;
     normals->push_back(osg::Vec3(0, 0, 1));
     plane->setNormalArray(normals.get(), osg::Array::BIND_OVERALL);
-    plane->setTexCoordArray(0, new osg::Vec2Array(4), osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::Vec2Array> texCoords = new osg::Vec2Array;
+    for (int k = 0; k < 4; ++k)
+        texCoords->push_back(osg::Vec2(0.5f / kSampleWidth, 0.5f / kSampleHeight));
+    plane->setTexCoordArray(0, texCoords.get(), osg::Array::BIND_PER_VERTEX);
     osg::ref_ptr<osg::Vec4Array> tangents = new osg::Vec4Array;
     for (int k = 0; k < 4; ++k) tangents->push_back(osg::Vec4(1, 0, 0, 1));
     plane->setVertexAttribArray(6, tangents.get(), osg::Array::BIND_PER_VERTEX);
@@ -114,7 +119,7 @@ TEST_P(DirectionInterpolationGpu, NoStepsAlongADensePathOfViewDirections) {
     const osg::Vec3d worldLight(forward.x(), forward.y(), -forward.z());
     const ProbedRender render = renderProbed(m, plane.get(), camera, [&](osg::StateSet& s) {
         setDirectionalLights(s, {osg::Vec3(osg::Matrixd::transform3x3(worldLight, camera.view))});
-        s.getOrCreateUniform("osgBTF_textureScale", osg::Uniform::FLOAT)->set(0.0f);
+        s.getOrCreateUniform("osgBTF_textureScale", osg::Uniform::FLOAT)->set(1.0f);
     });
 
     // The bound: the slope, over the disc map, of the piecewise linear interpolation of the
