@@ -11,6 +11,7 @@
 
 #include "core/ShaderSource.h"
 #include "harness/PassCost.h"
+#include "materials/ptm/Ptm.h"
 
 #include "tests/gl/GlTestEnv.h"
 
@@ -288,6 +289,25 @@ GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRend
             ++result.pixelsCompared;
         }
     return result;
+}
+
+}  // namespace osgBTF::test
+
+namespace osgBTF::test {
+
+double ptmGpuTolerance(const PtmMaterial& m) {
+    double largest = 0;
+    for (std::size_t t = 0; t < m.texelCount(); ++t)
+        for (int s = 0; s < m.slots(); ++s)
+            for (int c = 0; c < 3; ++c) {
+                double sum = 0;
+                for (int k = 0; k < PtmMaterial::kTerms; ++k)
+                    sum += std::abs(m.coefficient(t, s, k, c));
+                if (m.shape().luminance)
+                    sum *= std::abs(m.colour[(s * m.texelCount() + t) * 3 + c]);
+                largest = std::max(largest, sum);
+            }
+    return 64 * std::ldexp(1.0, -24) * largest;
 }
 
 }  // namespace osgBTF::test

@@ -19,6 +19,10 @@
 #include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
 
+namespace osgBTF {
+class PtmMaterial;
+}
+
 namespace osgBTF::test {
 
 struct GpuCpuComparison {
@@ -99,5 +103,11 @@ ProbedRender renderProbedSphere(const Material& material, const SphereSetting& s
  *  texel (Material::evaluate), or for a material that Material::filtersBilinearly at its own
  *  texture coordinate (Material::evaluateFiltered: the texels around it, blended). */
 GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRender& render);
+
+/** The GPU-CPU bound of a PTM material: GPU and CPU run the same float operations and may differ
+ *  by the rounding of each (a GPU may fuse a multiply and an add): about 8 operations per
+ *  polynomial, 3 blended views, and the view weights equal to rounding, so a few tens of u times
+ *  the largest sum of |terms| (|a_k| times the colour; every monomial is at most 1). */
+double ptmGpuTolerance(const PtmMaterial& material);
 
 }  // namespace osgBTF::test

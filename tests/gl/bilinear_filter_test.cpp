@@ -31,20 +31,6 @@ MeasuredBtf sample() {
     return makeSampleBtf(options);
 }
 
-/** material_ptm_test's bound: a few tens of float roundings of the largest sum of |terms|. */
-double ptmTolerance(const PtmMaterial& m) {
-    double largest = 0;
-    for (std::size_t t = 0; t < m.texelCount(); ++t)
-        for (int s = 0; s < m.slots(); ++s)
-            for (int c = 0; c < 3; ++c) {
-                double sum = 0;
-                for (int k = 0; k < PtmMaterial::kTerms; ++k)
-                    sum += std::abs(m.coefficient(t, s, k, c));
-                largest = std::max(largest, sum);
-            }
-    return 64 * std::ldexp(1.0, -24) * largest;
-}
-
 /** The largest value of the material's image for (view, light): material_fmf_test compares
  *  relative to it. */
 double largestValue(const Material& m, const glm::vec3& view, const glm::vec3& light) {
@@ -117,7 +103,7 @@ TEST(BilinearFilterGpu, PcaMatchesCpu) {
 TEST(BilinearFilterGpu, PtmMatchesCpu) {
     for (const char* options : {"", "views=all storage=float"}) {
         osg::ref_ptr<PtmMaterial> m = PtmMaterial::fit(sample(), FitOptions::parse(options));
-        const double bound = ptmTolerance(*m);
+        const double bound = test::ptmGpuTolerance(*m);
         expectFilteredGpuEqualsCpu(*m, std::string("ptm [") + options + "]",
                                    [&](const glm::vec3&) { return bound; });
     }

@@ -14,25 +14,6 @@ using namespace osgBTF;
 
 namespace {
 
-/** GPU and CPU run the same float operations; they may differ by the rounding of each (a GPU may
- *  fuse a multiply and an add): about 8 operations per polynomial, 3 blended views, and the view
- *  weights equal to rounding, so a few tens of u times the largest sum of |terms| (|a_k| times
- *  the colour; every monomial is at most 1). */
-double tolerance(const PtmMaterial& m) {
-    double largest = 0;
-    for (std::size_t t = 0; t < m.texelCount(); ++t)
-        for (int s = 0; s < m.slots(); ++s)
-            for (int c = 0; c < 3; ++c) {
-                double sum = 0;
-                for (int k = 0; k < PtmMaterial::kTerms; ++k)
-                    sum += std::abs(m.coefficient(t, s, k, c));
-                if (m.shape().luminance)
-                    sum *= std::abs(m.colour[(s * m.texelCount() + t) * 3 + c]);
-                largest = std::max(largest, sum);
-            }
-    return 64 * std::ldexp(1.0, -24) * largest;
-}
-
 void expectGpuEqualsCpu(const std::string& options,
                         const std::vector<std::pair<Direction, Direction>>& pairs) {
     SampleOptions sample;
@@ -40,7 +21,7 @@ void expectGpuEqualsCpu(const std::string& options,
     sample.height = 6;  // not square: catches swapped axes
     const osg::ref_ptr<PtmMaterial> m =
         PtmMaterial::fit(makeSampleBtf(sample), FitOptions::parse(options));
-    const double bound = tolerance(*m);
+    const double bound = test::ptmGpuTolerance(*m);
     double worst = 0;
     for (const auto& [v, l] : pairs) {
         const test::GpuCpuComparison r = test::compareGpuWithCpu(*m, v.toVector(), l.toVector());
