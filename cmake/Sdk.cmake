@@ -2,10 +2,17 @@
 #   include/osgBTF/<Name>           extension-less headers like OSG's own (#include <osgBTF/MaterialNode>)
 #   include/osgBTF/<layer>/<file>.h the runtime's headers, their includes rewritten from
 #                                   "core/X.h" to <osgBTF/core/X.h>, so <prefix>/include is enough
-#   <libdir>/libosgBTF.so*          the runtime library
+#   <libdir>/libosgBTF.so*          the runtime library (rendering fitted materials)
+#   <libdir>/libosgBTFFit.so*       the fitters and the fit cache, on top of it (Ceres inside)
+#   <libdir>/libosgBTFStreaming.so* streaming (BSVTF tile sets, HTTP with libcurl), on top of it
 #   <libdir>/cmake/osgBTF/          osgBTFConfig.cmake (+ version file): find_package(osgBTF) gives
-#                                   osgBTF::osgBTF with its OSG/GLM/Imath/Eigen usage requirements
-#   <libdir>/pkgconfig/osgBTF.pc
+#                                   osgBTF::osgBTF with its OSG/GLM/Imath/Eigen usage requirements,
+#                                   osgBTF::osgBTFFit for programs that fit, and
+#                                   osgBTF::osgBTFStreaming for programs that stream
+#   <libdir>/pkgconfig/osgBTF.pc, osgBTFFit.pc, osgBTFStreaming.pc
+# The headers of both libraries share include/osgBTF: a method's static fit() is declared in its
+# header and defined in libosgBTFFit (materials/<name>/<Name>Fit.cpp), as are fitMipMapped
+# (<osgBTF/materials/MipMapping.h>) and the fit cache (<osgBTF/FitCache>).
 # The headers are generated into <build>/sdk/include at build time (target osgbtf_sdk_headers);
 # osgbtf_sdk_check compiles every one of them with nothing but that folder and the public
 # dependencies on the include path, so a header that needs a source-tree path or a private
@@ -36,7 +43,8 @@ set(OSGBTF_SDK_UMBRELLAS
   ErrorMetrics=core/ErrorMetrics.h
   FittedMaterialFile=core/FittedMaterialFile.h
   FloatImage=core/FloatImage.h
-  Error=core/Error.h)
+  Error=core/Error.h
+  FitCache=scene/FitCache.h)
 
 set(OSGBTF_SDK_MANIFEST ${OSGBTF_SDK_DIR}/manifest.cmake)
 file(CONFIGURE OUTPUT ${OSGBTF_SDK_MANIFEST} CONTENT [[
@@ -76,7 +84,8 @@ add_dependencies(osgbtf_sdk_check osgbtf_sdk_headers)
 
 # ---- install -----------------------------------------------------------------------------
 set(OSGBTF_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/osgBTF)
-install(TARGETS osgBTF EXPORT osgBTFTargets LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+install(TARGETS osgBTF osgBTFFit osgBTFStreaming EXPORT osgBTFTargets
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${OSGBTF_SDK_DIR}/include/osgBTF DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(EXPORT osgBTFTargets NAMESPACE osgBTF:: DESTINATION ${OSGBTF_CMAKE_DIR})
 configure_package_config_file(${CMAKE_SOURCE_DIR}/cmake/osgBTFConfig.cmake.in
@@ -89,4 +98,9 @@ install(FILES ${OSGBTF_SDK_DIR}/osgBTFConfig.cmake ${OSGBTF_SDK_DIR}/osgBTFConfi
 file(RELATIVE_PATH OSGBTF_PC_TO_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
 string(REGEX REPLACE "/$" "" OSGBTF_PC_TO_PREFIX "${OSGBTF_PC_TO_PREFIX}")
 configure_file(${CMAKE_SOURCE_DIR}/cmake/osgBTF.pc.in ${OSGBTF_SDK_DIR}/osgBTF.pc @ONLY)
-install(FILES ${OSGBTF_SDK_DIR}/osgBTF.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+configure_file(${CMAKE_SOURCE_DIR}/cmake/osgBTFFit.pc.in ${OSGBTF_SDK_DIR}/osgBTFFit.pc @ONLY)
+configure_file(${CMAKE_SOURCE_DIR}/cmake/osgBTFStreaming.pc.in ${OSGBTF_SDK_DIR}/osgBTFStreaming.pc
+               @ONLY)
+install(FILES ${OSGBTF_SDK_DIR}/osgBTF.pc ${OSGBTF_SDK_DIR}/osgBTFFit.pc
+              ${OSGBTF_SDK_DIR}/osgBTFStreaming.pc
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

@@ -125,7 +125,7 @@ const osgBTF::plugin::ReaderWriterBTF& reader(const std::string& extension) {
     static const osg::ref_ptr<osgBTF::plugin::ReaderWriterBTF> btf =
         new osgBTF::plugin::ReaderWriterBTF("btf");
     static const osg::ref_ptr<osgBTF::plugin::ReaderWriterBTF> zip =
-        new osgBTF::plugin::ReaderWriterBTF("zip");
+        new osgBTF::plugin::ReaderWriterBTF("btfzip");  // osgdb_btfzip's: ".zip" and ".btfzip"
     static const osg::ref_ptr<osgBTF::plugin::ReaderWriterBTF> pseudo =
         new osgBTF::plugin::ReaderWriterBTF("btfmaterial");
     if (extension == "btf") return *btf;

@@ -9,7 +9,16 @@ ShaderCost shaderCost(const Material& material) {
     const std::string method = material.methodName();
     if (std::find(names.begin(), names.end(), method) != names.end()) {
         const MethodInfo& info = findMethod(method);
-        if (info.shaderCost) return info.shaderCost(material);
+        if (info.shaderCost) {
+            // The method counts one evaluation per light; the blend of texel values (every
+            // method that does not filter its parameters, every mip-mapped material) evaluates
+            // four texels, eight between two mip levels (the worst case, as the counting rule
+            // takes every branch).
+            const ShaderCost one = info.shaderCost(material);
+            if (material.filtersParameters()) return one;
+            return material.mipLayout().mipMapped() ? one.blendingTexels(8, 2)
+                                                    : one.blendingTexels(4, 1);
+        }
     }
     ShaderCost unknown;
     unknown.formula = "not counted";

@@ -6,8 +6,10 @@
 
 namespace osgBTF {
 
-/** The static count for a fitted material of any registered method: its MethodInfo::shaderCost,
- *  or counted = false ("not counted") for a method that supplies none. */
+/** The static count for a fitted material of any registered method: its MethodInfo::shaderCost
+ *  (one evaluation per light), times the texels btf_main.glsl blends unless the material filters
+ *  its parameters (ShaderCost::blendingTexels; Material::TexelFilter), or counted = false ("not
+ *  counted") for a method that supplies none. */
 ShaderCost shaderCost(const Material& material);
 
 }  // namespace osgBTF

@@ -29,9 +29,9 @@ bool parseUbo2003Name(const std::string& memberPath, Ubo2003Name& name);
 MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options = {});
 
 /** False when path is a zip archive or folder that opens and holds no member named like a BTF
- *  image (direction tokens "tlTTT plPPP tvTTT pvPPP"): some other zip, which the osgdb_zip plugin
- *  leaves to the next reader. True otherwise, so a damaged BTF zip still gets loadUbo2003's
- *  message. Reads only the member names. */
+ *  image (direction tokens "tlTTT plPPP tvTTT pvPPP"): some other zip, which the osgdb_btfzip
+ *  plugin leaves to the next reader. True otherwise, so a damaged BTF zip still gets
+ *  loadUbo2003's message. Reads only the member names. */
 bool mayBeUbo2003(const std::string& path);
 
 }  // namespace osgBTF

@@ -56,12 +56,32 @@ std::size_t foldedStride(const Material& material) {
     return hooksOf(material).foldedStride(material);
 }
 
+namespace {
+
+/** environmentProgram's programs, one per method for the whole process. */
+struct EnvironmentPrograms {
+    std::mutex mutex;
+    std::map<std::string, osg::ref_ptr<osg::Program>> programs;
+};
+
+EnvironmentPrograms& environmentPrograms() {
+    static EnvironmentPrograms cache;
+    return cache;
+}
+
+}  // namespace
+
+void releaseCachedEnvironmentPrograms(osg::State* state) {
+    EnvironmentPrograms& cache = environmentPrograms();
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    for (const auto& entry : cache.programs) entry.second->releaseGLObjects(state);
+}
+
 osg::ref_ptr<osg::Program> environmentProgram(const std::string& method) {
     if (!hasFoldedEnvironment(method)) noFolding(method);
-    static std::mutex mutex;
-    static std::map<std::string, osg::ref_ptr<osg::Program>> programs;
-    std::lock_guard<std::mutex> lock(mutex);
-    osg::ref_ptr<osg::Program>& program = programs[method];
+    EnvironmentPrograms& cache = environmentPrograms();
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    osg::ref_ptr<osg::Program>& program = cache.programs[method];
     if (!program) {
         osg::ref_ptr<osg::Program> created = new osg::Program;
         created->setName("osgBTF_" + method + "_environment");

@@ -25,6 +25,10 @@
 #include <osg/Program>
 #include <osg/StateSet>
 
+namespace osg {
+class State;
+}
+
 namespace osgBTF {
 
 class Material;
@@ -58,6 +62,8 @@ std::size_t foldedStride(const Material& material);
 /** The method's environment program, built once per process and method. Throws Error as
  *  foldEnvironment, or if a shader source is missing. */
 osg::ref_ptr<osg::Program> environmentProgram(const std::string& method);
+/** environmentProgram's part of releaseCachedPrograms (MaterialState.h). */
+void releaseCachedEnvironmentPrograms(osg::State* state);
 
 /** Program, per-vertex data texture (folded[v] for vertex index v, each of foldedStride values)
  *  and exposure for one geometry, and the program's other samplers on the units the material's

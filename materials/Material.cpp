@@ -9,12 +9,15 @@
 
 #include <glm/common.hpp>
 #include <osg/Shader>
+#include <osg/State>
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/EnvironmentState.h"
 #include "materials/LightVisibility.h"
 #include "materials/MaterialSerializer.h"
+#include "materials/MaterialState.h"
 #include "materials/ShaderInterface.h"
 
 namespace osgBTF {
@@ -77,51 +80,88 @@ void Material::setMipLayout(const MipLayout& layout) {
     _sharedStateSet = nullptr;
 }
 
+namespace {
+
+/** One texel of a filtered lookup and its share of the value. */
+struct FilterTap {
+    int x, y;
+    float weight;
+};
+
+/** The texels a filtered lookup blends, in the order btf_main.glsl adds them up. */
+struct FilterTaps {
+    FilterTap taps[8];
+    int count = 0;
+    void add(int x, int y, float weight) {
+        // A texel whose weight is 0 is not evaluated, on the GPU neither.
+        if (weight > 0.0f) taps[count++] = {x, y, weight};
+    }
+};
+
+/** btf_main.glsl's btfAddBilinearTaps: the four texels of `level` around uv, wrapped inside the
+ *  level's rectangle, with GL_LINEAR's weights (frac(uv size - 0.5) along each axis) times
+ *  `share`, in the shader's float arithmetic. */
+void addBilinearTaps(FilterTaps& taps, float u, float v, const MipLevel& level, float share) {
+    const auto axis = [](float t, int size, int& i0, int& i1, float& w) {
+        float f = t - std::floor(t);  // fract: the texture repeats
+        if (!std::isfinite(f)) f = 0.0f;
+        const float s = f * float(size) - 0.5f;
+        const float first = std::floor(s);
+        w = s - first;
+        i0 = std::min(int(first), size - 1);
+        if (i0 < 0) i0 = size - 1;  // left of the first centre: blends with the last texel
+        i1 = i0 + 1 == size ? 0 : i0 + 1;
+    };
+    int x0, x1, y0, y1;
+    float a, b;
+    axis(u, level.width, x0, x1, a);
+    axis(v, level.height, y0, y1, b);
+    taps.add(level.x + x0, level.y + y0, share * (1.0f - a) * (1.0f - b));
+    taps.add(level.x + x1, level.y + y0, share * a * (1.0f - b));
+    taps.add(level.x + x0, level.y + y1, share * (1.0f - a) * b);
+    taps.add(level.x + x1, level.y + y1, share * a * b);
+}
+
+}  // namespace
+
 glm::vec3 Material::evaluateFiltered(float u, float v, float lod, const glm::vec3& view,
                                      const glm::vec3& light) const {
-    int x, y;
-    if (filtersBilinearly()) {
-        // GL_LINEAR with GL_REPEAT: texel centres at (i + 0.5) / W, the weights frac(u W - 0.5)
-        // in float as GL specifies them (the texel blend is exact where they are multiples of a
-        // power of two, which the hardware's fixed-point weights represent too).
-        const float su = u * float(_width) - 0.5f, sv = v * float(_height) - 0.5f;
-        const float fu = std::floor(su), fv = std::floor(sv);
-        const float a = su - fu, b = sv - fv;
-        const auto wrap = [](float i, int n) {
-            const int m = int(std::fmod(double(i), double(n)));
-            return m < 0 ? m + n : m;
-        };
-        const int x0 = wrap(fu, _width), x1 = (x0 + 1) % _width;
-        const int y0 = wrap(fv, _height), y1 = (y0 + 1) % _height;
-        // The filter's order: both rows blended along u, then the rows along v.
-        const glm::vec3 bottom = (1.0f - a) * evaluateLinear(x0, y0, view, light) +
-                                 a * evaluateLinear(x1, y0, view, light);
-        const glm::vec3 top = (1.0f - a) * evaluateLinear(x0, y1, view, light) +
-                              a * evaluateLinear(x1, y1, view, light);
-        return finishLinear((1.0f - b) * bottom + b * top, view, light);
+    FilterTaps taps;
+    const MipLevel base{0, 0, _width, _height};
+    if (filtersParameters()) {
+        // The hardware filters the parameters, which blends evaluateLinear's values; the rest of
+        // the evaluation applies to the blend (GL_LINEAR's weights are exact where they are
+        // multiples of a power of two, which its fixed-point weights represent too).
+        addBilinearTaps(taps, u, v, base, 1.0f);
+        glm::vec3 linear(0.0f);
+        for (int k = 0; k < taps.count; ++k)
+            linear +=
+                taps.taps[k].weight * evaluateLinear(taps.taps[k].x, taps.taps[k].y, view, light);
+        return finishLinear(linear, view, light);
     }
     if (!_mipLayout.mipMapped()) {
-        const MipLayout base = MipLayout::forBase(_width, _height);
-        base.texelAt(u, v, 0, x, y);
-        return evaluate(x, y, view, light);
+        addBilinearTaps(taps, u, v, base, 1.0f);
+    } else {
+        const int last = _mipLayout.levelCount() - 1;
+        // As the shader: NaN or negative (magnification) clamps to level 0.
+        const float clamped = std::clamp(std::isnan(lod) ? 0.0f : lod, 0.0f, float(last));
+        const int a = int(std::floor(clamped)), b = std::min(a + 1, last);
+        const float coarser = clamped - float(a);
+        addBilinearTaps(taps, u, v, _mipLayout.levels()[std::size_t(a)], 1.0f - coarser);
+        if (coarser > 0.0f)
+            addBilinearTaps(taps, u, v, _mipLayout.levels()[std::size_t(b)], coarser);
     }
-    const int last = _mipLayout.levelCount() - 1;
-    // As the shader: NaN or negative (magnification) clamps to level 0.
-    const float clamped = std::clamp(std::isnan(lod) ? 0.0f : lod, 0.0f, float(last));
-    const int a = int(std::floor(clamped)), b = std::min(a + 1, last);
-    const float blend = clamped - float(a);
-    _mipLayout.texelAt(u, v, a, x, y);
-    glm::vec3 value = evaluate(x, y, view, light);
-    if (blend > 0.0f) {
-        _mipLayout.texelAt(u, v, b, x, y);
-        value = glm::mix(value, evaluate(x, y, view, light), blend);
-    }
+    glm::vec3 value(0.0f);
+    for (int k = 0; k < taps.count; ++k)
+        value += taps.taps[k].weight * evaluate(taps.taps[k].x, taps.taps[k].y, view, light);
     return value;
 }
 
-bool Material::filtersBilinearly() const {
+Material::TexelFilter Material::texelFilter() const {
     const MethodInfo* method = findMethodIfRegistered(methodName());
-    return method && method->filtersLinearly && !_mipLayout.mipMapped() && linearInParameters();
+    return method && method->filtersParameters && !_mipLayout.mipMapped() && linearInParameters()
+               ? TexelFilter::Parameters
+               : TexelFilter::Values;
 }
 
 void Material::throwMethodMismatch(const Material& other) const {
@@ -197,13 +237,38 @@ std::map<std::string, MethodInfo>& registry() {
     static std::map<std::string, MethodInfo> methods;
     return methods;
 }
+
+// Every registerFitter call, kept for a method registered (again) after it: a library's static
+// initialisers run in an order of their own.
+std::map<std::string, decltype(MethodInfo::fit)>& registeredFitters() {
+    static std::map<std::string, decltype(MethodInfo::fit)> fitters;
+    return fitters;
+}
 }  // namespace
 
 bool registerMethod(MethodInfo info) {
     const std::string name = info.name;
+    if (!info.fit) {
+        if (const auto it = registeredFitters().find(name); it != registeredFitters().end())
+            info.fit = it->second;
+        else
+            // A program that links only the render library: say what it lacks rather than let
+            // std::function throw bad_function_call.
+            info.fit = [name](const BtfSource&, const FitOptions&) -> osg::ref_ptr<Material> {
+                throw Error("method '" + name +
+                            "': fitting needs libosgBTFFit (link osgBTF::osgBTFFit or pkg-config "
+                            "osgBTFFit); this program has only the render library libosgBTF");
+            };
+    }
     if (!info.fragmentShader.empty()) addShaderSource(name + ".frag", info.fragmentShader);
     const MethodInfo& stored = registry()[name] = std::move(info);
     addMaterialWrapper(stored);
+    return true;
+}
+
+bool registerFitter(const std::string& name, decltype(MethodInfo::fit) fit) {
+    if (const auto it = registry().find(name); it != registry().end()) it->second.fit = fit;
+    registeredFitters()[name] = std::move(fit);
     return true;
 }
 
@@ -278,12 +343,23 @@ osg::ref_ptr<Material> loadMaterial(const std::string& path) {
 
 namespace {
 
+/** One program per method and variant for the whole process (every material of a method shares
+ *  it, so OSG compiles it once per context); releaseCachedPrograms empties its per-context part. */
+struct ProgramCache {
+    std::mutex mutex;
+    std::map<std::tuple<std::string, bool, bool>, osg::ref_ptr<osg::Program>> programs;
+};
+
+ProgramCache& programCache() {
+    static ProgramCache cache;
+    return cache;
+}
+
 osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordinateMap,
                                           bool shadowMap = false) {
-    static std::mutex mutex;
-    static std::map<std::tuple<std::string, bool, bool>, osg::ref_ptr<osg::Program>> programs;
-    std::lock_guard<std::mutex> lock(mutex);
-    auto& program = programs[{method, coordinateMap, shadowMap}];
+    ProgramCache& cache = programCache();
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    auto& program = cache.programs[{method, coordinateMap, shadowMap}];
     if (!program) {
         osg::ref_ptr<osg::Program> created = new osg::Program;
         created->setName("osgBTF_" + method + (coordinateMap ? "_coordinateMap" : "") +
@@ -314,6 +390,15 @@ osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordi
 
 osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
     return programVariant(method, false);
+}
+
+void releaseCachedPrograms(osg::State* state) {
+    {
+        ProgramCache& cache = programCache();
+        std::lock_guard<std::mutex> lock(cache.mutex);
+        for (const auto& entry : cache.programs) entry.second->releaseGLObjects(state);
+    }
+    releaseCachedEnvironmentPrograms(state);
 }
 
 osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method) {

@@ -88,19 +88,31 @@ public:
      *  this material's texel size. */
     void setMipLayout(const MipLayout& layout);
     /** CPU reference of the shader's texture lookup at texture coordinate uv and level of detail
-     *  `lod` (log2 of base texels per pixel, as GL computes it): a material without levels
-     *  blends its four texels around uv bilinearly with wrap-around when filtersBilinearly(),
-     *  else evaluates its nearest texel; a mip-mapped one blends levels floor(lod) and
-     *  floor(lod) + 1 (clamped to its levels) as GL_LINEAR_MIPMAP_LINEAR does, each level's
-     *  nearest texel. */
+     *  `lod` (log2 of base texels per pixel, as GL computes it), what GL_LINEAR (magnified) and
+     *  GL_LINEAR_MIPMAP_LINEAR (minified) give a texture: the bilinear blend, with wrap-around,
+     *  of the values of the four texels around uv (centres at (i + 0.5) / size, weights
+     *  frac(uv size - 0.5)). A mip-mapped material blends levels floor(lod) and floor(lod) + 1
+     *  (clamped to its levels; NaN or negative lod: level 0) by lod - floor(lod), each level
+     *  filtered bilinearly and wrapped inside its own rectangle of the atlas. texelFilter() says
+     *  how the four texels are blended; both ways give the same filtered BTF. */
     glm::vec3 evaluateFiltered(float u, float v, float lod, const glm::vec3& view,
                                const glm::vec3& light) const;
-    /** Whether evaluateFiltered and the shader blend the four texels around a texture coordinate
-     *  bilinearly, with wrap-around (GL_LINEAR, GL_REPEAT on the per-texel parameter textures):
-     *  the method sets MethodInfo::filtersLinearly, the material has no mip levels (that path
-     *  reads the nearest texel of two levels) and linearInParameters(). Otherwise they read the
-     *  nearest texel. */
-    bool filtersBilinearly() const;
+    /** How the shader and evaluateFiltered blend the four texels around a texture coordinate. */
+    enum class TexelFilter {
+        /** The per-texel parameters are filtered (GL_LINEAR and GL_REPEAT on their textures, or
+         *  the method's own blend of them) and the method evaluates the blend once: the value is
+         *  linear in them up to finishLinear. One evaluation per light. */
+        Parameters,
+        /** btf_main.glsl evaluates the four texels (eight between two mip levels) and blends the
+         *  values (uniform osgBTF_blendTexels): works for any method, four evaluations per light
+         *  where the texel weights are not 0 or 1. */
+        Values,
+    };
+    /** Parameters when the method sets MethodInfo::filtersParameters, the material has no mip
+     *  levels (they sit in an atlas, where the hardware filter cannot wrap inside a level) and
+     *  linearInParameters(); Values otherwise. */
+    TexelFilter texelFilter() const;
+    bool filtersParameters() const { return texelFilter() == TexelFilter::Parameters; }
 
     virtual MemoryFootprint memory() const = 0;
     virtual FittedMaterial toFittedMaterial() const = 0;
@@ -131,9 +143,10 @@ public:
 
 protected:
     ~Material() override = default;  // reference counted, like every osg::Object
-    /** False for a material of a filtering method whose value is not linear in its per-texel
-     *  parameters (e.g. ptm's luminance times colour, a product of two of them): filtering the
-     *  parameters would then not blend the texels' values, so it reads the nearest texel. */
+    /** False for a material of a method that sets MethodInfo::filtersParameters whose value is
+     *  nevertheless not linear in its per-texel parameters (e.g. ptm's luminance times colour, a
+     *  product of two of them): filtering the parameters would then not blend the texels'
+     *  values, so it takes TexelFilter::Values. */
     virtual bool linearInParameters() const { return true; }
     /** evaluate() = finishLinear(evaluateLinear()), split where the value stops being linear in
      *  the texel's parameters (ptm's clamp at 0, fmf's colour decoding and exp): the hardware
@@ -209,7 +222,10 @@ struct MethodInfo {
     /** The fit options, in the order help texts list them (see MethodOptions.h). */
     std::vector<OptionSpec> options;
     /** Fits the method. Implementations start with validateOptions(), so every caller gets the
-     *  one error format; they read typed values from its result. */
+     *  one error format; they read typed values from its result. The built-in methods' fitters
+     *  live in libosgBTFFit (materials/<name>/<Name>Fit.cpp), which sets them with
+     *  registerFitter when it is loaded; without it, fit throws Error "method 'X': fitting
+     *  needs libosgBTFFit ...". */
     std::function<osg::ref_ptr<Material>(const BtfSource&, const FitOptions&)> fit;
     std::function<osg::ref_ptr<Material>(const FittedMaterial&)> load;
     /** A new empty material of the method's class (e.g. `[]() -> osg::Object* { return new
@@ -225,10 +241,12 @@ struct MethodInfo {
     std::string fragmentShader;
     /** Folded environment lighting; none: the method is lit by representative lights. */
     std::optional<EnvironmentHooks> environment;
-    /** The shader reads the per-texel parameters with GL's bilinear filter and wrap-around
-     *  (Material::filtersBilinearly): for a method whose value is linear in them (up to
-     *  Material::finishLinear), so that filtering the parameters blends the texels' values. */
-    bool filtersLinearly = false;
+    /** The shader filters the per-texel parameters (GL's bilinear filter with wrap-around, or its
+     *  own blend of them) and evaluates once (Material::TexelFilter::Parameters): for a method
+     *  whose value is linear in them (up to Material::finishLinear), so that filtering the
+     *  parameters blends the texels' values. False: btf_main.glsl blends four evaluations
+     *  (TexelFilter::Values), which any method's shader supports unchanged. */
+    bool filtersParameters = false;
     /** The baseline every comparison starts with (baselineMethod()); one method sets it. */
     bool baseline = false;
     /** The method whose fits `btf fit` can save as a UBO2014 .btf file (its factors are the
@@ -247,6 +265,9 @@ struct MethodInfo {
 
 /** Adds a method; each method's .cpp calls it from a static initialiser. Returns true. */
 bool registerMethod(MethodInfo info);
+/** Sets the fit of method `name`, registered now or later (libosgBTFFit's static initialisers
+ *  call it, so the render library holds no fitting code). Returns true. */
+bool registerFitter(const std::string& name, decltype(MethodInfo::fit) fit);
 /** Throws Error "unknown method 'X' (known: laf, slaf, ...)". */
 const MethodInfo& findMethod(const std::string& name);
 /** findMethod without the error: nullptr for a name no method registered. */

@@ -227,9 +227,11 @@ void addCommonState(osg::StateSet& stateSet, const Material& material) {
     stateSet.addUniform(rectangles.get());
     stateSet.addUniform(new osg::Uniform(shader::kMipLevels, levels));
     stateSet.addUniform(new osg::Uniform(shader::kTextureScale, 1.0f));
-    // btf_main.glsl: the method's per-texel lookups sample the filtered textures at the texture
-    // coordinate instead of fetching the nearest texel.
-    stateSet.addUniform(new osg::Uniform(shader::kBilinear, material.filtersBilinearly()));
+    // btf_main.glsl filters the texels one of two ways (Material::TexelFilter): the method's
+    // per-texel lookups sample the filtered textures at the texture coordinate, or main() blends
+    // the evaluations of the four texels (per mip level).
+    stateSet.addUniform(new osg::Uniform(shader::kBilinear, material.filtersParameters()));
+    stateSet.addUniform(new osg::Uniform(shader::kBlendTexels, !material.filtersParameters()));
     // The real eye direction unless a rectified image fixes the view (addRectifiedLighting,
     // harness/MaterialImage.h: on this StateSet, below it, or above it with OVERRIDE). Set here
     // for the same reason as the terminator below: a draw after a rectified one would otherwise

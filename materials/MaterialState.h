@@ -12,10 +12,14 @@
 
 #include "core/FittedMaterialFile.h"
 
+namespace osg {
+class State;
+}
+
 namespace osgBTF {
 
 /** NEAREST-filtered, clamped float texture (bilinear: per-texel parameters of a material that
- *  Material::filtersBilinearly, LINEAR and REPEAT, no mipmaps) of 1-4 channels (GL_R32F ...
+ *  Material::filtersParameters, LINEAR and REPEAT, no mipmaps) of 1-4 channels (GL_R32F ...
  * GL_RGBA32F, or the 16F formats for half data), NPOT resize off (float data would be normalised
  * otherwise). For a texture with depth > 1 a Texture2DArray, one layer per slice. */
 osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& texture,
@@ -34,6 +38,15 @@ osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& texture
  *  specifying that object's storage again (glTexImage3D on immutable storage: a GL error). Every
  *  material array texture is made with this. */
 osg::ref_ptr<osg::Texture2DArray> newTexture2DArray();
+
+/** Releases the GL objects that the process-wide programs (methodProgram, its variants,
+ *  environmentProgram) hold for the context of `state` (null: every context). OSG releases what a
+ *  closing context's scene graph holds, but these programs outlive any scene graph: a context
+ *  that is closed after its scene was removed leaves them pointing at its program objects, and a
+ *  later context that gets the same context ID would use those dead objects (GL_INVALID_VALUE at
+ *  every draw). Call it with the context current before closing such a context;
+ *  HeadlessRenderer does. */
+void releaseCachedPrograms(osg::State* state);
 
 /** A sampler uniform + texture on a unit. */
 void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::string& sampler,

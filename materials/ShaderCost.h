@@ -49,6 +49,29 @@ struct ShaderCost {
     static constexpr int kLookupInsideAlu = 4, kLookupOutsideAlu = 2;
     static constexpr int kLookupEdgeAlu = 17, kLookupEdgeTex = 1;
 
+    // btf_main.glsl's blend of texel values (Material::TexelFilter::Values), per fragment and
+    // level: btfAddBilinearTaps = fract, scale, offset 3, floor and weights 2, clamp 2, wrap
+    // below 6, wrap above 8, four weights 12, four texel addresses 4, four btfAddTap (test,
+    // count) 8 = 45; per light and evaluated texel: loop test and count 2, weight multiply-add 2.
+    static constexpr int kBlendLevelAlu = 45;
+    static constexpr int kBlendTapAlu = 4;
+
+    /** This count (a method's, for one evaluation per light) when btf_main.glsl evaluates
+     *  `texels` texels per light and blends them (4: bilinear; 8: trilinear between two mip
+     *  levels, the worst case), over `levels` levels: the evaluation's part of the per-light
+     *  count (all but the light loop's kLightLoopAlu) once per texel. */
+    ShaderCost blendingTexels(int texels, int levels) const {
+        ShaderCost c = *this;
+        if (!counted) return c;
+        c.fixedAlu += levels * kBlendLevelAlu;
+        c.perLightAlu = kLightLoopAlu + texels * (perLightAlu - kLightLoopAlu + kBlendTapAlu);
+        c.perLightTex = texels * perLightTex;
+        c.formula = std::to_string(texels) + " texels x (" + formula + ", less the light loop's " +
+                    std::to_string(kLightLoopAlu) + ", plus " + std::to_string(kBlendTapAlu) +
+                    " ALU to blend)";
+        return c;
+    }
+
     /** The count of a method whose btfEvaluate costs `evaluateAlu` / `evaluateTex`: the shared
      *  frame set-up as the fixed part, the light loop body plus btfEvaluate per light. */
     static ShaderCost ofEvaluate(int evaluateAlu, int evaluateTex, std::string formula) {

@@ -23,8 +23,12 @@ constexpr const char* kLightColor = "osgBTF_lightColor";        ///< vec3[kMaxLi
 constexpr const char* kSize = "osgBTF_size";                    ///< ivec2, texels of the material
 constexpr const char* kFixedView = "osgBTF_fixedView";          ///< vec4, w = 1: fixed local view
 constexpr const char* kTextureScale = "osgBTF_textureScale";    ///< float, tiling
-/** bool: the method's per-texel lookups filter bilinearly (Material::filtersBilinearly). */
+/** bool: the method's per-texel lookups filter the parameters bilinearly
+ *  (Material::TexelFilter::Parameters). */
 constexpr const char* kBilinear = "osgBTF_bilinear";
+/** bool: btf_main.glsl blends the evaluations of the four texels around the texture coordinate
+ *  (per mip level; Material::TexelFilter::Values); false with kBilinear false: nearest texel. */
+constexpr const char* kBlendTexels = "osgBTF_blendTexels";
 /** Mip-mapped materials (core/MipPyramid.h): the level count (1: not mip-mapped) and each level's
  *  rectangle (x, y, width, height) in the material's texels; level 0 is the base. */
 constexpr const char* kMipLevels = "osgBTF_mipLevels";  ///< int

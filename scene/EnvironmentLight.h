@@ -2,7 +2,7 @@
 // section 5; the math is in materials/EnvironmentLighting.h).
 //
 // The map is read through osgDB: Radiance .hdr with OSG's own hdr plugin, OpenEXR with the
-// project's osgdb_exr. Lat-long convention (EnvironmentMap): +Z up, the image's top row is the
+// project's osgdb_btfexr. Lat-long convention (EnvironmentMap): +Z up, the image's top row is the
 // zenith, columns run in azimuth from +X toward +Y. Exposure scales the result at render time;
 // the rotation (degrees about +Z) and the file change the projected per-vertex data.
 //

@@ -7,8 +7,11 @@
 #include <filesystem>
 #include <mutex>
 #include <system_error>
+#include <utility>
+#include <vector>
 
 #include <osg/Version>
+#include <osgDB/FileUtils>
 #include <osgDB/Registry>
 
 namespace osgBTF {
@@ -48,7 +51,35 @@ std::string useOwnPlugins() {
     static std::once_flag once;
     static std::string added;
     std::call_once(once, [] { added = addToLibraryPath(); });
+    aliasOwnPlugins();
     return added;
 }
+
+std::vector<std::string> aliasOwnPlugins() {
+    // (extension, the module osgBTF reads it with): OSG's own plugins for these extensions are
+    // osgdb_zip and osgdb_exr, names osgBTF must not take (tests/plugin_names_test.cpp).
+    static const std::pair<const char*, const char*> kAliases[] = {{"zip", "btfzip"},
+                                                                   {"exr", "btfexr"}};
+    static std::mutex mutex;
+    static std::vector<std::string> aliased;
+    const std::lock_guard<std::mutex> lock(mutex);
+    osgDB::Registry* registry = osgDB::Registry::instance();
+    for (const auto& [extension, module] : kAliases) {
+        if (std::find(aliased.begin(), aliased.end(), extension) != aliased.end()) continue;
+        if (osgDB::findLibraryFile(registry->createLibraryNameForExtension(module)).empty())
+            continue;
+        registry->addFileExtensionAlias(extension, module);
+        aliased.push_back(extension);
+    }
+    return aliased;
+}
+
+namespace {
+// Any program that loads libosgBTF (an application linking it, or stock osgviewer reading an
+// osgBTF scene or material through osgBTF's plugins) reads BTF zips and EXR images by name.
+struct AliasOnLoad {
+    AliasOnLoad() { aliasOwnPlugins(); }
+} aliasOnLoad;
+}  // namespace
 
 }  // namespace osgBTF

@@ -17,6 +17,7 @@
 #include "core/Error.h"
 #include "core/Notify.h"
 #include "materials/MaterialState.h"
+#include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
 #include "streaming/TileFetcher.h"
 #include "streaming/TileSet.h"
@@ -566,6 +567,9 @@ osg::ref_ptr<osg::StateSet> TileStreamer::createStateSet(
     // The LUT and U change while it renders: the viewer must not update them during a draw.
     stateSet->setDataVariance(osg::Object::DYNAMIC);
     addCommonState(*stateSet, material);
+    // The tile cache is read at the nearest texel: filtering it (from the tiles' padding, levels
+    // of the cache) is not done yet, so btf_main.glsl's blend of texel values stays off.
+    stateSet->addUniform(new osg::Uniform(shader::kBlendTexels, false));
     addTexture(*stateSet, stream.uTexture.get(), "fmfU", 0);
     addTexture(*stateSet, _cache.get(), "bsvtfCache", 1);
     material._viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);

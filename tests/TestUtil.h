@@ -45,4 +45,19 @@ std::string errorOf(const std::function<void()>& f);
 void writeTextFile(const std::string& path, const std::string& content);
 std::string readTextFile(const std::string& path);
 
+/** Whether this program is built with AddressSanitizer or ThreadSanitizer (GCC defines the
+ *  macros, clang answers __has_feature): stock programs cannot load its instrumented plugins,
+ *  and memory figures include the sanitizer's. */
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+inline constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+#else
+inline constexpr bool kSanitized = false;
+#endif
+
 }  // namespace osgBTF::test

@@ -140,19 +140,26 @@ TEST(MipMappedMaterial, SavesItsLevelsAndLooksUpLikeTheShader) {
     ASSERT_EQ(rectangles(loaded->mipLayout()), rectangles(material->mipLayout()));
 
     const glm::vec3 view = btf.views().vector(3), light = btf.lights().vector(5);
-    // uv (0.3, 0.8): level 1 texel (9, 3), level 2 texel (8, 5) (MipLayout.TexelsAndFootprints).
-    const glm::vec3 level1 = loaded->evaluate(9, 3, view, light);
-    const glm::vec3 level2 = loaded->evaluate(8, 5, view, light);
-    const glm::vec3 base = loaded->evaluate(2, 6, view, light);
-    EXPECT_EQ(loaded->evaluateFiltered(0.3f, 0.8f, 1.0f, view, light), level1);
-    const glm::vec3 between = loaded->evaluateFiltered(0.3f, 0.8f, 1.25f, view, light);
-    for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(between[c], 0.75f * level1[c] + 0.25f * level2[c], 1e-6f);
-    // Magnification and NaN: the base; past the last level: the last (8, 6).
-    EXPECT_EQ(loaded->evaluateFiltered(0.3f, 0.8f, -2.0f, view, light), base);
-    EXPECT_EQ(loaded->evaluateFiltered(0.3f, 0.8f, NAN, view, light), base);
-    EXPECT_EQ(loaded->evaluateFiltered(0.3f, 0.8f, 9.0f, view, light),
-              loaded->evaluate(8, 6, view, light));
+    const auto at = [&](int x, int y) { return loaded->evaluate(x, y, view, light); };
+    const auto near = [](const glm::vec3& got, const glm::vec3& expected) {
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], expected[c], 1e-6f) << c;
+    };
+    // uv (0.375, 0.875): the centre of level 1's texel (1, 3), atlas (9, 3); in level 2 (2 x 2
+    // at (8, 4)) a quarter of a texel right of column 0's centre, a quarter above row 1's, so
+    // row 1 blends with row 0 (wrapped inside the level, not the atlas row above it).
+    const float u = 0.375f, v = 0.875f;
+    const glm::vec3 level1 = at(9, 3);
+    const glm::vec3 level2 =
+        0.5625f * at(8, 5) + 0.1875f * at(9, 5) + 0.1875f * at(8, 4) + 0.0625f * at(9, 4);
+    EXPECT_EQ(loaded->evaluateFiltered(u, v, 1.0f, view, light), level1);
+    near(loaded->evaluateFiltered(u, v, 2.0f, view, light), level2);
+    near(loaded->evaluateFiltered(u, v, 1.25f, view, light), 0.75f * level1 + 0.25f * level2);
+    // Magnification and NaN: the base, half-way between columns 2, 3 and rows 6, 7.
+    const glm::vec3 base = 0.25f * (at(2, 6) + at(3, 6) + at(2, 7) + at(3, 7));
+    near(loaded->evaluateFiltered(u, v, -2.0f, view, light), base);
+    near(loaded->evaluateFiltered(u, v, NAN, view, light), base);
+    // Past the last level: the last, one texel (8, 6), whatever the weights.
+    near(loaded->evaluateFiltered(u, v, 9.0f, view, light), at(8, 6));
 }
 
 TEST(MipMappedMaterial, BadLevelsAreRefusedWithTheirReason) {

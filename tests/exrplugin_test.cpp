@@ -1,4 +1,4 @@
-// Tests for plugins/exr (osgdb_exr), loaded the way applications load it: through osgDB.
+// Tests for plugins/exr (osgdb_btfexr), loaded the way applications load it: through osgDB.
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -19,6 +19,7 @@
 
 #include "core/FittedMaterialFile.h"
 #include "core/FloatImage.h"
+#include "scene/OwnPlugins.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
@@ -30,7 +31,8 @@ using osgBTF::test::TempDir;
 
 namespace {
 
-/** The build's osgdb_exr, found through the library path like any installed plugin. */
+/** The build's osgdb_btfexr, found through the library path like any installed plugin and
+ *  reached for ".exr" through libosgBTF's alias exr -> btfexr. */
 osgDB::ReaderWriter* exrPlugin() {
     static osgDB::ReaderWriter* plugin = [] {
         const std::string dir = buildDir() + "/lib";
@@ -39,6 +41,7 @@ osgDB::ReaderWriter* exrPlugin() {
         // prepended, so the system plugins other tests use stay reachable.
         osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
         if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);
+        osgBTF::aliasOwnPlugins();
         return osgDB::Registry::instance()->getReaderWriterForExtension("exr");
     }();
     return plugin;
@@ -48,7 +51,7 @@ class ExrPlugin : public ::testing::Test {
 protected:
     void SetUp() override {
         ASSERT_NE(exrPlugin(), nullptr)
-            << "osgdb_exr not found under " << buildDir() << "/lib (build target osgdb_exr)";
+            << "osgdb_btfexr not found under " << buildDir() << "/lib (build target osgdb_btfexr)";
     }
     TempDir dir;
 };

@@ -246,12 +246,18 @@ TEST(MethodPlugin, AppearsInTheComparisonTables) {
     EXPECT_DOUBLE_EQ(dummy.error.average, expected.average);
     EXPECT_EQ(dummy.memory.bytesPerTexel, 12.0);
     EXPECT_TRUE(dummy.cost.counted);
-    EXPECT_EQ(dummy.cost.perLightTex, 1);
+    // A method that does not declare MethodInfo::filtersParameters is filtered by btf_main.glsl's
+    // blend of four texel values: its one-evaluation count (ALU 1 + light loop 10, TEX 1) four
+    // times, plus 4 ALU per texel (ALU 10 + 4 x 5 = 30, TEX 4) and 45 to find the texels.
+    EXPECT_EQ(dummy.cost.perLightTex, 4);
+    EXPECT_EQ(dummy.cost.perLightAlu, 30);
+    EXPECT_EQ(dummy.cost.fixedAlu, 25 + 45);
 
     const std::string report = readTextFile((out / "report.md").string());
     // One row in each of Table 1 (error), Table 2 (memory), Table 3 (pass cost) and fitting.
     EXPECT_EQ(count(report, "\n| dummy | "), 4u) << report;
-    EXPECT_NE(report.find("| dummy | 25 + 11 | 0 + 1 | 36 | 1 | ALU 11, TEX 1 |"),
-              std::string::npos)
+    EXPECT_NE(
+        report.find("| dummy | 70 + 30 | 0 + 4 | 100 | 4 | 4 texels x (ALU 11, TEX 1, less the "),
+        std::string::npos)
         << report;
 }

@@ -1,6 +1,7 @@
-// osgdb_zip and zips that are not BTFs: the plugin answers FILE_NOT_HANDLED for them so that
-// osgDB goes on to the next reader of ".zip" (OSG's own zip archive plugin where a system has
-// one), and still reads BTF zips and reports damaged ones. No OpenGL here.
+// osgdb_btfzip and zips that are not BTFs: the plugin hands them to the next reader of ".zip"
+// (OSG's own zip archive plugin, osgdb_zip, where a system has one; osgDB itself would not load
+// it once libosgBTF has aliased ".zip" to osgdb_btfzip), answers FILE_NOT_HANDLED where there is
+// none, and still reads BTF zips and reports damaged ones. No OpenGL here.
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +15,7 @@
 
 #include "loaders/Ubo2003.h"
 #include "scene/MaterialNode.h"
+#include "scene/OwnPlugins.h"
 #include "tests/TestUtil.h"
 
 using osgBTF::test::buildDir;
@@ -29,6 +31,7 @@ osgDB::ReaderWriter* btfZipReader() {
     const std::string dir = buildDir() + "/lib";
     osgDB::FilePathList& paths = osgDB::Registry::instance()->getLibraryFilePathList();
     if (std::find(paths.begin(), paths.end(), dir) == paths.end()) paths.push_front(dir);
+    osgBTF::aliasOwnPlugins();
     return osgDB::Registry::instance()->getReaderWriterForExtension("zip");
 }
 
@@ -69,13 +72,16 @@ public:
         group->setName("next reader: " + osgDB::getSimpleFileName(file));
         return group.get();
     }
+    ReadResult readObject(const std::string& file, const Options* options) const override {
+        return readNode(file, options);
+    }
 };
 
 }  // namespace
 
 TEST(ZipPlugin, PlainZipsAreNotHandled) {
     osgDB::ReaderWriter* reader = btfZipReader();
-    ASSERT_NE(reader, nullptr) << "osgdb_zip not found in " << buildDir() << "/lib";
+    ASSERT_NE(reader, nullptr) << "osgdb_btfzip not found in " << buildDir() << "/lib";
     TempDir dir;
     osg::ref_ptr<osgDB::Options> options = new osgDB::Options("method=lambert cache=off");
     const std::string text = makeZip(dir, "text.zip", {{"README.txt", "hello\n"}});
@@ -103,6 +109,13 @@ TEST(ZipPlugin, OsgDbGoesOnToTheNextReader) {
     result = osgDB::Registry::instance()->readNode(model, options.get());
     ASSERT_TRUE(result.validNode()) << result.message();
     EXPECT_EQ(result.getNode()->getName(), "next reader: model.zip");
+    // osgBTF's reader hands the zip over itself: asked directly, it answers with the other's node.
+    result = btfZipReader()->readNode(model, options.get());
+    ASSERT_TRUE(result.validNode()) << result.message();
+    EXPECT_EQ(result.getNode()->getName(), "next reader: model.zip");
+    result = btfZipReader()->readObject(model, options.get());
+    ASSERT_TRUE(result.validObject()) << result.message();
+    EXPECT_EQ(result.getObject()->getName(), "next reader: model.zip");
 
     // A BTF zip is still osgBTF's, and so is a damaged one (its message names the file).
     const std::string btf = dir.file("sample.zip");

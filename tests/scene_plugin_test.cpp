@@ -1,4 +1,4 @@
-// Tests for plugins/btf (osgdb_btfmat, osgdb_btf, osgdb_zip, osgdb_btfmaterial), loaded the way
+// Tests for plugins/btf (osgdb_btfmat, osgdb_btf, osgdb_btfzip, osgdb_btfmaterial), loaded the way
 // applications load them: through osgDB and the build's plugin folder. No OpenGL here.
 #include <algorithm>
 #include <chrono>

@@ -38,6 +38,7 @@ TEST(ShaderInterface, GlslDeclaresTheSameNamesAndLimits) {
     EXPECT_TRUE(declares(frag, std::string("uniform vec4 ") + shader::kFixedView + "\\b"));
     EXPECT_TRUE(declares(vert, std::string("uniform float ") + shader::kTextureScale + "\\b"));
     EXPECT_TRUE(declares(frag, std::string("uniform bool ") + shader::kBilinear + "\\b"));
+    EXPECT_TRUE(declares(frag, std::string("uniform bool ") + shader::kBlendTexels + "\\b"));
     // The smooth terminator (both stages) and the shadow-map variant.
     EXPECT_TRUE(declares(vert, std::string("const int ") + shader::kMaxLightsName + " = " +
                                    std::to_string(shader::kMaxLights) + ";"));

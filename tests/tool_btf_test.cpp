@@ -164,7 +164,7 @@ TEST(BtfTool, EvalWithAnEnvironment) {
 }
 
 // A user runs the tool from the build tree with no OSG_LIBRARY_PATH (issue 30 section 5): an EXR
-// environment is read by this project's osgdb_exr, which OSG's own folders do not hold, so the
+// environment is read by this project's osgdb_btfexr, which OSG's own folders do not hold, so the
 // tool has to find its plugins itself (useOwnPlugins, scene/OwnPlugins.h). Before, this failed
 // with "white.exr: no osgDB plugin could read it as an image".
 TEST(BtfTool, FindsItsOwnPluginsWithoutOsgLibraryPath) {

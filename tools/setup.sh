@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs osgBTF's Debian 12 dependencies and builds it into build/ (Release with debug info).
 # Usage: bash tools/setup.sh [extra cmake arguments]
-# OSGBTF_BUILD_TARGETS="t1 t2" builds only those targets (and what they need), not everything.
+# OSGBTF_BUILD_TARGETS="t1 t2" builds only those targets (and what they need), not everything;
+# OSGBTF_TEST_PACKAGES=0 installs only what building and running needs, not what the tests need.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -11,13 +12,19 @@ PACKAGES=(
   libopenexr-dev openexr libopenimageio-dev openimageio-tools   # float images, exrheader, oiiotool
   libglm-dev libeigen3-dev libceres-dev libtbb-dev libzip-dev zip unzip
   libembree-dev               # ray-cast environment visibility (scene/VertexEnvironment.h)
-  zlib1g-dev libcurl4-openssl-dev nginx-light  # BSVTF: tile codec, HTTP streaming and its tests
+  zlib1g-dev libcurl4-openssl-dev nginx-light  # BSVTF: tile codec, HTTP streaming, serve-tiles.sh
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)
+)
+# Only the tests need these (about half of what a fresh machine downloads: clang and Chromium are
+# the big ones); OSGBTF_TEST_PACKAGES=0 leaves them out (tools/run-sample.sh does).
+TEST_PACKAGES=(
   xvfb xauth libglx-mesa0     # X server for the viewer tests and xvfb-run (osgviewer, btfviewer)
+  chromium                    # headless browser: the gallery page test (btf-examples --gallery)
   dpkg-dev file               # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
   clang libclang-rt-14-dev    # CI's sanitizer build and the fuzz targets (libFuzzer, ASan, UBSan)
 )
+if [ "${OSGBTF_TEST_PACKAGES:-1}" != 0 ]; then PACKAGES+=("${TEST_PACKAGES[@]}"); fi
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
 missing=()

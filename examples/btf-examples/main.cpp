@@ -20,6 +20,7 @@
 #include "core/FloatImage.h"
 #include "core/Progress.h"
 #include "examples/ExampleScenes.h"
+#include "examples/btf-examples/Gallery.h"
 #include "examples/btf-examples/SceneBench.h"
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
@@ -44,6 +45,7 @@ std::vector<std::string> splitList(const std::string& text) {
 
 struct Options {
     std::string outputDir;
+    std::string galleryDir;
     int size = 32;
     std::string methods = "lambert,laf,pca";
     int blockMap = 0;  // 0: none
@@ -238,7 +240,14 @@ int main(int argc, char** argv) {
         "View them with `btfviewer DIR/spheres.osgt` or, with OSG_LIBRARY_PATH set to osgBTF's "
         "lib folder, stock `osgviewer DIR/spheres.osgt`."};
     Options options;
-    app.add_option("-o,--out", options.outputDir, "Output folder (created if missing)")->required();
+    app.add_option("-o,--out", options.outputDir, "Output folder (created if missing)");
+    app.add_option("--gallery", options.galleryDir,
+                   "Instead of the scenes: a gallery in this folder (replaced as a whole): every "
+                   "method of --methods (default: all that `btf compare --methods all` runs) "
+                   "fitted by `btf compare` and rendered headless in a close-up, a grazing view, "
+                   "a floor into the distance, environment lighting and cast shadows, as "
+                   "pictures/METHOD-VIEW.png, and index.html showing them side by side with each "
+                   "method's error, bytes per texel and pass time");
     app.add_option("--size", options.size, "Texels per side of the sample")
         ->check(CLI::Range(4, 512))
         ->capture_default_str();
@@ -284,6 +293,15 @@ int main(int argc, char** argv) {
     }
     osgBTF::Progress::setEnabled(progress);
     try {
+        if (!options.galleryDir.empty()) {
+            osgBTF::examples::GalleryOptions gallery;
+            gallery.outputDir = options.galleryDir;
+            gallery.size = options.size;
+            if (app.count("--methods") > 0) gallery.methods = splitList(options.methods);
+            std::cout << "wrote " << osgBTF::examples::writeGallery(gallery) << "\n";
+            return 0;
+        }
+        if (options.outputDir.empty()) throw osgBTF::Error("--out or --gallery is required");
         run(options);
     } catch (const std::exception& e) {
         std::cerr << "btf-examples: " << e.what() << "\n";

@@ -890,7 +890,7 @@ int run(osg::ArgumentParser& arguments) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    osgBTF::useOwnPlugins();  // the material readers and osgdb_exr, without OSG_LIBRARY_PATH
+    osgBTF::useOwnPlugins();  // the material readers and osgdb_btfexr, without OSG_LIBRARY_PATH
     osg::ArgumentParser arguments(&argc, argv);
     try {
         return run(arguments);

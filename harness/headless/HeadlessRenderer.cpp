@@ -1,6 +1,7 @@
 #include "harness/headless/HeadlessRenderer.h"
 
 #include "core/Error.h"
+#include "materials/MaterialState.h"
 
 #include <osg/Drawable>
 #include <osg/GL>
@@ -142,6 +143,13 @@ HeadlessRenderer::HeadlessRenderer() : _context(createHeadlessContext(64, 64)) {
 }
 
 HeadlessRenderer::~HeadlessRenderer() {
+    // The scenes were taken out after each render, so closing the context releases nothing of
+    // them; the process-wide method programs would keep this context's program objects and hand
+    // them to the next context with the same ID (materials/MaterialState.h).
+    if (_context && _context->valid() && _context->makeCurrent()) {
+        releaseCachedPrograms(_context->getState());
+        _context->releaseContext();
+    }
     // The viewer closes the context it draws with; then the context is released.
     _viewer = nullptr;
     _context = nullptr;

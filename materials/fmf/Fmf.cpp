@@ -2,7 +2,6 @@
 #include "materials/CoordinateMapRendering.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -13,7 +12,6 @@
 
 #include "core/Error.h"
 #include "core/LowRank.h"
-#include "core/Progress.h"
 #include "materials/MaterialState.h"
 
 namespace osgBTF {
@@ -31,10 +29,6 @@ int groupsOf(int components) {
 
 double bytesPerValue(MaterialTexture::PixelKind kind) {
     return kind == MaterialTexture::Half ? 2 : 4;
-}
-
-const char* storageName(MaterialTexture::PixelKind kind) {
-    return kind == MaterialTexture::Half ? "half" : "float";
 }
 
 /** Shortest text that reads back as the same float. */
@@ -441,7 +435,7 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
     addCommonState(*stateSet, *this);
     // Arrays even with one layer (rank <= 4, one view): fmf.frag samples sampler2DArrays.
     addTexture(*stateSet, createFloatTextureArray(uTexture()).get(), "fmfU", 0);
-    addTexture(*stateSet, createFloatTextureArray(sxvTexture(), filtersBilinearly()).get(),
+    addTexture(*stateSet, createFloatTextureArray(sxvTexture(), filtersParameters()).get(),
                "fmfSxV", 1);
     _viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
     _lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
@@ -465,86 +459,6 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
     return stateSet;
 }
 
-// ---- fit -------------------------------------------------------------------------------------
-
-osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const BtfSource& btf, const FitOptions& options) {
-    const auto start = std::chrono::steady_clock::now();
-    const OptionValues o = validateOptions("fmf", options);
-    if (btf.empty()) throw Error("fmf: the BTF is empty");
-    const int components = o.integer("components");
-    const MaterialTexture::PixelKind storage =
-        o.choice("storage") == "float" ? MaterialTexture::Float : MaterialTexture::Half;
-    const std::size_t texels = btf.texelCount(), images = btf.viewCount() * btf.lightCount();
-    const std::size_t rows = images * 3, maxComponents = std::min(rows, texels);
-    if (std::size_t(components) > maxComponents)
-        throw Error("fmf: option components must be at most " + std::to_string(maxComponents) +
-                    " for this BTF (its texels, or 3 x views x lights if fewer), got " +
-                    std::to_string(components));
-
-    // Rows (image, channel) in blocks of whole images, read straight from the BTF's storage:
-    // the only copies are one block per thread, de-interleaved into A^T's columns.
-    const std::size_t blockImages = std::max<std::size_t>(
-        btf.imageBlock(),
-        std::clamp<std::size_t>((std::size_t(16) << 20) / (texels * 3 + 1), 1, 256));
-    RowBlockSource source;
-    source.rows = rows;
-    source.cols = texels;
-    source.blockRows = blockImages * 3;
-    source.fill = [&btf, texels](std::size_t first, std::size_t count, float* out) {
-        const std::size_t firstImage = first / 3, images = count / 3;
-        std::vector<float> interleaved(images * texels * 3);
-        btf.readImages(firstImage, images, interleaved.data());
-        for (std::size_t j = 0; j < images; ++j) {
-            const float* f = interleaved.data() + j * texels * 3;
-            float* r = out + (j * 3) * texels;
-            float* g = r + texels;
-            float* b = g + texels;
-            for (std::size_t t = 0; t < texels; ++t, f += 3) r[t] = f[0], g[t] = f[1], b[t] = f[2];
-        }
-    };
-    StreamedSvdOptions svdOptions;
-    Progress progress(
-        "fmf: factorising " + std::to_string(rows) + " x " + std::to_string(texels) + " values",
-        rows * std::size_t(svdOptions.passes(texels)));
-    svdOptions.progress = [&progress](std::size_t n) { progress.advance(n); };
-    const TruncatedSvd svd = streamedTruncatedSvd(source, components, svdOptions);
-    progress.finish();
-
-    FactoredBtf factors;
-    factors.model = FactorModel::Fmf;
-    factors.source = btf.source.empty() ? std::string("fmf") : btf.source;
-    factors.views = btf.views();
-    factors.lights = btf.lights();
-    factors.width = btf.width();
-    factors.height = btf.height();
-    factors.factors.resize(1);
-    BtfFactor& f = factors.factors[0];
-    f.S.resize(components);
-    for (int k = 0; k < components; ++k) f.S(k) = float(svd.singularValues[std::size_t(k)]);
-    f.U = Eigen::Map<const Eigen::MatrixXf>(svd.u.data(), Eigen::Index(rows), components);
-    f.SxV.resize(Eigen::Index(texels), components);
-    const Eigen::Map<const Eigen::MatrixXf> v(svd.v.data(), Eigen::Index(texels), components);
-    for (int y = 0; y < btf.height(); ++y)
-        for (int x = 0; x < btf.width(); ++x) {
-            const Eigen::Index t = Eigen::Index(y) * btf.width() + x;
-            f.SxV.row(Eigen::Index(factors.factorRow(x, y))) =
-                v.row(t).cwiseProduct(f.S.transpose());
-        }
-
-    osg::ref_ptr<FmfMaterial> m = new FmfMaterial;
-    m->setFactors(std::move(factors), storage);
-    const double residual = svd.residualSquared();
-    m->fitInfo["seconds"] = std::to_string(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    m->fitInfo["components"] = std::to_string(components);
-    m->fitInfo["storage"] = storageName(storage);
-    m->fitInfo["algorithm"] = texels <= svdOptions.gramColumns ? "gram" : "randomised";
-    // Share of the data's squared norm the rank-C factors capture (before rounding to half).
-    m->fitInfo["energy"] =
-        std::to_string(svd.totalSquared > 0 ? 1.0 - residual / svd.totalSquared : 1.0);
-    return m;
-}
-
 namespace {
 const bool registered = registerMethod([] {
     MethodInfo m;
@@ -559,16 +473,13 @@ const bool registered = registerMethod([] {
                                      "100)"),
                  OptionSpec::choice("storage", "half", {"half", "float"},
                                     "precision of U and SxV on the GPU and in the file")};
-    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return FmfMaterial::fit(btf, o);
-    };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
         return FmfMaterial::fromFile(f);
     };
     m.createInstance = []() -> osg::Object* { return new FmfMaterial; };
     // Per-texel SxV rows times per-direction U rows; the colour decoding and exp come after the
     // sums (FmfMaterial::finishLinear).
-    m.filtersLinearly = true;
+    m.filtersParameters = true;
     m.shaderCost = [](const Material& material) {
         // fmf.frag. View + light lookups 2 x 11; the 9 combinations: weight product,
         // test, row address, count (4 x 9); decode at worst (model 11): 5 model tests, exp, 3

@@ -25,19 +25,6 @@ osg::ref_ptr<LafMaterial> LafMaterial::create(int width, int height, int lobeCou
     return m;
 }
 
-// ---- fitter: LobeMaterial's, with T fixed at 1 -----------------------------------------------
-
-osg::ref_ptr<LafMaterial> LafMaterial::fit(const BtfSource& btf, const FitOptions& options) {
-    const OptionValues o = validateOptions("laf", options);
-    if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
-        throw Error("laf: cannot fit an empty BTF");
-    osg::ref_ptr<LafMaterial> m =
-        create(btf.width(), btf.height(), o.integer("lobes"), btf.views(), btf.lights());
-    m->_cosine = o.flag("cosine");
-    m->fitLobes(btf, o.integer("iterations"), 0, nullptr);
-    return m;
-}
-
 // ---- CPU evaluator ---------------------------------------------------------------------------
 
 glm::vec3 LafMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
@@ -87,9 +74,6 @@ const bool registered = registerMethod([] {
         OptionSpec::flag("cosine", true,
                          "1: the bracket times l_z, the BRDF model times the foreshortening the "
                          "data contain; 0: seed 001 eq. 2 literally, no l_z")};
-    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return LafMaterial::fit(btf, o);
-    };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
         return LafMaterial::fromFile(f);
     };

@@ -105,6 +105,22 @@ MemoryFootprint LpcaMaterial::memory() const {
     return {perTexelValues + sharedValues, double(bytes) / texels, bytes};
 }
 
+// ---- options, shared with lpca-revised ----------------------------------------------------------
+
+std::vector<OptionSpec> LpcaSettings::optionTable() {
+    const LpcaSettings d;
+    return {OptionSpec::integer("clusters", d.clusters, 1, 256,
+                                "number of clusters k (the index is stored in 8 bits)"),
+            OptionSpec::integer("components", d.components, 1, OptionSpec::kNoLimit,
+                                "Eigen-BRDFs per cluster c"),
+            OptionSpec::integer("iterations", d.iterations, 1, OptionSpec::kNoLimit,
+                                "maximum Lloyd iterations of the clustering"),
+            OptionSpec::integer("training", d.trainingTexels, 0, OptionSpec::kNoLimit,
+                                "texels sampled to train the clusters, 0 = all"),
+            OptionSpec::integer("seed", int(d.seed), 0, OptionSpec::kNoLimit,
+                                "random seed of the training sample")};
+}
+
 // ---- textures shared with lpca-revised ----------------------------------------------------------
 
 osg::ref_ptr<osg::Texture> createTextureArray(const MaterialTexture& t) {
@@ -254,9 +270,6 @@ const bool registered = registerMethod([] {
         "local PCA (Mueller 2003): per texel a cluster index and c weights of its cluster's "
         "Eigen-BRDFs, 3x3 view/light interpolation";
     m.options = LpcaSettings::optionTable();
-    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return LpcaMaterial::fit(btf, o);
-    };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
         return LpcaMaterial::fromFile(f);
     };

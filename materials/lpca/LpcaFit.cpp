@@ -240,20 +240,6 @@ void assignGram(const Eigen::MatrixXd& gram, const std::vector<std::vector<std::
 
 }  // namespace
 
-std::vector<OptionSpec> LpcaSettings::optionTable() {
-    const LpcaSettings d;
-    return {OptionSpec::integer("clusters", d.clusters, 1, 256,
-                                "number of clusters k (the index is stored in 8 bits)"),
-            OptionSpec::integer("components", d.components, 1, OptionSpec::kNoLimit,
-                                "Eigen-BRDFs per cluster c"),
-            OptionSpec::integer("iterations", d.iterations, 1, OptionSpec::kNoLimit,
-                                "maximum Lloyd iterations of the clustering"),
-            OptionSpec::integer("training", d.trainingTexels, 0, OptionSpec::kNoLimit,
-                                "texels sampled to train the clusters, 0 = all"),
-            OptionSpec::integer("seed", int(d.seed), 0, OptionSpec::kNoLimit,
-                                "random seed of the training sample")};
-}
-
 LpcaSettings LpcaSettings::fromValues(const OptionValues& values) {
     LpcaSettings s;
     s.clusters = values.integer("clusters");
@@ -480,5 +466,13 @@ osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const BtfSource& btf, const LpcaSetti
     m->fitInfo["rms"] = text(std::sqrt(allError / double(texels * dims)));
     return m;
 }
+
+namespace {
+// The fit hook of the method registered in Lpca.cpp (libosgBTF).
+const bool fitterRegistered =
+    registerFitter("lpca", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
+        return LpcaMaterial::fit(btf, o);
+    });
+}  // namespace
 
 }  // namespace osgBTF

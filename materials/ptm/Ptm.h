@@ -105,6 +105,8 @@ public:
     static std::array<double, kTerms> monomials(const glm::vec3& light);
     /** Rounds every stored value to the storage precision, as the fitter does. */
     void roundToStorage();
+    /** A value at the storage precision (half or float), as the fitter stores it. */
+    static float toStorage(double value, MaterialTexture::PixelKind kind);
 
     /** [slot * layersPerSlot() + layer][y][x][3], rows bottom-up (the texture's layout). */
     std::vector<float> coefficients;

@@ -19,7 +19,8 @@ uniform int ptmPerView;            // 1: one PTM per measured view, 0: slot 0 fo
 // One layer of the texel's data; filtered (btfBilinear): the field is linear in the coefficients
 // (half or float, filtered as the floats they are), so filtering them blends the texels' fields,
 // and btfEvaluate clamps the blend (PtmMaterial::finishLinear). Luminance materials, a product of
-// colour and coefficients, are not filtered (PtmMaterial::linearInParameters).
+// colour and coefficients, read their texel here and btf_main.glsl blends four texels' values
+// (PtmMaterial::linearInParameters).
 vec3 ptmTexel(sampler2DArray s, ivec2 texel, int layer) {
     return btfBilinear ? textureLod(s, vec3(btfBilinearCoordinate, float(layer)), 0.0).rgb
                        : texelFetch(s, ivec3(texel, layer), 0).rgb;

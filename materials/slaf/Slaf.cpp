@@ -34,22 +34,6 @@ void SlafMaterial::prepare() {
     _viewLookup = DirectionLookup(_views);
 }
 
-// ---- fitter: LobeMaterial's, with the view table T fitted ------------------------------------
-
-osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const BtfSource& btf, const FitOptions& options) {
-    const OptionValues o = validateOptions("slaf", options);
-    const int rounds = o.integer("rounds");
-    if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
-        throw Error("slaf: cannot fit an empty BTF");
-    if (btf.viewCount() < 3) throw Error("slaf: needs at least 3 view directions to interpolate T");
-    osg::ref_ptr<SlafMaterial> m =
-        create(btf.width(), btf.height(), o.integer("lobes"), btf.views(), btf.lights());
-    m->_cosine = o.flag("cosine");
-    m->fitLobes(btf, o.integer("iterations"), rounds, &m->scale);
-    m->fitInfo["rounds"] = std::to_string(rounds);
-    return m;
-}
-
 // ---- CPU evaluator ---------------------------------------------------------------------------
 
 glm::vec3 SlafMaterial::evaluate(int x, int y, const glm::vec3& view,
@@ -138,9 +122,6 @@ const bool registered = registerMethod([] {
                             "alternations between the view table T and the lobes"),
         OptionSpec::flag("cosine", true,
                          "1: the bracket times l_z; 0: seed 001 eq. 4 literally (see laf)")};
-    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return SlafMaterial::fit(btf, o);
-    };
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
         return SlafMaterial::fromFile(f);
     };

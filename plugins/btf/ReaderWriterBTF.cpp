@@ -3,8 +3,10 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <sstream>
 #include <system_error>
 
@@ -12,6 +14,7 @@
 #include <osgDB/FileNameUtils>
 #include <osgDB/FileUtils>
 #include <osgDB/ReadFile>
+#include <osgDB/Registry>
 
 #include "core/Error.h"
 #include "core/FloatImage.h"
@@ -19,8 +22,12 @@
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2003.h"
 #include "materials/Material.h"
-#include "materials/MipMapping.h"
 #include "scene/MaterialNode.h"
+// The modules that fit on load (all but osgdb_btfmat) link libosgBTFFit for the fit and its
+// cache; osgdb_btfmat renders fitted files only and is built without them (CMakeLists.txt).
+#if OSGBTF_READERS_FIT
+#include "scene/FitCache.h"
+#endif
 
 namespace fs = std::filesystem;
 
@@ -41,19 +48,12 @@ struct Settings {
     bool mipmap = false;   // fit a mip-mapped material (materials/MipMapping.h)
 };
 
-std::string defaultCacheDir() {
-    if (const char* dir = std::getenv("OSGBTF_CACHE_DIR"); dir && *dir) return dir;
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
-        return (fs::path(xdg) / "osgbtf").string();
-    if (const char* home = std::getenv("HOME"); home && *home)
-        return (fs::path(home) / ".cache" / "osgbtf").string();
-    return {};
-}
-
 /** Parses option words; `extra` (from a pseudo-file name) wins over the -O string. */
 Settings parseSettings(const osgDB::Options* options, const std::string& extra = {}) {
     Settings settings;
-    settings.cacheDir = defaultCacheDir();
+#if OSGBTF_READERS_FIT
+    settings.cacheDir = defaultFitCacheFolder();
+#endif
     std::string text = options ? options->getOptionString() : std::string();
     text += " " + extra;
     for (char& c : text)
@@ -101,110 +101,16 @@ FitOptions fitOptionsFor(const MethodInfo& method, const Settings& settings) {
     return options;
 }
 
-std::string hex64(std::uint64_t value) {
-    char text[17];
-    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
-    return text;
-}
-
-std::uint64_t fnv1a64(const std::string& text) {
-    std::uint64_t hash = 14695981039346656037ull;
-    for (unsigned char c : text) {
-        hash ^= c;
-        hash *= 1099511628211ull;
-    }
-    return hash;
-}
-
-/** Everything a fit depends on, as one line (stored in the fitted file to detect collisions). */
-std::string cacheKey(const std::string& path, const std::string& method, const FitOptions& options,
-                     bool mipmap) {
-    std::error_code error;
-    const fs::path absolute = fs::absolute(path, error);
-    std::ostringstream key;
-    key << "osgbtf-fit-cache-1|" << (error ? fs::path(path) : absolute).lexically_normal().string()
-        << "|";
-    if (fs::is_directory(path, error)) {
-        // A folder of images: its newest member stands for its modification time.
-        std::uintmax_t size = 0;
-        fs::file_time_type newest{};
-        for (const auto& entry : fs::directory_iterator(path, error)) {
-            if (!entry.is_regular_file(error)) continue;
-            size += entry.file_size(error);
-            newest = std::max(newest, entry.last_write_time(error));
-        }
-        key << size << "|" << newest.time_since_epoch().count();
-    } else {
-        key << fs::file_size(path, error) << "|"
-            << fs::last_write_time(path, error).time_since_epoch().count();
-    }
-    key << "|" << method << (mipmap ? "|mipmap" : "");
-    for (const auto& [name, value] : options.values()) key << "|" << name << "=" << value;
-    return key.str();
-}
-
-/** A measured BTF fitted with the settings' method, through the fit cache. */
+/** A measured BTF fitted with the settings' method, through the fit cache (scene/FitCache.h). */
 osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& settings) {
     const MethodInfo& method = findMethod(settings.method);
     const FitOptions fitOptions = fitOptionsFor(method, settings);
-    std::string optionText;
-    for (const auto& [name, value] : fitOptions.values())
-        optionText += (optionText.empty() ? "" : " ") + name + "=" + value;
-    const std::string key = cacheKey(path, method.name, fitOptions, settings.mipmap);
-
-    fs::path cacheFile;
-    if (!settings.cacheDir.empty()) {
-        cacheFile =
-            fs::path(settings.cacheDir) / (fs::path(path).filename().string() + "-" + method.name +
-                                           "-" + hex64(fnv1a64(key)) + ".btfmat");
-        std::error_code error;
-        if (fs::exists(cacheFile, error)) {
-            try {
-                osg::ref_ptr<Material> material = loadSharedMaterial(cacheFile.string());
-                const auto it = material->fitInfo.find("cacheKey");
-                if (it != material->fitInfo.end() && it->second == key) {
-                    OSGBTF_NOTIFY(osg::NOTICE, "osgBTF: " << path << ": using the cached fit "
-                                                          << cacheFile.string());
-                    return material;
-                }
-                OSGBTF_NOTIFY(osg::NOTICE,
-                              "osgBTF: " << cacheFile.string()
-                                         << " was fitted from something else; fitting again");
-            } catch (const Error& e) {
-                OSGBTF_NOTIFY(osg::WARN, "osgBTF: ignoring the damaged cache file " << e.what());
-            }
-        }
-    }
-    OSGBTF_NOTIFY(osg::NOTICE,
-                  "osgBTF: " << path << ": fitting method '" << method.name << "'"
-                             << (optionText.empty() ? std::string() : " (" + optionText + ")")
-                             << (cacheFile.empty() ? std::string(", cache off")
-                                                   : ", then caching it in " + cacheFile.string()));
-    osg::ref_ptr<Material> material;
-    {
-        // A UBO2014 file is fitted from its factors, decoded block by block, never whole.
-        const std::unique_ptr<BtfSource> source = openBtfSource(path);
-        material = settings.mipmap ? fitMipMapped(method, *source, fitOptions)
-                                   : method.fit(*source, fitOptions);
-    }
-    material->fitInfo["cacheKey"] = key;
-    if (!cacheFile.empty()) {
-        try {
-            std::error_code error;
-            fs::create_directories(cacheFile.parent_path(), error);
-            if (error) fail(cacheFile.parent_path().string(), "cannot create: " + error.message());
-            // Temporaries of cache writers that were killed (ENTRY.btfmat.tmp<pid>): one folder
-            // scan per fit, which takes far longer.
-            removeStaleTemporaries(cacheFile.parent_path().string(), [](const std::string& stem) {
-                return stem.size() > 7 && stem.compare(stem.size() - 7, 7, ".btfmat") == 0;
-            });
-            saveMaterial(*material, cacheFile.string());  // atomic: temporary name, then rename
-            material->sourceFile = cacheFile.string();
-        } catch (const Error& e) {
-            OSGBTF_NOTIFY(osg::WARN, "osgBTF: cannot cache the fit: " << e.what());
-        }
-    }
-    return material;
+#if OSGBTF_READERS_FIT
+    return fitCached(path, method, fitOptions, settings.cacheDir, settings.mipmap);
+#else
+    throw Error(path + ": fitting a measured BTF needs libosgBTFFit, which this module (" +
+                "osgdb_btfmat, fitted materials only) does not load");
+#endif
 }
 
 /** A UBO2014 file without method=: its stored factorisation as an `fmf` material, nothing
@@ -277,6 +183,38 @@ std::string applyCoordinateMap(MaterialNode& node, const Settings& settings,
     return node.getCoordinateMapError();
 }
 
+/** OpenSceneGraph's own zip archive reader (osgdb_zip), loaded on the first call where it is
+ *  installed; null where it is not. Once libosgBTF has aliased ".zip" to this module, osgDB never
+ *  loads osgdb_zip for a ".zip" itself, so the module is loaded here by its file name: ours with
+ *  "btfzip" replaced, which keeps osgDB's folder, version, postfix and suffix. */
+osgDB::ReaderWriter* osgZipReader() {
+    osgDB::Registry* registry = osgDB::Registry::instance();
+    static std::once_flag once;
+    std::call_once(once, [registry] {
+        std::string name = registry->createLibraryNameForExtension("btfzip");
+        const auto at = name.rfind("osgdb_btfzip");
+        if (at == std::string::npos) return;
+        name.replace(at, std::strlen("osgdb_btfzip"), "osgdb_zip");
+        if (!osgDB::findLibraryFile(name).empty()) registry->loadLibrary(name);
+    });
+    // Any other reader of ".zip" will do (a test stands one in for OSG's).
+    for (const osg::ref_ptr<osgDB::ReaderWriter>& reader : registry->getReaderWriterList())
+        if (reader->acceptsExtension("zip") && !dynamic_cast<ReaderWriterBTF*>(reader.get()))
+            return reader.get();
+    return nullptr;
+}
+
+/** OSG's zip reader when `file` is a ".zip" that is no BTF (a model or texture archive) and that
+ *  reader is installed; null otherwise. */
+osgDB::ReaderWriter* zipForOsg(const osgDB::ReaderWriter& self, const std::string& file,
+                               const osgDB::Options* options) {
+    if (osgDB::getLowerCaseFileExtension(file) != "zip" || !self.acceptsExtension("zip"))
+        return nullptr;
+    const std::string path = osgDB::findDataFile(file, options);
+    if (path.empty() || mayBeUbo2003(path)) return nullptr;
+    return osgZipReader();
+}
+
 /** Splits "MODEL.(MATERIAL,k=v,...)" into model, material and the k=v words. */
 bool splitPseudoName(const std::string& inner, std::string& model, std::string& material,
                      std::string& words) {
@@ -300,9 +238,15 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
         supportsExtension("btf",
                           "UBO2014 measured BTF: its stored factors as an fmf material, or fitted "
                           "on load with method= -> MaterialNode");
-    else if (extension == "zip")
-        supportsExtension("zip", "UBO2003/ATRIUM measured BTF zip, fitted on load -> MaterialNode");
-    else if (extension == "btfmaterial")
+    else if (extension == "btfzip") {
+        supportsExtension("zip",
+                          "UBO2003/ATRIUM measured BTF zip, fitted on load -> MaterialNode "
+                          "(other zips go to OSG's zip plugin where installed)");
+        supportsExtension("btfzip",
+                          "pseudo-loader: NAME.zip.btfzip reads NAME.zip as a UBO2003/ATRIUM "
+                          "measured BTF zip (for programs in which \".zip\" reaches OSG's own "
+                          "zip plugin)");
+    } else if (extension == "btfmaterial")
         supportsExtension(
             "btfmaterial",
             std::string("pseudo-loader: a model under an osgBTF material, ") + kPseudoSyntax);
@@ -332,8 +276,28 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
 
 osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readObject(const std::string& file,
                                                             const Options* options) const {
+    if (osgDB::ReaderWriter* zip = zipForOsg(*this, file, options))
+        return zip->readObject(file, options);
     // As for every node format: osgconv reads its input with readObjectFile.
     return readNode(file, options);
+}
+
+osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readImage(const std::string& file,
+                                                           const Options* options) const {
+    if (osgDB::ReaderWriter* zip = zipForOsg(*this, file, options))
+        return zip->readImage(file, options);
+    return ReadResult::FILE_NOT_HANDLED;
+}
+
+osgDB::ReaderWriter::ReadResult ReaderWriterBTF::openArchive(const std::string& file,
+                                                             ArchiveStatus status,
+                                                             unsigned int indexBlockSizeHint,
+                                                             const Options* options) const {
+    // Any zip, a BTF's too, is an archive to OSG's zip plugin.
+    if (osgDB::getLowerCaseFileExtension(file) == "zip" && acceptsExtension("zip"))
+        if (osgDB::ReaderWriter* zip = osgZipReader())
+            return zip->openArchive(file, status, indexBlockSizeHint, options);
+    return ReadResult::FILE_NOT_HANDLED;
 }
 
 osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& file,
@@ -362,17 +326,31 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
         }
 
         const Settings settings = parseSettings(options);
-        std::string path = osgDB::findDataFile(file, options);
+        // "x.zip.btfzip": x.zip is a BTF zip, whatever else reads ".zip" in this program.
+        const bool namedBtfZip = ext == "btfzip";
+        const std::string name = namedBtfZip ? osgDB::getNameLessExtension(file) : file;
+        std::string path = osgDB::findDataFile(name, options);
         if (path.empty() && ext == "btfmat") {
             // "x.exr.btfmat": the fitted file x.exr, read as a material rather than an image.
             const std::string inner = osgDB::getNameLessExtension(file);
             if (!osgDB::getFileExtension(inner).empty()) path = osgDB::findDataFile(inner, options);
         }
-        if (path.empty()) return notFound(file);
-        // A zip that is no BTF (a model archive, say) is some other plugin's: let osgDB go on.
-        if (ext == "zip" && !mayBeUbo2003(path)) return ReadResult::FILE_NOT_HANDLED;
-        osg::ref_ptr<Material> material =
-            ext == "btfmat" ? loadSharedMaterial(path) : readMaterial(path, settings);
+        if (path.empty()) return notFound(name);
+        if (namedBtfZip && !mayBeUbo2003(path))
+            return error(path +
+                         ": not a UBO2003/ATRIUM BTF zip (no member named like \"tl000 pl000 "
+                         "tv000 pv000\"), read as one because of the name " +
+                         file);
+        // A zip that is no BTF (a model archive, say) is OSG's zip plugin's where installed;
+        // elsewhere FILE_NOT_HANDLED lets osgDB go on to any other reader of ".zip" loaded.
+        if (ext == "zip" && !mayBeUbo2003(path)) {
+            if (osgDB::ReaderWriter* zip = zipForOsg(*this, file, options))
+                return zip->readNode(file, options);
+            return ReadResult::FILE_NOT_HANDLED;
+        }
+        osg::ref_ptr<Material> material = ext == "btfmat" ? loadSharedMaterial(path)
+                                          : namedBtfZip   ? fitMeasured(path, settings)
+                                                          : readMaterial(path, settings);
         osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
         if (!node->getMaterial()) return error(node->getMaterialError());
         node->setTextureScale(settings.textureScale);

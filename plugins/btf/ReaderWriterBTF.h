@@ -1,7 +1,7 @@
 /* osgBTF's osgDB readers: BTF materials as scene-graph nodes (osgBTF::MaterialNode).
  *
  * One source, four plugin modules (osgDB loads osgdb_<ext>.so per extension); each module claims
- * only its own extension:
+ * only its own extension (osgdb_btfzip also ".zip", see there):
  *
  *   osgdb_btfmat       x.btfmat       a fitted-material file (`btf fit -o x.btfmat`; OpenEXR
  *                                     inside) -> MaterialNode. Files named otherwise
@@ -10,7 +10,15 @@
  *   osgdb_btf          x.btf          a UBO2014 measured BTF -> MaterialNode: its stored
  *                                     factors as an fmf material (nothing decoded or fitted),
  *                                     or fitted on load when method= is given
- *   osgdb_zip          x.zip          a UBO2003/ATRIUM measured BTF zip, fitted on load
+ *   osgdb_btfzip       x.zip          a UBO2003/ATRIUM measured BTF zip, fitted on load. Not
+ *                      x.zip.btfzip   named osgdb_zip, OpenSceneGraph's zip archive plugin:
+ *                                     osgDB reaches this module for ".zip" through the
+ *                                     extension alias zip -> btfzip that libosgBTF registers
+ *                                     (scene/OwnPlugins.h), `-e btfzip`, or the pseudo-file
+ *                                     name x.zip.btfzip. A zip that is no BTF goes to OSG's
+ *                                     osgdb_zip where one is installed (loaded by its own
+ *                                     name, since the alias hides it from osgDB), else it is
+ *                                     FILE_NOT_HANDLED.
  *   osgdb_btfmaterial  (pseudo-loader) puts a model under a material, all in one file name:
  *
  *       MODEL.(MATERIAL[,scale=S][,KEY=VALUE...]).btfmaterial
@@ -39,7 +47,8 @@
  *   cache=DIR        folder of fitted measured BTFs (default $OSGBTF_CACHE_DIR, else
  *                    $XDG_CACHE_HOME/osgbtf, else ~/.cache/osgbtf); cache=off fits every time
  *
- * Fit cache: a measured BTF is fitted once; the result is saved (atomically) as
+ * Fit cache (scene/FitCache.h, in libosgBTFFit, which osgdb_btfmat does not load): a measured BTF
+ * is fitted once; the result is saved (atomically) as
  * DIR/<name>-<method>-<16 hex digits>.btfmat, the digits a hash of the input's absolute path,
  * size, modification time, the method and its options. The next load of the same input with the
  * same options reads that file instead of fitting. OSG_NOTICE says which of the two happened.
@@ -56,7 +65,7 @@ namespace osgBTF::plugin {
 
 class ReaderWriterBTF : public osgDB::ReaderWriter {
 public:
-    /** Claims `extension` (one of btfmat, btf, zip, btfmaterial). */
+    /** Claims `extension` (one of btfmat, btf, btfzip, btfmaterial; btfzip also claims zip). */
     explicit ReaderWriterBTF(const std::string& extension);
 
     const char* className() const override { return "osgBTF material reader"; }
@@ -64,6 +73,12 @@ public:
     ReadResult readNode(const std::string& file, const Options* options) const override;
     /** The same MaterialNode (osgconv reads its input through readObjectFile). */
     ReadResult readObject(const std::string& file, const Options* options) const override;
+    /** Images and archives are OSG's zip plugin's business: for a ".zip" handed over to it where
+     *  it is installed, FILE_NOT_HANDLED otherwise. */
+    ReadResult readImage(const std::string& file, const Options* options) const override;
+    using osgDB::ReaderWriter::openArchive;  // the stream overload stays the base's
+    ReadResult openArchive(const std::string& file, ArchiveStatus status,
+                           unsigned int indexBlockSizeHint, const Options* options) const override;
 };
 
 }  // namespace osgBTF::plugin

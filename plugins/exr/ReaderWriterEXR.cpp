@@ -1,6 +1,12 @@
-/* osgdb_exr: OpenEXR images for osgDB, built on OpenEXR 3.
+/* osgdb_btfexr: OpenEXR images for osgDB, built on OpenEXR 3.
  *
  * Usage: osgDB::readImageFile("x.exr"), osgviewer --image x.exr, osgconv in.png out.exr.
+ *
+ * The module is not named osgdb_exr, OpenSceneGraph's own EXR plugin (built where OSG finds
+ * OpenEXR 2), so that installing osgBTF never replaces or hides it. It claims ".exr" and the
+ * pseudo-extension ".btfexr" (x.exr.btfexr reads or writes x.exr); osgDB reaches it for ".exr"
+ * through the alias exr -> btfexr that libosgBTF registers (scene/OwnPlugins.h), through
+ * `-e btfexr` on a stock OSG program's command line, or through such a name.
  *
  * Reading: scanline or tiled, single- or multi-part files ("part=N" picks the part, default 0),
  * half/float/uint channels. The channels of one layer become the image (layer "" when the part
@@ -404,6 +410,7 @@ class ReaderWriterEXR : public osgDB::ReaderWriter {
 public:
     ReaderWriterEXR() {
         supportsExtension("exr", "OpenEXR float image");
+        supportsExtension("btfexr", "pseudo-loader: NAME.btfexr reads or writes NAME as OpenEXR");
         supportsOption("half",
                        "Write 16-bit half channels (default: half for GL_HALF_FLOAT "
                        "images, 32-bit float otherwise)");
@@ -423,15 +430,17 @@ public:
         return readImage(in, options);
     }
 
-    ReadResult readImage(const std::string& file, const Options* options) const override {
-        if (!acceptsExtension(osgDB::getLowerCaseFileExtension(file)))
+    ReadResult readImage(const std::string& name, const Options* options) const override {
+        if (!acceptsExtension(osgDB::getLowerCaseFileExtension(name)))
             return ReadResult::FILE_NOT_HANDLED;
+        const std::string file = withoutPseudoExtension(name);
         const std::string path = osgDB::findDataFile(file, options);
         if (path.empty()) return ReadResult::FILE_NOT_FOUND;
         std::ifstream in(path, std::ios::binary);
         if (!in) return ReadResult(path + ": cannot open the file");
         ReadResult result = read(in, path, options);
-        if (result.getImage()) result.getImage()->setFileName(file);
+        // The name as asked for: a scene written back reads it the same way (pseudo-name too).
+        if (result.getImage()) result.getImage()->setFileName(name);
         return result;
     }
 
@@ -439,10 +448,11 @@ public:
         return read(in, "<stream>", options);
     }
 
-    WriteResult writeImage(const osg::Image& image, const std::string& file,
+    WriteResult writeImage(const osg::Image& image, const std::string& name,
                            const Options* options) const override {
-        if (!acceptsExtension(osgDB::getLowerCaseFileExtension(file)))
+        if (!acceptsExtension(osgDB::getLowerCaseFileExtension(name)))
             return WriteResult::FILE_NOT_HANDLED;
+        const std::string file = withoutPseudoExtension(name);
         // Written under a temporary name and renamed, so a failure never leaves a partial file.
         const std::string temporary = file + ".tmp" + std::to_string(getpid());
         WriteResult result;
@@ -467,6 +477,13 @@ public:
     }
 
 private:
+    /** "x.exr.btfexr" names the file x.exr. */
+    static std::string withoutPseudoExtension(const std::string& name) {
+        return osgDB::getLowerCaseFileExtension(name) == "btfexr"
+                   ? osgDB::getNameLessExtension(name)
+                   : name;
+    }
+
     static ReadResult read(std::istream& in, const std::string& name, const Options* options) {
         try {
             if (!hasExrMagic(in)) {
@@ -502,4 +519,4 @@ private:
     }
 };
 
-REGISTER_OSGPLUGIN(exr, ReaderWriterEXR)
+REGISTER_OSGPLUGIN(btfexr, ReaderWriterEXR)

@@ -17,12 +17,19 @@ uniform ivec2 osgBTF_size;  // texels of the material
 // measured BTF image: `btf eval`); w = 0: the real eye direction.
 uniform vec4 osgBTF_fixedView = vec4(0.0);
 
-// Material::filtersBilinearly: the material's per-texel parameter textures are GL_LINEAR and
-// GL_REPEAT, and its btfEvaluate samples them at btfBilinearCoordinate when btfBilinear is set
-// (main() sets it for a fragment that reads the base texels: not a mip-mapped or coordinate-mapped
-// lookup, which stay on the nearest texel). Samples with textureLod at level 0: the lookups sit
-// in non-uniform control flow, where implicit derivatives are undefined.
+// Texel filtering (Material::texelFilter; Material::evaluateFiltered is the CPU reference). A
+// fragment shows the bilinear blend, with wrap-around, of the values of the four texels around
+// its texture coordinate (trilinear between two mip levels), in one of two ways:
+// - TexelFilter::Parameters (osgBTF_bilinear): the material's per-texel parameter textures are
+//   GL_LINEAR and GL_REPEAT, and its btfEvaluate samples them at btfBilinearCoordinate when
+//   btfBilinear is set (main() sets it for a fragment that reads the base texels: not a
+//   mip-mapped or coordinate-mapped lookup). Samples with textureLod at level 0: the lookups sit
+//   in non-uniform control flow, where implicit derivatives are undefined. One evaluation.
+// - TexelFilter::Values (osgBTF_blendTexels): main() evaluates btfEvaluate at each of the four
+//   texels (per level) and blends the values; no method's shader takes part.
+// Neither set (or a coordinate map): the nearest texel (of each of two levels).
 uniform bool osgBTF_bilinear = false;
+uniform bool osgBTF_blendTexels = false;
 bool btfBilinear = false;
 vec2 btfBilinearCoordinate = vec2(0.0);
 
@@ -86,27 +93,69 @@ ivec2 btfTexel(vec2 uv) {
 }
 #endif
 
+// The texels a fragment evaluates and their shares of its value (at most four per level, two
+// levels), in the order Material::evaluateFiltered adds them up. Texels of weight 0 are left out.
+const int btfMaxTaps = 8;
+ivec2 btfTapTexel[btfMaxTaps];
+float btfTapWeight[btfMaxTaps];
+int btfTapCount = 0;
+
+void btfAddTap(ivec2 texel, float weight) {
+    if (weight > 0.0) {
+        btfTapTexel[btfTapCount] = texel;
+        btfTapWeight[btfTapCount] = weight;
+        ++btfTapCount;
+    }
+}
+
+#ifndef OSGBTF_COORDINATE_MAP
+/** The four texels of `level` around uv, wrapped inside the level's rectangle of the atlas (the
+ *  hardware's GL_REPEAT would wrap at the atlas's edge), with GL_LINEAR's weights: texel centres
+ *  at (i + 0.5) / size, weights frac(uv size - 0.5); times `share`. */
+void btfAddBilinearTaps(vec2 uv, int level, float share) {
+    ivec4 r = osgBTF_mipLevel[level];
+    vec2 s = fract(uv) * vec2(r.zw) - 0.5;
+    vec2 first = floor(s);
+    vec2 w = s - first;
+    ivec2 i0 = min(ivec2(first), r.zw - ivec2(1));
+    // Left of (below) the first centre: the other neighbour is the last texel.
+    i0 = ivec2(i0.x < 0 ? r.z - 1 : i0.x, i0.y < 0 ? r.w - 1 : i0.y);
+    ivec2 i1 = ivec2(i0.x + 1 == r.z ? 0 : i0.x + 1, i0.y + 1 == r.w ? 0 : i0.y + 1);
+    btfAddTap(r.xy + i0, share * (1.0 - w.x) * (1.0 - w.y));
+    btfAddTap(r.xy + ivec2(i1.x, i0.y), share * w.x * (1.0 - w.y));
+    btfAddTap(r.xy + ivec2(i0.x, i1.y), share * (1.0 - w.x) * w.y);
+    btfAddTap(r.xy + i1, share * w.x * w.y);
+}
+#endif
+
 void main() {
     vec3 t, b, n;
     btfSurfaceFrame(t, b, n);
     vec3 view = btfLocalView(t, b, n);
-    ivec2 texel = btfTexel(btfTexCoord);
-    // A mip-mapped material blends the nearest texels of two levels, as GL_LINEAR_MIPMAP_LINEAR
-    // (Material::evaluateFiltered is the CPU reference); magnified fragments evaluate once.
-    ivec2 coarserTexel = texel;
-    float coarserWeight = 0.0;
 #ifndef OSGBTF_COORDINATE_MAP
+    // A mip-mapped material blends two levels as GL_LINEAR_MIPMAP_LINEAR: levels floor(lod) and
+    // the next, by lod - floor(lod); magnified fragments read level 0 alone.
     float lod = btfMipLod(btfTexCoord);
+    int level = 0;
+    float coarserWeight = 0.0;
     if (osgBTF_mipLevels > 1) {
         // NaN (no derivative) or negative: level 0.
         lod = lod > 0.0 ? min(lod, float(osgBTF_mipLevels - 1)) : 0.0;
-        int level = int(floor(lod));
-        texel = btfLevelTexel(btfTexCoord, level);
-        coarserTexel = btfLevelTexel(btfTexCoord, min(level + 1, osgBTF_mipLevels - 1));
+        level = int(floor(lod));
         coarserWeight = lod - float(level);
+    }
+    int coarser = min(level + 1, osgBTF_mipLevels - 1);
+    if (osgBTF_blendTexels) {
+        btfAddBilinearTaps(btfTexCoord, level, 1.0 - coarserWeight);
+        if (coarserWeight > 0.0) btfAddBilinearTaps(btfTexCoord, coarser, coarserWeight);
+    } else {
+        btfAddTap(btfLevelTexel(btfTexCoord, level), 1.0 - coarserWeight);
+        if (coarserWeight > 0.0) btfAddTap(btfLevelTexel(btfTexCoord, coarser), coarserWeight);
     }
     btfBilinear = osgBTF_bilinear && osgBTF_mipLevels <= 1;
     btfBilinearCoordinate = btfTexCoord;
+#else
+    btfAddTap(btfTexel(btfTexCoord), 1.0);
 #endif
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {
@@ -118,9 +167,9 @@ void main() {
             float visible = btfTerminatorFactor(i) * btfShadowFactor(i) * btfLightVisibility[i];
             // Skipped when dark: shadowed lights cost no method evaluation.
             if (visible > 0.0) {
-                vec3 value = btfEvaluate(texel, view, light);
-                if (coarserWeight > 0.0)
-                    value = mix(value, btfEvaluate(coarserTexel, view, light), coarserWeight);
+                vec3 value = vec3(0.0);
+                for (int k = 0; k < btfTapCount; ++k)
+                    value += btfTapWeight[k] * btfEvaluate(btfTapTexel[k], view, light);
                 color += visible * osgBTF_lightColor[i] * value;
             }
         }

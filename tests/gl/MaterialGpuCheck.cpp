@@ -11,6 +11,7 @@
 
 #include "core/ShaderSource.h"
 #include "harness/PassCost.h"
+#include "materials/ShaderInterface.h"
 #include "materials/ptm/Ptm.h"
 
 #include "tests/gl/GlTestEnv.h"
@@ -127,7 +128,6 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& 
     // Pixel centre -> the eye ray in patch coordinates, through the inverse of the whole chain.
     const osg::Matrixd clipToWorld = osg::Matrixd::inverse(camera.view * camera.projection);
     const osg::Matrixd worldToPatch = osg::Matrixd::inverse(render.model);
-    const bool filtered = material.filtersBilinearly();
     GpuCpuComparison result;
     for (int j = 0; j < camera.height; ++j) {
         for (int i = 0; i < camera.width; ++i) {
@@ -142,20 +142,16 @@ GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& 
             const double t = a.y() + (b.y() - a.y()) * along;
             if (!(s > 0 && s < 1 && t > 0 && t < 1)) continue;
             const double u = s * render.textureScale, v = t * render.textureScale;
+            // Every material is filtered (Material::evaluateFiltered): no texel edge is a step,
+            // every pixel compares.
             const double fs = u * material.width(), ft = v * material.height();
-            const double edge = 0.2;  // skip pixels whose centre is near a texel edge
-            // Filtered, no texel edge is a step: every pixel compares.
-            if (!filtered && (fs - std::floor(fs) < edge || std::ceil(fs) - fs < edge ||
-                              ft - std::floor(ft) < edge || std::ceil(ft) - ft < edge))
-                continue;
             const glm::dvec3 toEye = glm::normalize(toGlm(nearWorld - farWorld));
             const glm::vec3 view(glm::dot(toEye, frame[0]), glm::dot(toEye, frame[1]),
                                  glm::dot(toEye, frame[2]));
             if (view.z <= 0.0f) continue;  // the back of the patch renders black
             const int tx = int(fs) % material.width(), ty = int(ft) % material.height();
             const glm::vec3 expected =
-                filtered ? material.evaluateFiltered(float(u), float(v), 0.0f, view, light)
-                         : material.evaluate(tx, ty, view, light);
+                material.evaluateFiltered(float(u), float(v), 0.0f, view, light);
             for (int c = 0; c < 3; ++c) {
                 const double d = std::abs(double(pixel(*image, i, j, c)) - expected[c]);
                 if (!(d <= result.maxAbsDifference)) {
@@ -226,8 +222,11 @@ ProbedRender renderProbed(const Material& material, osg::Drawable* drawable,
     out.shaded.resize(n);
     for (const char* pass :
          {"", "osgbtf-probe-view", "osgbtf-probe-light", "osgbtf-probe-texel", "osgbtf-probe-uv"}) {
-        if (*pass)
+        if (*pass) {
             stateSet->setAttributeAndModes(methodProgram(pass).get(), osg::StateAttribute::ON);
+            // A probe reports its fragment's nearest texel and inputs, not a blend of them.
+            stateSet->addUniform(new osg::Uniform(shader::kBlendTexels, false));
+        }
         osg::ref_ptr<osg::Image> image = sharedRenderer().render(geode.get(), camera);
         for (int y = 0; y < out.height; ++y)
             for (int x = 0; x < out.width; ++x) {
@@ -271,9 +270,7 @@ GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRend
             const glm::ivec2 t = render.texel[i];
             const glm::vec2 uv = render.uv[i];
             const glm::vec3 expected =
-                material.filtersBilinearly()
-                    ? material.evaluateFiltered(uv.x, uv.y, 0.0f, render.view[i], render.light[i])
-                    : material.evaluate(t.x, t.y, render.view[i], render.light[i]);
+                material.evaluateFiltered(uv.x, uv.y, 0.0f, render.view[i], render.light[i]);
             for (int c = 0; c < 3; ++c) {
                 const double d = std::abs(double(render.color[i][c]) - expected[c]);
                 if (!(d <= result.maxAbsDifference)) {

@@ -1,7 +1,7 @@
 // GPU == CPU check shared by every method's tests: render a flat patch of the material under a
 // model transform and a camera (orthographic or perspective) with one directional light into a
-// float FBO, and compare each pixel with Material::evaluate for the texel it shows (a filtering
-// material: Material::evaluateFiltered at its texture coordinate), seen from the direction its
+// float FBO, and compare each pixel with Material::evaluateFiltered at its texture coordinate
+// (every material is filtered), seen from the direction its
 // own eye ray comes from, in the surface frame the shader must build.
 #pragma once
 
@@ -65,9 +65,8 @@ PatchRender magnifiedPatchRender(const Material& material, const glm::vec2& cent
 
 /** Renders the patch as `render` says and compares every pixel whose centre is on the patch with
  *  the CPU reference (view = the pixel's eye ray reversed, light = `toLight`, both in
- *  patchFrame(model)): for a material that Material::filtersBilinearly, evaluateFiltered at the
- *  pixel's texture coordinate; otherwise evaluate at the texel it shows, skipping pixels close
- *  to a texel edge. Uses sharedRenderer(). */
+ *  patchFrame(model)): Material::evaluateFiltered at the pixel's texture coordinate, level 0 (the
+ *  texels around it, blended). Uses sharedRenderer(). */
 GpuCpuComparison compareGpuWithCpu(const Material& material, const PatchRender& render);
 
 /** The flat patch seen orthographically from `view`, lit from `light` (local unit vectors). */
@@ -99,9 +98,8 @@ ProbedRender renderProbed(const Material& material, osg::Drawable* drawable,
 ProbedRender renderProbedSphere(const Material& material, const SphereSetting& setting, int size,
                                 float textureScale);
 
-/** Every shaded pixel of `render` against the CPU reference at its own directions: at its own
- *  texel (Material::evaluate), or for a material that Material::filtersBilinearly at its own
- *  texture coordinate (Material::evaluateFiltered: the texels around it, blended). */
+/** Every shaded pixel of `render` against the CPU reference at its own directions and texture
+ *  coordinate (Material::evaluateFiltered at level 0: the texels around it, blended). */
 GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRender& render);
 
 /** The GPU-CPU bound of a PTM material: GPU and CPU run the same float operations and may differ

@@ -1,8 +1,10 @@
-// Bilinear filtering with wrap-around (issue 29 section 1) for the methods whose value is linear in
-// their per-texel parameters (MethodInfo::filtersLinearly: lambert, pca, ptm, fmf): a magnified
-// view (4 x 4 texels over 64 x 64 pixels) and one straddling the texture's wrap edge (texture
-// coordinates beyond 1) equal Material::evaluateFiltered at every pixel, within the tolerance of
-// each method's own GPU == CPU test.
+// Bilinear filtering with wrap-around (issue 29 section 1) for every method, both ways
+// (Material::TexelFilter): the methods whose value is linear in their per-texel parameters filter
+// those (lambert, pca, ptm, fmf), the others have btf_main.glsl blend four evaluations (laf, slaf,
+// rf, lpca, lpca-revised, ptm's luminance variant). A magnified view (4 x 4 texels over 64 x 64
+// pixels) and one straddling the texture's wrap edge (texture coordinates beyond 1) equal
+// Material::evaluateFiltered at every pixel, within the tolerance of each method's own GPU == CPU
+// test.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -49,8 +51,9 @@ float largest(const glm::vec3& v) {
 
 /** Renders the magnified views and the wrap edge; `tolerance` for a (view, light). */
 void expectFilteredGpuEqualsCpu(const Material& m, const std::string& name,
-                                const std::function<double(const glm::vec3&)>& tolerance) {
-    ASSERT_TRUE(m.filtersBilinearly()) << name;
+                                const std::function<double(const glm::vec3&)>& tolerance,
+                                Material::TexelFilter filter = Material::TexelFilter::Parameters) {
+    ASSERT_EQ(m.texelFilter(), filter) << name;
     const glm::vec3 top(0, 0, 1);
     double worstMagnified = 0, worstWrap = 0;
     for (const Direction& l : {Direction{45, 20}, Direction{60, 126}, Direction{0, 0}}) {
@@ -109,14 +112,27 @@ TEST(BilinearFilterGpu, PtmMatchesCpu) {
     }
 }
 
-TEST(BilinearFilterGpu, PtmLuminanceStaysOnTheNearestTexel) {
+TEST(BilinearFilterGpu, PtmLuminanceBlendsTexelValues) {
     // Colour times luminance: a product of two per-texel parameters, which filtering them would
-    // not blend; the material reads the nearest texel as before.
+    // not blend; btf_main.glsl blends the four texels' values instead.
     osg::ref_ptr<PtmMaterial> m = PtmMaterial::fit(sample(), FitOptions::parse("colour=luminance"));
-    EXPECT_FALSE(m->filtersBilinearly());
-    const glm::vec3 top(0, 0, 1), light = Direction{45, 20}.toVector();
-    EXPECT_EQ(m->evaluateFiltered(2.0f / kWidth + 1e-3f, 2.5f / kHeight, 0.0f, top, light),
-              m->evaluate(2, 2, top, light));
+    const double bound = test::ptmGpuTolerance(*m);
+    expectFilteredGpuEqualsCpu(
+        *m, "ptm [colour=luminance]", [&](const glm::vec3&) { return bound; },
+        Material::TexelFilter::Values);
+}
+
+TEST(BilinearFilterGpu, MethodsNotLinearInTheirParametersBlendTexelValues) {
+    // Lafortune exponents, cluster ids: btf_main.glsl evaluates the four texels and blends, the
+    // methods' shaders unchanged. The tolerance of their own GPU == CPU tests (float data).
+    for (const std::string& name : methodNamesInOrder()) {
+        const MethodInfo& method = findMethod(name);
+        if (method.filtersParameters) continue;
+        const osg::ref_ptr<Material> m =
+            method.fit(sample(), FitOptions::parse(method.quickFitOptions));
+        expectFilteredGpuEqualsCpu(
+            *m, name, [](const glm::vec3&) { return 1e-3; }, Material::TexelFilter::Values);
+    }
 }
 
 TEST(BilinearFilterGpu, FmfMatchesCpuWithDecodingAfterTheBlend) {

@@ -26,6 +26,7 @@
 #include <osgDB/ReadFile>
 #include <osgShadow/ShadowMap>
 #include <osgShadow/ShadowedScene>
+#include <osgText/TextBase>
 #include <osgViewer/Renderer>
 
 #include "harness/sample/BlockMap.h"
@@ -275,6 +276,48 @@ TEST(GlErrors, EveryMethodDrawsTheSameInTheTexturesOfADeletedEqualMaterialWithou
         EXPECT_EQ(watch.take(), "");
         EXPECT_GT(drawnPixels(*second), 0);
         EXPECT_EQ(maxDifference(*first, *second), 0.0);
+    }
+}
+
+// A context closed after its scene was taken out (as HeadlessRenderer does after every render)
+// released nothing of the process-wide method programs, which then still held its program
+// objects; the next context given the same context ID drew with those dead objects
+// (GL_INVALID_VALUE at every draw): `btf-examples --gallery`, rendering after `btf compare`'s
+// renderer had closed. A context of its own per round: the second gets the first one's ID.
+TEST(GlErrors, EveryMethodDrawsTheSameInAContextOpenedAfterAnotherClosed) {
+    const MeasuredBtf sample = smallSampleBtf(8);
+    std::vector<osg::ref_ptr<osg::Node>> scenes;
+    for (const std::string& name : methodNames()) {
+        // Without the labels: osgText's glyph textures are not osgBTF's to release.
+        osg::ref_ptr<osg::Node> scene = spheresWith(quickFit(name, sample).get());
+        for (const auto& geode : collect<osg::Geode>(*scene))
+            for (unsigned i = geode->getNumDrawables(); i-- > 0;)
+                if (dynamic_cast<osgText::TextBase*>(geode->getDrawable(i)))
+                    geode->removeDrawables(i, 1);
+        scenes.push_back(scene);
+    }
+    GlErrorWatch watch;
+    std::vector<osg::ref_ptr<osg::Image>> rounds[2];
+    unsigned contextIds[2] = {0, 0};
+    for (int round = 0; round < 2; ++round) {
+        HeadlessRenderer renderer(sharedRenderer().backend());
+        renderer.context().getState()->setCheckForGLErrors(osg::State::ONCE_PER_ATTRIBUTE);
+        contextIds[round] = renderer.context().getState()->getContextID();
+        for (const osg::ref_ptr<osg::Node>& scene : scenes) {
+            renderer.setScene(scene.get());
+            renderer.setCamera(cameraOnto(*scene));
+            renderer.render();
+            rounds[round].push_back(renderer.render());
+            renderer.setScene(nullptr);
+        }
+    }
+    ASSERT_EQ(contextIds[0], contextIds[1]) << "the second context did not reuse the first's ID";
+    EXPECT_EQ(watch.take(), "");
+    const std::vector<std::string> names = methodNames();
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        SCOPED_TRACE(names[i]);
+        EXPECT_GT(drawnPixels(*rounds[1][i]), 0);
+        EXPECT_EQ(maxDifference(*rounds[0][i], *rounds[1][i]), 0.0);
     }
 }
 

@@ -91,11 +91,9 @@ Comparison compareWithCpu(const osg::Image& image, const Material& material, con
                 ft - std::floor(ft) < edge || std::ceil(ft) - ft < edge)
                 continue;
             const glm::vec3 light(kToLight.x(), kToLight.y(), kToLight.z());
-            // A filtering material blends the texels around the pixel's coordinate.
+            // Filtered: the texels around the pixel's coordinate, blended.
             const glm::vec3 value =
-                material.filtersBilinearly()
-                    ? material.evaluateFiltered(float(p.x()), float(p.y()), 0.0f, view.toEye, light)
-                    : material.evaluate(int(fs), int(ft), view.toEye, light);
+                material.evaluateFiltered(float(p.x()), float(p.y()), 0.0f, view.toEye, light);
             for (int c = 0; c < 3; ++c) {
                 const double expected = double(kLightColor[c]) * value[c];
                 const double d = std::abs(double(pixel(image, i, j, c)) - expected);

@@ -207,11 +207,9 @@ Comparison compareWithCpu(const osg::Image& image, const Material& material, con
                 toLight.normalize();
                 const glm::vec3 l(toLight.x(), toLight.y(), toLight.z());
                 if (l.z <= 0) continue;
-                // A filtering material blends the texels around the pixel's coordinate.
+                // Filtered: the texels around the pixel's coordinate, blended.
                 const glm::vec3 value =
-                    material.filtersBilinearly()
-                        ? material.evaluateFiltered(float(s), float(t), 0.0f, camera.toEye, l)
-                        : material.evaluate(int(fs), int(ft), camera.toEye, l);
+                    material.evaluateFiltered(float(s), float(t), 0.0f, camera.toEye, l);
                 expected += glm::vec3(light.color.x(), light.color.y(), light.color.z()) * value;
             }
             for (int c = 0; c < 3; ++c) {

@@ -572,10 +572,11 @@ TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
     const fs::path include = prefix.path() / "include" / "osgBTF";
     for (const fs::path& file :
          {lib / "libosgBTF.so", plugins / "osgdb_btfmat.so", plugins / "osgdb_btf.so",
-          plugins / "osgdb_zip.so", plugins / "osgdb_btfmaterial.so", plugins / "osgdb_exr.so",
-          plugins / "osgdb_serializers_osgbtf.so", prefix.path() / "bin" / "btf",
-          prefix.path() / "bin" / "btfviewer", prefix.path() / "bin" / "btf-examples",
-          include / "MaterialNode", include / "scene" / "MaterialNode.h", include / "Version",
+          plugins / "osgdb_btfzip.so", plugins / "osgdb_btfmaterial.so",
+          plugins / "osgdb_btfexr.so", plugins / "osgdb_serializers_osgbtf.so",
+          prefix.path() / "bin" / "btf", prefix.path() / "bin" / "btfviewer",
+          prefix.path() / "bin" / "btf-examples", include / "MaterialNode",
+          include / "scene" / "MaterialNode.h", include / "Version",
           lib / "cmake" / "osgBTF" / "osgBTFConfig.cmake",
           lib / "cmake" / "osgBTF" / "osgBTFConfigVersion.cmake",
           lib / "cmake" / "osgBTF" / "osgBTFTargets.cmake", lib / "pkgconfig" / "osgBTF.pc"})

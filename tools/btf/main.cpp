@@ -58,7 +58,7 @@ void dieWithParent() {
 int main(int argc, char** argv) {
     using namespace osgBTF;
     dieWithParent();
-    useOwnPlugins();  // osgdb_exr for --env sky.exr, without OSG_LIBRARY_PATH
+    useOwnPlugins();  // osgdb_btfexr for --env sky.exr, without OSG_LIBRARY_PATH
     CLI::App app{
         "btf: measured Bidirectional Texture Functions for OpenSceneGraph.\n"
         "Reads UBO2003/ATRIUM zips or folders, UBO2014 .btf files; writes the built-in sample."};

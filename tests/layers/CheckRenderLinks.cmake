@@ -1,0 +1,137 @@
+# ctest layers.render_links: rendering a fitted material loads no fitter and no HTTP client of
+# osgBTF's (libosgBTFStreaming; libcurl neither in NEEDED nor used: no curl_ symbol. Debian's
+# OpenImageIO brings libcurl into the closure through GDAL, which is not osgBTF's to change, so
+# ldd is not asked about libcurl). The render library
+# (libosgBTF) and the render plugin (osgdb_btfmat) must not need Ceres or glog, not even through
+# another library (ldd: the whole closure), and must not need libosgBTFFit (readelf: NEEDED);
+# libosgBTF must not use a symbol libosgBTFFit defines (the fitting code lives there only) nor
+# export Ceres code (Debian's CMake package links Ceres statically: its code would be inside, and
+# only glog in NEEDED). So that the check can fail, the same probes must find glog or Ceres behind
+# libosgBTFFit, Ceres code in it, and libosgBTFFit in a plugin that fits on load (osgdb_btf).
+#   cmake -DRENDER_LIBRARY=<libosgBTF> -DRENDER_PLUGIN=<osgdb_btfmat>
+#         -DFIT_LIBRARY=<libosgBTFFit> -DFIT_PLUGIN=<osgdb_btf>
+#         -DSTREAMING_LIBRARY=<libosgBTFStreaming> -P CheckRenderLinks.cmake
+cmake_minimum_required(VERSION 3.22)
+set(fitting_pattern "ceres|glog|osgBTFFit|osgBTFStreaming")  # NEEDED and ldd
+set(direct_pattern "${fitting_pattern}|curl")                   # NEEDED only
+set(RENDER ${RENDER_LIBRARY} ${RENDER_PLUGIN})
+
+function(needed file out)  # the DT_NEEDED entries of `file`
+  execute_process(COMMAND readelf -d ${file} OUTPUT_VARIABLE text RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "readelf -d ${file} failed (${rc})")
+  endif()
+  string(REGEX MATCHALL "\\(NEEDED\\)[^[]*\\[[^]]+\\]" entries "${text}")
+  list(TRANSFORM entries REPLACE ".*\\[([^]]+)\\]" "\\1")
+  set(${out} "${entries}" PARENT_SCOPE)
+endfunction()
+
+function(closure file out)  # every library the loader brings in for `file` (ldd)
+  execute_process(COMMAND ldd ${file} OUTPUT_VARIABLE text RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "ldd ${file} failed (${rc})")
+  endif()
+  string(REGEX MATCHALL "[^ \t\n]+\\.so[^ \t\n]*" entries "${text}")
+  set(${out} "${entries}" PARENT_SCOPE)
+endfunction()
+
+function(dynamic_symbols file mode out)  # mode: --defined-only or --undefined-only
+  execute_process(COMMAND nm -D ${mode} ${file} OUTPUT_VARIABLE text RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "nm -D ${mode} ${file} failed (${rc})")
+  endif()
+  string(REGEX MATCHALL "[^ \t\n]+\n" symbols "${text}")
+  list(TRANSFORM symbols STRIP)
+  set(${out} "${symbols}" PARENT_SCOPE)
+endfunction()
+
+set(problems)
+foreach(file IN LISTS RENDER)
+  get_filename_component(name ${file} NAME)
+  needed(${file} direct)
+  closure(${file} all)
+  foreach(library IN LISTS direct)
+    if(library MATCHES "${direct_pattern}")
+      list(APPEND problems "${name} needs ${library}: rendering must not load a fitter or an "
+                           "HTTP client")
+    endif()
+  endforeach()
+  foreach(library IN LISTS all)
+    if(library MATCHES "${fitting_pattern}")
+      list(APPEND problems "${name} needs ${library}: rendering must not load a fitter or an "
+                           "HTTP client")
+    endif()
+  endforeach()
+endforeach()
+
+# No symbol of the render library is left for libosgBTFFit or libosgBTFStreaming to define.
+set(render_library ${RENDER_LIBRARY})
+dynamic_symbols(${render_library} --undefined-only render_undefined)
+foreach(symbol IN LISTS render_undefined)
+  if(symbol MATCHES "^curl_")
+    list(APPEND problems "${render_library} uses ${symbol} (libcurl)")
+  endif()
+endforeach()
+foreach(upper IN ITEMS ${FIT_LIBRARY} ${STREAMING_LIBRARY})
+  get_filename_component(upper_name ${upper} NAME)
+  dynamic_symbols(${upper} --defined-only upper_defined)
+  list(LENGTH upper_defined upper_defined_count)
+  if(upper_defined_count EQUAL 0)
+    list(APPEND problems "nm -D found no symbols in ${upper}: the probe is broken")
+  endif()
+  foreach(symbol IN LISTS render_undefined)
+    if(symbol IN_LIST upper_defined)
+      list(APPEND problems "${render_library} uses ${symbol}, which ${upper_name} defines")
+    endif()
+  endforeach()
+endforeach()
+
+function(exports_ceres file out)  # whether `file` exports symbols of namespace ceres
+  execute_process(COMMAND nm -DC --defined-only ${file} OUTPUT_VARIABLE text RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "nm -DC --defined-only ${file} failed (${rc})")
+  endif()
+  string(FIND "${text}" "ceres::" at)
+  if(at EQUAL -1)
+    set(${out} FALSE PARENT_SCOPE)
+  else()
+    set(${out} TRUE PARENT_SCOPE)
+  endif()
+endfunction()
+exports_ceres(${render_library} render_ceres)
+if(render_ceres)
+  list(APPEND problems "${render_library} exports symbols of Ceres (nm -DC | grep ceres::)")
+endif()
+
+# The probes can fail: the fitting side shows what the render side must not.
+needed(${FIT_LIBRARY} fit_direct)
+if(NOT fit_direct MATCHES "ceres|glog")
+  list(APPEND problems "readelf finds neither Ceres nor glog in ${FIT_LIBRARY}'s NEEDED (${fit_direct})")
+endif()
+exports_ceres(${FIT_LIBRARY} fit_ceres)
+if(NOT fit_ceres)
+  list(APPEND problems "nm finds no Ceres code in ${FIT_LIBRARY}")
+endif()
+needed(${FIT_PLUGIN} plugin_direct)
+if(NOT plugin_direct MATCHES "osgBTFFit")
+  list(APPEND problems "readelf finds no libosgBTFFit in ${FIT_PLUGIN}'s NEEDED (${plugin_direct})")
+endif()
+closure(${FIT_PLUGIN} plugin_all)
+if(NOT plugin_all MATCHES "ceres|glog")
+  list(APPEND problems "ldd finds neither Ceres nor glog behind ${FIT_PLUGIN}")
+endif()
+dynamic_symbols(${STREAMING_LIBRARY} --undefined-only streaming_undefined)
+if(NOT streaming_undefined MATCHES "(^|;)curl_")
+  list(APPEND problems "nm finds no curl_ symbol used by ${STREAMING_LIBRARY}")
+endif()
+needed(${STREAMING_LIBRARY} streaming_direct)
+if(NOT streaming_direct MATCHES "curl")
+  list(APPEND problems "readelf finds no libcurl in ${STREAMING_LIBRARY}'s NEEDED (${streaming_direct})")
+endif()
+
+if(problems)
+  list(REMOVE_DUPLICATES problems)
+  list(JOIN problems "\n  " text)
+  message(FATAL_ERROR "render link check failed:\n  ${text}")
+endif()
+message(STATUS "render library and render plugin load no fitter and no HTTP client")
