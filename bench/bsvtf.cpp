@@ -155,7 +155,8 @@ int main(int argc, char** argv) {
         const TileBuildReport r = buildTileSet(*fmf, folder, build);
         const double buildSeconds = since(start);
         std::printf(
-            "## Preprocessing (seed 003 Table 1: 512^2, C = 100: 1 min single-threaded)\n\n"
+            "## Preprocessing (Schwartz et al. 2013, Table 1: 512^2, C = 100: 1 min "
+            "single-threaded)\n\n"
             "| texels | C | tiles | levels | raw tiles | coded tiles | ratio | U | "
             "seconds |\n|---|---|---|---|---|---|---|---|---|\n"
             "| %d^2 | %d | %zu | %d | %.1f MiB | %.2f MiB | %.1f:1 | %.2f MiB | %.2f |\n\n",
@@ -168,7 +169,7 @@ int main(int argc, char** argv) {
         std::printf("GL renderer: %s\n\n", renderer.glRenderer().c_str());
         const CameraSetup camera = orthoUnitSquare(width, height);
         std::printf(
-            "## GPU memory and frame time (seed 003 Table 2), %dx%d\n\n"
+            "## GPU memory and frame time (Schwartz et al. 2013, Table 2), %dx%d\n\n"
             "| materials | fmf memory | BSVTF memory | fmf ms | BSVTF ms | BSVTF frames to "
             "converge |\n|---|---|---|---|---|---|\n",
             width, height);
@@ -224,7 +225,8 @@ int main(int argc, char** argv) {
         const std::vector<float>& converged = progress.back().second;
         const float peak = *std::max_element(converged.begin(), converged.end());
         std::printf(
-            "\n## Progressive streaming, %d materials from scratch (seed 003 Fig. 5: SSIM "
+            "\n## Progressive streaming, %d materials from scratch (Schwartz et al. 2013, Fig. 5: "
+            "SSIM "
             "95.4 %% after 25 MB), at most %d new files per frame\n\n| frame | MiB received | SSIM "
             "to converged |\n"
             "|---|---|---|\n",

@@ -32,7 +32,8 @@ endforeach()
 find_package(Eigen3 3.4 CONFIG REQUIRED)
 find_package(Ceres CONFIG REQUIRED)
 find_package(TBB CONFIG REQUIRED)
-# Per-vertex environment visibility (scene/VertexEnvironment.h): Debian's libembree-dev 3.13.
+# Per-vertex environment visibility (scene/VertexEnvironment.h, libosgBTFEnvironment only):
+# Debian's libembree-dev 3.13.
 find_package(embree 3 CONFIG REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)
 find_package(nlohmann_json 3 CONFIG REQUIRED)

@@ -1,10 +1,10 @@
 # `cpack -G DEB` in a build configured with -DCMAKE_INSTALL_PREFIX=/usr: the package osgbtf
 # (osgbtf_<version>_<arch>.deb) with everything `cmake --install` puts in place, under /usr:
-# libosgBTF, libosgBTFFit and libosgBTFStreaming in /usr/lib/<multiarch>, the plugins in
-# /usr/lib/<multiarch>/osgPlugins-<OSG version>
-# (where Debian's OSG looks first, so stock osgviewer needs no OSG_LIBRARY_PATH), the tools in
-# /usr/bin, the SDK (headers, CMake package, pkg-config files). Library dependencies come from
-# dpkg-shlibdeps (package dpkg-dev); the -dev packages the SDK's headers need are recommended.
+# libosgBTF, libosgBTFFit, libosgBTFStreaming and libosgBTFEnvironment in /usr/lib/<multiarch>,
+# the plugins in /usr/lib/<multiarch>/osgPlugins-<OSG version> (where Debian's OSG looks first,
+# so stock osgviewer needs no OSG_LIBRARY_PATH), the tools in /usr/bin, the SDK (headers, CMake
+# package, pkg-config files). Library dependencies come from dpkg-shlibdeps (package dpkg-dev);
+# the -dev packages the SDK's headers need are recommended.
 # cpack installs from this build: it builds nothing that is not built already.
 set(CPACK_PACKAGE_NAME osgbtf)
 set(CPACK_PACKAGE_VENDOR osgBTF)
@@ -15,7 +15,7 @@ set(CPACK_PACKAGE_DESCRIPTION
     "osgBTF renders measured Bidirectional Texture Functions in OpenSceneGraph: osgDB plugins for
 fitted and measured BTFs (stock osgviewer and osgconv read them), libosgBTF with
 osgBTF::MaterialNode, libosgBTFFit with the fitters and the fit cache, libosgBTFStreaming
-with BSVTF streaming, their headers, CMake
+with BSVTF streaming, libosgBTFEnvironment with environment lighting, their headers, CMake
 package and pkg-config files, and the btf, btfviewer and btf-examples tools.")
 set(CPACK_PACKAGE_CONTACT "osgBTF maintainers <osgbtf@localhost>")
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
@@ -23,8 +23,8 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION graphics)
 set(CPACK_STRIP_FILES ON)  # as Debian packages are (debug info would triple the size)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-# libosgBTF, libosgBTFFit and libosgBTFStreaming are in the package itself: dpkg-shlibdeps finds
-# them there for the tools and plugins.
+# libosgBTF, libosgBTFFit, libosgBTFStreaming and libosgBTFEnvironment are in the package itself:
+# dpkg-shlibdeps finds them there for the tools and plugins.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${CMAKE_INSTALL_LIBDIR})
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
     "libopenscenegraph-dev, libglm-dev, libimath-dev, libeigen3-dev, openscenegraph")

@@ -5,14 +5,19 @@
 #   <libdir>/libosgBTF.so*          the runtime library (rendering fitted materials)
 #   <libdir>/libosgBTFFit.so*       the fitters and the fit cache, on top of it (Ceres inside)
 #   <libdir>/libosgBTFStreaming.so* streaming (BSVTF tile sets, HTTP with libcurl), on top of it
+#   <libdir>/libosgBTFEnvironment.so* environment lighting (per-vertex visibility with Embree,
+#                                   EnvironmentLitGroup), on top of it
 #   <libdir>/cmake/osgBTF/          osgBTFConfig.cmake (+ version file): find_package(osgBTF) gives
 #                                   osgBTF::osgBTF with its OSG/GLM/Imath/Eigen usage requirements,
 #                                   osgBTF::osgBTFFit for programs that fit, and
-#                                   osgBTF::osgBTFStreaming for programs that stream
-#   <libdir>/pkgconfig/osgBTF.pc, osgBTFFit.pc, osgBTFStreaming.pc
-# The headers of both libraries share include/osgBTF: a method's static fit() is declared in its
+#                                   osgBTF::osgBTFStreaming for programs that stream,
+#                                   osgBTF::osgBTFEnvironment for programs that light scenes by
+#                                   an HDR environment
+#   <libdir>/pkgconfig/osgBTF.pc, osgBTFFit.pc, osgBTFStreaming.pc, osgBTFEnvironment.pc
+# The headers of all libraries share include/osgBTF: a method's static fit() is declared in its
 # header and defined in libosgBTFFit (materials/<name>/<Name>Fit.cpp), as are fitMipMapped
-# (<osgBTF/materials/MipMapping.h>) and the fit cache (<osgBTF/FitCache>).
+# (<osgBTF/materials/MipMapping.h>) and the fit cache (<osgBTF/FitCache>); the functions of
+# <osgBTF/scene/VertexEnvironment.h> and <osgBTF/EnvironmentLitGroup> are libosgBTFEnvironment's.
 # The headers are generated into <build>/sdk/include at build time (target osgbtf_sdk_headers);
 # osgbtf_sdk_check compiles every one of them with nothing but that folder and the public
 # dependencies on the include path, so a header that needs a source-tree path or a private
@@ -84,7 +89,7 @@ add_dependencies(osgbtf_sdk_check osgbtf_sdk_headers)
 
 # ---- install -----------------------------------------------------------------------------
 set(OSGBTF_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/osgBTF)
-install(TARGETS osgBTF osgBTFFit osgBTFStreaming EXPORT osgBTFTargets
+install(TARGETS osgBTF osgBTFFit osgBTFStreaming osgBTFEnvironment EXPORT osgBTFTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${OSGBTF_SDK_DIR}/include/osgBTF DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(EXPORT osgBTFTargets NAMESPACE osgBTF:: DESTINATION ${OSGBTF_CMAKE_DIR})
@@ -101,6 +106,8 @@ configure_file(${CMAKE_SOURCE_DIR}/cmake/osgBTF.pc.in ${OSGBTF_SDK_DIR}/osgBTF.p
 configure_file(${CMAKE_SOURCE_DIR}/cmake/osgBTFFit.pc.in ${OSGBTF_SDK_DIR}/osgBTFFit.pc @ONLY)
 configure_file(${CMAKE_SOURCE_DIR}/cmake/osgBTFStreaming.pc.in ${OSGBTF_SDK_DIR}/osgBTFStreaming.pc
                @ONLY)
+configure_file(${CMAKE_SOURCE_DIR}/cmake/osgBTFEnvironment.pc.in
+               ${OSGBTF_SDK_DIR}/osgBTFEnvironment.pc @ONLY)
 install(FILES ${OSGBTF_SDK_DIR}/osgBTF.pc ${OSGBTF_SDK_DIR}/osgBTFFit.pc
-              ${OSGBTF_SDK_DIR}/osgBTFStreaming.pc
+              ${OSGBTF_SDK_DIR}/osgBTFStreaming.pc ${OSGBTF_SDK_DIR}/osgBTFEnvironment.pc
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

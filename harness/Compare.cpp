@@ -339,7 +339,8 @@ void pictureStage(const BtfSource& btf, const fs::path& work, CompareResult& res
             writeFloatImage(sheet, (work / "pictures/error-maps.png").string());
             result.pictures.push_back(
                 {"pictures/error-maps.png",
-                 "Per-texel error (seed 001 sec. 4.1) of each method, viridis colour map from 0 "
+                 "Per-texel error (Meseth et al. 2003, sec. 4.1) of each method, viridis colour "
+                 "map from 0 "
                  "(dark blue) to " +
                      formatNumber(result.errorMapMax, 4) +
                      " (yellow, the largest per-texel error of all methods); magenta = NaN/Inf. "

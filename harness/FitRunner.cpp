@@ -30,7 +30,10 @@ namespace {
 std::vector<std::string> commandLine(const FitJob& job) {
     std::vector<std::string> args{job.tool};
     args.insert(args.end(), job.globalArguments.begin(), job.globalArguments.end());
-    args.insert(args.end(), {"--no-progress", "fit", job.input, "-m", job.method});
+    // --no-mipmap: the base level, `btf fit`'s default before mip-mapping was; the tables measure
+    // each method against the measured texels, as the papers do (a mip-mapped fit's texels are an
+    // atlas of every level).
+    args.insert(args.end(), {"--no-progress", "fit", job.input, "-m", job.method, "--no-mipmap"});
     for (const auto& [key, value] : job.options)
         args.insert(args.end(), {"--set", key + "=" + value});
     args.insert(args.end(), job.extraArguments.begin(), job.extraArguments.end());

@@ -9,6 +9,7 @@
 
 namespace osgBTF {
 
+/** One `btf fit` child process of the comparison: the base level of INPUT (`--no-mipmap`). */
 struct FitJob {
     std::string tool;                            ///< the `btf` executable
     std::string input;                           ///< measured BTF

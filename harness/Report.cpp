@@ -87,7 +87,7 @@ std::string reportMarkdown(const CompareResult& r) {
        << "Definitions of every column: harness/README.md in the osgBTF sources.\n\n";
 
     md << "## Table 1: error\n\n"
-       << "Per-texel error (seed 001 sec. 4.1: mean over all " << r.views * r.lights
+       << "Per-texel error (Meseth et al. 2003, sec. 4.1: mean over all " << r.views * r.lights
        << " measured (view, light) pairs of |measured - model| in RGB, 8-bit data scaled to "
           "[0, 1]) as average / minimum / maximum over texels; RMSE over every channel value; "
           "PSNR with peak 1. From the CPU evaluator. The GPU column is the largest |GPU - CPU| "
@@ -108,7 +108,8 @@ std::string reportMarkdown(const CompareResult& r) {
     }
 
     md << "\n## Table 2: memory\n\n"
-       << "Storage as seed 001 Table 2 counts it (Material::memory(): per-texel arrays fully, "
+       << "Storage as Meseth et al. 2003, Table 2, counts it (Material::memory(): per-texel arrays "
+          "fully, "
           "shared tables divided by the texel count). Compression ratio = raw bytes per texel ("
        << general(r.rawBytesPerTexel, 8) << ") / bytes per texel.\n\n"
        << "| method | values/texel | bytes/texel | total | compression ratio |\n"
@@ -251,7 +252,8 @@ std::string resultsCsv(const CompareResult& r) {
     }
     csv << "method,status,message,options,error_avg,error_min,error_max,rmse,psnr_db,"
            "nonfinite_values,gpu_cpu_max_diff,values_per_texel,bytes_per_texel,total_bytes,"
-           "shared_bytes,compression_ratio,alu_fixed,tex_fixed,alu_per_light,tex_per_light,alu_total,"
+           "shared_bytes,compression_ratio,alu_fixed,tex_fixed,alu_per_light,tex_per_light,alu_"
+           "total,"
            "tex_total,pass_clock,"
         << passColumns << "fit_seconds,fit_process_seconds,peak_rss_bytes,reused,fitted_file\n";
     for (const MethodResult& m : r.methods) {
@@ -269,8 +271,8 @@ std::string resultsCsv(const CompareResult& r) {
             << "," << full(m.error.rmse) << "," << full(m.error.psnr) << ","
             << m.error.nonFiniteValues << "," << optional(m.gpuCpuMaxDifference) << ","
             << full(m.memory.valuesPerTexel) << "," << full(m.memory.bytesPerTexel) << ","
-            << m.memory.totalBytes << "," << m.memory.sharedBytes << ","
-            << full(m.compressionRatio) << ",";
+            << m.memory.totalBytes << "," << m.memory.sharedBytes << "," << full(m.compressionRatio)
+            << ",";
         if (m.cost.counted)
             csv << m.cost.fixedAlu << "," << m.cost.fixedTex << "," << m.cost.perLightAlu << ","
                 << m.cost.perLightTex << "," << m.cost.alu(r.pass.lights) << ","

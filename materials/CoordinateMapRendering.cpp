@@ -8,6 +8,7 @@
 
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
+#include "materials/BilinearTaps.h"
 #include "materials/MaterialState.h"
 #include "materials/ShaderInterface.h"
 
@@ -139,6 +140,19 @@ FittedMaterial remapFittedMaterial(const FittedMaterial& file, const CoordinateM
 osg::ref_ptr<Material> remapMaterial(const Material& material, const CoordinateMap& map) {
     checkCoordinateMapMatches(material, map, "coordinate map");
     return materialFromFile(remapFittedMaterial(material.toFittedMaterial(), map));
+}
+
+glm::vec3 evaluateThroughMap(const Material& material, const CoordinateMap& map, float u, float v,
+                             const glm::vec3& view, const glm::vec3& light) {
+    const BilinearTaps taps(u, v, map.width, map.height);
+    glm::vec3 value(0.0f);
+    for (int k = 0; k < 4; ++k)
+        // As the shader: an entry of weight 0 is not evaluated.
+        if (taps.weight[k] > 0.0f)
+            value +=
+                taps.weight[k] * material.evaluate(map.sampleX(taps.x[k], taps.y[k]),
+                                                   map.sampleY(taps.x[k], taps.y[k]), view, light);
+    return value;
 }
 
 osg::ref_ptr<osg::Texture2D> createCoordinateMapTexture(const CoordinateMap& map) {

@@ -1,16 +1,26 @@
 // osgBTF: rendering any fitted material through a coordinate map (core/CoordinateMap.h, the
 // output of BTF synthesis), and the material such a render stands for.
 //
-// GPU: the method's program variant compiled with shader::kCoordinateMapDefine picks its texel
-// with one dependent fetch: the surface's texture coordinates (times the texture scale) cover
-// the MAP, wrapping around, and the map's entry there is the sample texel every fetch of the
-// method then uses (shaders/common/btf_main.glsl). The map's size is the texel grid on the
-// surface: a 1024 x 1024 map over a 64 x 64 sample puts 1024 x 1024 texels on each repeat.
+// GPU: the method's program variant compiled with shader::kCoordinateMapDefine reads the map
+// with dependent fetches: the surface's texture coordinates (times the texture scale) cover the
+// MAP, wrapping around, and a fragment shows the bilinear blend (GL_LINEAR's weights) of the
+// method's values at the sample texels named by the four map entries around its coordinate; the
+// map tiles, so its last column blends with its first (shaders/common/btf_main.glsl). Every method
+// blends values there, also one that filters its parameter textures without a map
+// (Material::TexelFilter::Parameters): neighbouring entries name unrelated sample texels. The map
+// has no mip levels: a minified map is filtered bilinearly at its one level (it may alias). The
+// map's size is the texel grid on the surface: a 1024 x 1024 map over a 64 x 64 sample puts
+// 1024 x 1024 texels on each repeat. evaluateThroughMap is the CPU reference.
 //
 // CPU: remapMaterial builds the "materialised" material: the map's size, every per-texel texture
 // remapped through the map, every shared table copied. Evaluating it at texel (x, y) computes
-// exactly what the original computes at map(x, y), and rendering it without a map draws exactly
-// what rendering the original through the map draws (tests/gl/coordinate_map_test.cpp).
+// exactly what the original computes at map(x, y). Its filtered evaluation
+// (Material::evaluateFiltered) equals evaluateThroughMap exactly where it blends values, and
+// where it blends parameters and the finishing step (Material::finishLinear) is linear over the
+// four entries (lambert, pca, plain fmf; ptm rgb while its clamp at 0 does not act). Between
+// entries of an fmf with exp decoding (dynamic-range reduction, exp colour models) it decodes
+// the blend of the parameters and the map render blends decoded values, so they differ there
+// (tests/gl/coordinate_map_test.cpp).
 #pragma once
 
 #include <string>
@@ -61,6 +71,14 @@ FittedMaterial remapFittedMaterial(const FittedMaterial& file, const CoordinateM
 
 /** remapFittedMaterial of the material, loaded back as a Material (no source file). */
 osg::ref_ptr<Material> remapMaterial(const Material& material, const CoordinateMap& map);
+
+/** The CPU reference of a render through the map at texture coordinate (u, v) (after the texture
+ *  scale; the map repeats): the bilinear blend, with wrap-around, of material.evaluate at the
+ *  sample texels named by the four map entries around (u, v), GL_LINEAR's weights (centres at
+ *  (i + 0.5) / map size, weights frac(uv size - 0.5)), in btf_main.glsl's order. The map must
+ *  point into the material (checkCoordinateMapMatches). */
+glm::vec3 evaluateThroughMap(const Material& material, const CoordinateMap& map, float u, float v,
+                             const glm::vec3& view, const glm::vec3& light);
 
 /** The map as an R32I texture, each texel (sample row << 16) | sample column, NEAREST, no
  *  mipmaps, for texelFetch through an isampler2D. Throws Error for a sample wider or taller

@@ -8,6 +8,7 @@
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
+#include "materials/BilinearTaps.h"
 #include "materials/Material.h"
 #include "materials/MaterialState.h"
 #include "materials/ShaderInterface.h"
@@ -50,6 +51,22 @@ std::vector<float> foldEnvironment(const Material& material, const std::vector<g
 glm::vec3 evaluateFolded(const Material& material, const std::vector<float>& folded, int x, int y,
                          const glm::vec3& view) {
     return hooksOf(material).evaluateFolded(material, folded, x, y, view);
+}
+
+glm::vec3 evaluateFoldedFiltered(const Material& material, const std::vector<float>& folded,
+                                 float u, float v, const glm::vec3& view) {
+    const EnvironmentHooks& hooks = hooksOf(material);
+    const MipLayout& mip = material.mipLayout();
+    const MipLevel base =
+        mip.mipMapped() ? mip.levels()[0] : MipLevel{0, 0, material.width(), material.height()};
+    const BilinearTaps taps(u, v, base.width, base.height);
+    glm::vec3 value(0.0f);
+    for (int k = 0; k < 4; ++k)
+        // As the shader: a texel of weight 0 is not evaluated.
+        if (taps.weight[k] > 0.0f)
+            value += taps.weight[k] * hooks.evaluateFolded(material, folded, base.x + taps.x[k],
+                                                           base.y + taps.y[k], view);
+    return value;
 }
 
 std::size_t foldedStride(const Material& material) {

@@ -13,6 +13,7 @@
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
+#include "materials/BilinearTaps.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/EnvironmentState.h"
 #include "materials/LightVisibility.h"
@@ -102,20 +103,10 @@ struct FilterTaps {
  *  level's rectangle, with GL_LINEAR's weights (frac(uv size - 0.5) along each axis) times
  *  `share`, in the shader's float arithmetic. */
 void addBilinearTaps(FilterTaps& taps, float u, float v, const MipLevel& level, float share) {
-    const auto axis = [](float t, int size, int& i0, int& i1, float& w) {
-        float f = t - std::floor(t);  // fract: the texture repeats
-        if (!std::isfinite(f)) f = 0.0f;
-        const float s = f * float(size) - 0.5f;
-        const float first = std::floor(s);
-        w = s - first;
-        i0 = std::min(int(first), size - 1);
-        if (i0 < 0) i0 = size - 1;  // left of the first centre: blends with the last texel
-        i1 = i0 + 1 == size ? 0 : i0 + 1;
-    };
     int x0, x1, y0, y1;
     float a, b;
-    axis(u, level.width, x0, x1, a);
-    axis(v, level.height, y0, y1, b);
+    bilinearAxis(u, level.width, x0, x1, a);
+    bilinearAxis(v, level.height, y0, y1, b);
     taps.add(level.x + x0, level.y + y0, share * (1.0f - a) * (1.0f - b));
     taps.add(level.x + x1, level.y + y0, share * a * (1.0f - b));
     taps.add(level.x + x0, level.y + y1, share * (1.0f - a) * b);
@@ -159,9 +150,11 @@ glm::vec3 Material::evaluateFiltered(float u, float v, float lod, const glm::vec
 
 Material::TexelFilter Material::texelFilter() const {
     const MethodInfo* method = findMethodIfRegistered(methodName());
-    return method && method->filtersParameters && !_mipLayout.mipMapped() && linearInParameters()
-               ? TexelFilter::Parameters
-               : TexelFilter::Values;
+    // A material of no registered method (BSVTF's StreamedFmfMaterial, made by its streamer,
+    // never loaded by name) has no MethodInfo to declare it: its linearInParameters() does.
+    const bool filters = method ? method->filtersParameters : true;
+    return filters && !_mipLayout.mipMapped() && linearInParameters() ? TexelFilter::Parameters
+                                                                      : TexelFilter::Values;
 }
 
 void Material::throwMethodMismatch(const Material& other) const {

@@ -50,6 +50,16 @@ public:
 
 protected:
     ~StreamedFmfMaterial() override = default;
+    /** bsvtf.frag filters the Eigen-Textures in the cache from the tiles' padding, as fmf.frag
+     *  filters its SxV (TexelFilter::Parameters). Tiles without padding (P = 0) leave nothing to
+     *  filter from: false, so btf_main.glsl blends the four texels' values instead. */
+    bool linearInParameters() const override;
+    /** The snapshot's: the CPU reference of the filtered render once every finest tile is
+     *  resident (elsewhere the GPU filters each fragment at its tile's resident level). */
+    glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,
+                             const glm::vec3& light) const override;
+    glm::vec3 finishLinear(const glm::vec3& linear, const glm::vec3& view,
+                           const glm::vec3& light) const override;
 
 private:
     friend class TileStreamer;

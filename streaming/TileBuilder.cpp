@@ -76,11 +76,11 @@ TileBuildReport buildTileSet(const FmfMaterial& material, const std::string& fol
         fail(source,
              "BSVTF streams FMF materials (one factorisation, the colour in U's rows); this is "
              "DFMF (one factorisation per colour channel): fit an fmf material first, e.g. "
-             "`btf fit IN -m fmf -o M.btfmat`");
+             "`btf fit IN -m fmf --no-mipmap -o M.btfmat`");
     if (material.mipLayout().mipMapped())
         fail(source,
-             "the material is mip-mapped; BSVTF builds its own levels: use the material "
-             "fitted without --mipmap");
+             "the material is mip-mapped; BSVTF builds its own levels: fit the base level "
+             "alone (`btf fit IN -m fmf --no-mipmap -o M.btfmat`)");
     if (options.codec != "dct" && options.codec != "raw")
         throw Error("tiles: unknown codec '" + options.codec + "' (known: dct, raw)");
     if (options.quality < 1 || options.quality > 100)

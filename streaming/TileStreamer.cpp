@@ -17,7 +17,6 @@
 #include "core/Error.h"
 #include "core/Notify.h"
 #include "materials/MaterialState.h"
-#include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
 #include "streaming/TileFetcher.h"
 #include "streaming/TileSet.h"
@@ -105,8 +104,10 @@ TileStreamer::TileStreamer(TileStreamerOptions options) : _options(options), _sc
     _cache->setInternalFormat(GL_RGBA16F_ARB);
     _cache->setSourceFormat(GL_RGBA);
     _cache->setSourceType(GL_HALF_FLOAT);
-    _cache->setFilter(osg::Texture::MIN_FILTER, osg::Texture::NEAREST);
-    _cache->setFilter(osg::Texture::MAG_FILTER, osg::Texture::NEAREST);
+    // bsvtf.frag's filtered lookups (textureLod inside a slot, from its padding) blend the four
+    // texels around the coordinate; its nearest lookups are texelFetch, which ignores the filter.
+    _cache->setFilter(osg::Texture::MIN_FILTER, osg::Texture::LINEAR);
+    _cache->setFilter(osg::Texture::MAG_FILTER, osg::Texture::LINEAR);
     _cache->setResizeNonPowerOfTwoHint(false);
     _cache->setUseHardwareMipMapGeneration(false);
     _cache->setSubloadCallback(_uploads.get());
@@ -567,9 +568,6 @@ osg::ref_ptr<osg::StateSet> TileStreamer::createStateSet(
     // The LUT and U change while it renders: the viewer must not update them during a draw.
     stateSet->setDataVariance(osg::Object::DYNAMIC);
     addCommonState(*stateSet, material);
-    // The tile cache is read at the nearest texel: filtering it (from the tiles' padding, levels
-    // of the cache) is not done yet, so btf_main.glsl's blend of texel values stays off.
-    stateSet->addUniform(new osg::Uniform(shader::kBlendTexels, false));
     addTexture(*stateSet, stream.uTexture.get(), "fmfU", 0);
     addTexture(*stateSet, _cache.get(), "bsvtfCache", 1);
     material._viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
@@ -626,6 +624,21 @@ osg::ref_ptr<FmfMaterial> StreamedFmfMaterial::snapshot() const {
 glm::vec3 StreamedFmfMaterial::evaluate(int x, int y, const glm::vec3& view,
                                         const glm::vec3& light) const {
     return snapshot()->evaluate(x, y, view, light);
+}
+
+bool StreamedFmfMaterial::linearInParameters() const {
+    osg::ref_ptr<TileStreamer> streamer;
+    return _streamer.lock(streamer) && streamer->options().padding > 0;
+}
+
+glm::vec3 StreamedFmfMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
+                                              const glm::vec3& light) const {
+    return snapshot()->evaluateLinear(x, y, view, light);
+}
+
+glm::vec3 StreamedFmfMaterial::finishLinear(const glm::vec3& linear, const glm::vec3& view,
+                                            const glm::vec3& light) const {
+    return snapshot()->finishLinear(linear, view, light);
 }
 
 void StreamedFmfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {

@@ -226,6 +226,39 @@ TEST(Environment, FoldedPcaEqualsTheBruteForceSum) {
               "environment: 3 projected values for 81 measured light directions");
 }
 
+TEST(Environment, FilteredFoldedBlendsTheFourTexelsAroundACoordinate) {
+    // evaluateFoldedFiltered, the environment shader's CPU reference, on the 4 x 4 pca (texel
+    // positions and weights exact in float): a texel centre shows that texel, half-way between
+    // two texels their mean, u = 0 and u = 1 (left of the first centre, across the wrap) the
+    // mean of the last and the first column, the corner (0, 0) the mean of the four corners.
+    const PcaMaterial& pca = smallPca();
+    ASSERT_EQ(pca.width(), 4);
+    ASSERT_EQ(pca.height(), 4);
+    const std::vector<glm::vec3> g =
+        projectEnvironment(visibleEnvironment(randomMap(32, 16, 5), SurfaceFrame{}),
+                           DirectionInterpolator(pca.lights()));
+    const std::vector<float> folded = foldEnvironment(pca, g);
+    const glm::vec3 view = glm::normalize(glm::vec3(0.2f, 0.3f, 0.9f));
+    const auto texel = [&](int x, int y) { return evaluateFolded(pca, folded, x, y, view); };
+    const auto filtered = [&](float u, float v) {
+        return evaluateFoldedFiltered(pca, folded, u, v, view);
+    };
+    const double scale = glm::length(texel(1, 2));
+    ASSERT_GT(scale, 1e-3);
+    // The neighbours differ, so a blend shows.
+    ASSERT_GT(glm::length(texel(1, 2) - texel(2, 2)), 1e-3 * scale);
+    ASSERT_GT(glm::length(texel(3, 2) - texel(0, 2)), 1e-3 * scale);
+    expectClose(filtered(1.5f / 4, 2.5f / 4), texel(1, 2), scale, 1e-6);
+    expectClose(filtered(2.0f / 4, 2.5f / 4), 0.5f * (texel(1, 2) + texel(2, 2)), scale, 1e-6);
+    for (float u : {0.0f, 1.0f, -1.0f})
+        expectClose(filtered(u, 2.5f / 4), 0.5f * (texel(3, 2) + texel(0, 2)), scale, 1e-6);
+    expectClose(filtered(0.0f, 0.0f),
+                0.25f * (texel(3, 3) + texel(0, 3) + texel(3, 0) + texel(0, 0)), scale, 1e-6);
+    // A quarter of the way from texel 1's centre to texel 2's.
+    expectClose(filtered(1.75f / 4, 2.5f / 4), 0.75f * texel(1, 2) + 0.25f * texel(2, 2), scale,
+                1e-6);
+}
+
 TEST(Environment, FoldedFmfAndLpcaEqualTheProjectedSum) {
     // The exact CPU path (evaluateProjected: sum_i g_i BTF(x, v, l_i) through evaluate()) against
     // what the fmf and lpca environment shaders compute from their per-vertex data. fmf with the

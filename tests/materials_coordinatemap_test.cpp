@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include <gtest/gtest.h>
+#include <glm/geometric.hpp>
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
@@ -89,6 +90,38 @@ TEST_P(CoordinateMapRemap, RemappedMaterialEvaluatesLikeTheMapExactly) {
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, CoordinateMapRemap, ::testing::ValuesIn(methodNames()),
                          testName);
+
+TEST(CoordinateMapRemap, ThroughTheMapBlendsTheFourEntriesAroundACoordinate) {
+    // evaluateThroughMap, the CPU reference of a render through a map: an entry's centre shows
+    // its sample texel, half-way between two entries their mean, u = 0 and u = 1 (left of the
+    // first centre, across the wrap) the mean of the map's last and first column, the corner the
+    // mean of the four corner entries. An 8 x 4 map: entry positions and weights exact in float.
+    const MethodInfo& info = findMethod("pca");
+    osg::ref_ptr<Material> material = info.fit(sample(), FitOptions::parse(info.quickFitOptions));
+    const CoordinateMap map = makeBlockCoordinateMap(8, 4, 8, 6, 1, 3);
+    const glm::vec3 view = Direction{31.7f, 77}.toVector(), light = Direction{52, 200}.toVector();
+    const auto entry = [&](int x, int y) {
+        return material->evaluate(map.sampleX(x, y), map.sampleY(x, y), view, light);
+    };
+    const auto through = [&](float u, float v) {
+        return evaluateThroughMap(*material, map, u, v, view, light);
+    };
+    const float scale = glm::length(entry(1, 2));
+    ASSERT_GT(scale, 1e-3f);
+    ASSERT_GT(glm::length(entry(1, 2) - entry(2, 2)), 1e-3f * scale) << "the entries differ";
+    ASSERT_GT(glm::length(entry(7, 2) - entry(0, 2)), 1e-3f * scale);
+    const auto expectNear = [&](const glm::vec3& got, const glm::vec3& expected) {
+        EXPECT_LE(glm::length(got - expected), 1e-6f * scale)
+            << got.x << " " << got.y << " " << got.z << " against " << expected.x << " "
+            << expected.y << " " << expected.z;
+    };
+    expectNear(through(1.5f / 8, 2.5f / 4), entry(1, 2));
+    expectNear(through(2.0f / 8, 2.5f / 4), 0.5f * (entry(1, 2) + entry(2, 2)));
+    for (float u : {0.0f, 1.0f, 3.0f})
+        expectNear(through(u, 2.5f / 4), 0.5f * (entry(7, 2) + entry(0, 2)));
+    expectNear(through(0.0f, 0.0f),
+               0.25f * (entry(7, 3) + entry(0, 3) + entry(7, 0) + entry(0, 0)));
+}
 
 TEST(CoordinateMapRemap, FitOfTheMaterialisedBtfEqualsTheRemappedFit) {
     // lambert fits each texel from that texel's data alone, so fitting the synthesised BTF

@@ -243,7 +243,7 @@ TEST(ScenePlugins, MeasuredBtfIsFittedOnceThenReadFromTheCache) {
     EXPECT_EQ(filesIn(cache).size(), 3u);
 }
 
-TEST(ScenePlugins, MipmapOptionFitsLevelsAndIsItsOwnCacheEntry) {
+TEST(ScenePlugins, MipmapIsTheDefaultAndOffIsItsOwnCacheEntry) {
     TempDir dir;
     const std::string zip = writeSampleZip(dir);
     const std::string cache = "cache=" + dir.file("cache");
@@ -259,6 +259,11 @@ TEST(ScenePlugins, MipmapOptionFitsLevelsAndIsItsOwnCacheEntry) {
     result = readNode(zip, "method=lambert mipmap=off " + cache);
     ASSERT_NE(asMaterialNode(result), nullptr) << result.message();
     EXPECT_FALSE(asMaterialNode(result)->getMaterial()->mipLayout().mipMapped());
+    EXPECT_EQ(filesIn(dir.file("cache")).size(), 2u);
+    // No option: mip-mapped, as `btf fit` (issue 29), the same entry as mipmap=on.
+    result = readNode(zip, "method=lambert " + cache);
+    ASSERT_NE(asMaterialNode(result), nullptr) << result.message();
+    EXPECT_TRUE(asMaterialNode(result)->getMaterial()->mipLayout().mipMapped());
     EXPECT_EQ(filesIn(dir.file("cache")).size(), 2u);
 }
 

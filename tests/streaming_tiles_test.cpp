@@ -200,7 +200,7 @@ TEST(TileBuilder, RefusesDfmfMaterials) {
     EXPECT_EQ(errorOf([&] { buildTileSet(*dfmf, dir.file("t")); }),
               "d.btf: BSVTF streams FMF materials (one factorisation, the colour in U's rows); "
               "this is DFMF (one factorisation per colour channel): fit an fmf material first, "
-              "e.g. `btf fit IN -m fmf -o M.btfmat`");
+              "e.g. `btf fit IN -m fmf --no-mipmap -o M.btfmat`");
     EXPECT_FALSE(std::filesystem::exists(dir.file("t")));
     EXPECT_EQ(errorOf([&] { buildTileSet(*formulaMaterial(), dir.file("no/such/t")); }),
               dir.file("no/such/t") + ": folder '" + dir.file("no/such") + "' does not exist");

@@ -91,7 +91,8 @@ TEST(BtfTool, FitThenEvalMatchesTheCpuReference) {
     ASSERT_EQ(btf("sample --size 8 --format png -o " + shellQuote(zip)).exitCode, 0);
     CommandResult r = btf("fit " + shellQuote(zip) + " -m lambert -o " + shellQuote(fitted));
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_NE(r.output.find("per-texel error (seed 001 sec. 4.1): avg "), std::string::npos);
+    EXPECT_NE(r.output.find("per-texel error (Meseth et al. 2003, sec. 4.1): avg "),
+              std::string::npos);
     EXPECT_NE(r.output.find("3.00 values, 6.00 bytes per texel"), std::string::npos) << r.output;
     r = btfWithGl("eval " + shellQuote(fitted) + " --view 45,0 --light 60,90 -o " +
                   shellQuote(dir.file("gpu.exr")));
@@ -103,12 +104,20 @@ TEST(BtfTool, FitThenEvalMatchesTheCpuReference) {
     EXPECT_NE(r.output.find("--view: theta 95"), std::string::npos) << r.output;
 }
 
-TEST(BtfTool, MipMappedFitEvaluatesItsBaseLevel) {
+TEST(BtfTool, MipMappedFitIsTheDefaultAndEvaluatesItsBaseLevel) {
     TempDir dir;
     const std::string zip = dir.file("s.zip"), fitted = dir.file("m.btfmat");
     ASSERT_EQ(btf("sample --size 8 --format png -o " + shellQuote(zip)).exitCode, 0);
     CommandResult r =
-        btf("fit " + shellQuote(zip) + " -m lambert --mipmap -o " + shellQuote(fitted));
+        btf("fit " + shellQuote(zip) + " -m lambert --mipmap --no-mipmap -o " + shellQuote(fitted));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--mipmap excludes --no-mipmap"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(fitted));
+    r = btf("fit " + shellQuote(zip) + " -m lambert --no-mipmap -o " + shellQuote(fitted));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("(8x8 texels, 81x81 directions)"), std::string::npos) << r.output;
+    // No flag: mip-mapped (issue 29).
+    r = btf("fit " + shellQuote(zip) + " -m lambert -o " + shellQuote(fitted));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     // 8x8: levels of 4x4, 2x2 and 1x1 in a column of 4 beside the base.
     EXPECT_NE(r.output.find("(8x8 texels, 4 mip levels in 12x8, 81x81 directions)"),

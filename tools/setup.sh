@@ -11,7 +11,7 @@ PACKAGES=(
   libopenscenegraph-dev openscenegraph          # OSG 3.6.5 libraries, osgviewer, osgconv
   libopenexr-dev openexr libopenimageio-dev openimageio-tools   # float images, exrheader, oiiotool
   libglm-dev libeigen3-dev libceres-dev libtbb-dev libzip-dev zip unzip
-  libembree-dev               # ray-cast environment visibility (scene/VertexEnvironment.h)
+  libembree-dev               # ray-cast environment visibility (libosgBTFEnvironment)
   zlib1g-dev libcurl4-openssl-dev nginx-light  # BSVTF: tile codec, HTTP streaming, serve-tiles.sh
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)

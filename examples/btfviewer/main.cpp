@@ -518,10 +518,10 @@ int run(osg::ArgumentParser& arguments) {
         "the home view looks from, 90 from +X (its right); elevation above the XY plane (Z up)");
     usage->addCommandLineOption("--no-orbit-light", "Start with the orbit light off");
     usage->addCommandLineOption("--no-scene-lights", "Start with the scene's own lights off");
-    usage->addCommandLineOption(
-        "--terminator-alpha DEG",
-        "Seed 004's smooth shadow terminator on every object with this alpha (default: each "
-        "object's own, 15 unless its scene says otherwise; 0..60)");
+    usage->addCommandLineOption("--terminator-alpha DEG",
+                                "The smooth shadow terminator of Sattler et al. 2003 on every "
+                                "object with this alpha (default: each "
+                                "object's own, 15 unless its scene says otherwise; 0..60)");
     usage->addCommandLineOption("--no-terminator", "Start with the terminator off everywhere");
     usage->addCommandLineOption(
         "--shadows",
@@ -549,13 +549,14 @@ int run(osg::ArgumentParser& arguments) {
                                 "--env: turn the environment about Z (degrees, default 0)");
     usage->addCommandLineOption(
         "--env-samples A",
-        "--env: illumination PCA (seed 004 5.3): compute A rotations up front (A times the "
+        "--env: illumination PCA (Sattler et al. 2003, 5.3): compute A rotations up front (A times "
+        "the "
         "work), then rebuild any rotation at once from 5 components (default 0: each rotation "
         "computed exactly; the seed uses 30)");
     usage->addCommandLineOption(
         "--stream LOCATION",
         "A BSVTF tile set (`btf tiles`; a folder or an http:// URL of one) streamed into the "
-        "shared tile cache, on the model like a material file; repeatable (seed 003)");
+        "shared tile cache, on the model like a material file; repeatable (Schwartz et al. 2013)");
     usage->addCommandLineOption("--cache-size N",
                                 "--stream: texels per side of the RGBA16F tile cache (default "
                                 "4032: 3136 tiles, 124 MiB)");

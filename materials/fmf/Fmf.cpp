@@ -464,12 +464,12 @@ const bool registered = registerMethod([] {
     MethodInfo m;
     m.name = kFmfMethodName;
     m.description =
-        "full-matrix factorisation (Schwartz et al. 2013, seed 003; UBO2014 FMF/DFMF files): "
+        "full-matrix factorisation (Schwartz et al. 2013; UBO2014 FMF/DFMF files): "
         "rank-C SVD of the (view, light, colour) x texel matrix, 3x3 view/light blending of U; "
         "64 bytes per texel + U at 32 components, half";
     m.options = {OptionSpec::integer("components", 32, 1, OptionSpec::kNoLimit,
                                      "rank C: Eigen-Textures / Eigen-ABRDFs (at most the "
-                                     "texels, or 3 x views x lights if fewer; seed 003 uses "
+                                     "texels, or 3 x views x lights if fewer; the paper uses "
                                      "100)"),
                  OptionSpec::choice("storage", "half", {"half", "float"},
                                     "precision of U and SxV on the GPU and in the file")};

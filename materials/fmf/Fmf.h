@@ -87,6 +87,8 @@ public:
     MaterialTexture sxvTexture() const;
 
 protected:
+    // Its filtered evaluation is its snapshot's (evaluateLinear, finishLinear).
+    friend class StreamedFmfMaterial;
     ~FmfMaterial() override = default;
     /** The three factor sums, before colour decoding (and exp) and the cosine division. */
     glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,

@@ -73,7 +73,7 @@ const bool registered = registerMethod([] {
         OptionSpec::integer("iterations", 50, 1, 500, "Levenberg-Marquardt iterations per texel"),
         OptionSpec::flag("cosine", true,
                          "1: the bracket times l_z, the BRDF model times the foreshortening the "
-                         "data contain; 0: seed 001 eq. 2 literally, no l_z")};
+                         "data contain; 0: Meseth et al. 2003, eq. 2, literally, no l_z")};
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
         return LafMaterial::fromFile(f);
     };

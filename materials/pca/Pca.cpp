@@ -232,8 +232,8 @@ const bool registered = registerMethod([] {
         OptionSpec::integer("components", 16, 1, OptionSpec::kNoLimit,
                             "Eigen-Textures per view (at most the lights, or 3 x texels if fewer)"),
         OptionSpec::choice("storage", "unorm8", {"unorm8", "half", "float"},
-                           "Eigen-Texture precision: unorm8 is 1 byte per value, as seed 001 "
-                           "Table 2 counts")};
+                           "Eigen-Texture precision: unorm8 is 1 byte per value, as Meseth et "
+                           "al. 2003, Table 2, counts")};
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
         return PcaMaterial::fromFile(f);
     };

@@ -287,7 +287,8 @@ const bool registered = registerMethod([] {
     MethodInfo m;
     m.name = "ptm";
     m.description =
-        "polynomial texture maps (Malzbender 2001, seed 002): per texel a biquadratic in the "
+        "polynomial texture maps (Malzbender 2001, as Boßerhoff and Nicoll 2003 use them): per "
+        "texel a biquadratic in the "
         "light's (l_x, l_y), per channel or on the luminance times a base colour, fitted by one "
         "shared pseudo-inverse; on the front view or one per view, blended";
     m.options = {
@@ -297,7 +298,7 @@ const bool registered = registerMethod([] {
                            "luminance (6 + 3)"),
         OptionSpec::choice("views", "front", {"front", "all"},
                            "front: one PTM fitted on the measured view nearest the normal, used "
-                           "for every view (the seed's); all: one PTM per measured view, blended "
+                           "for every view (the paper's); all: one PTM per measured view, blended "
                            "over the 3 Delaunay-neighbour views"),
         OptionSpec::choice("storage", "half", {"half", "float"},
                            "precision of the coefficients and the colour")};

@@ -304,7 +304,7 @@ const bool registered = registerMethod([] {
     m.description =
         "reflectance fields (Meseth 2003): per measured view, rho_d + rho_v(v) RGB x k light "
         "lobes (a l_x + b l_y + c l_z)^n, views blended with interpolation weights; diffuse=0 "
-        "and colour=rgb give seed 002's per-view Lafortune BTF";
+        "and colour=rgb give the per-view Lafortune BTF of Boßerhoff and Nicoll 2003";
     m.options = {
         OptionSpec::integer(
             "lobes", defaults.lobes, 1, RfMaterial::kMaxLobes,
@@ -321,13 +321,13 @@ const bool registered = registerMethod([] {
                            "largest lobe exponent n (the Bonn lights are 15 degrees apart: "
                            "sharper lobes are unconstrained between them)"),
         OptionSpec::flag("diffuse", defaults.variant.diffuse,
-                         "1: the light- and view-independent floor rho_d (seed 001); 0: lobes "
-                         "only, seed 002's per-view Lafortune BTF"),
+                         "1: the light- and view-independent floor rho_d (Meseth et al. 2003); 0: "
+                         "lobes only, the per-view Lafortune BTF of Boßerhoff and Nicoll 2003"),
         OptionSpec::choice("colour", "luminance", {"luminance", "rgb"},
-                           "luminance: k lobes per view times an RGB rho_v (seed 002's luminance "
-                           "model with its base colour); rgb: k lobes per view and colour channel "
-                           "(seed 002's RGB model; 3x the lobe layers: Bonn's 81 views take up to "
-                           "8, UBO2014's 151 up to 4)")};
+                           "luminance: k lobes per view times an RGB rho_v (the luminance model of "
+                           "Boßerhoff and Nicoll 2003 with its base colour); rgb: k lobes per view "
+                           "and colour channel (their RGB model; 3x the lobe layers: Bonn's 81 "
+                           "views take up to 8, UBO2014's 151 up to 4)")};
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
         return RfMaterial::fromFile(f);
     };

@@ -120,8 +120,9 @@ const bool registered = registerMethod([] {
                             "Levenberg-Marquardt iterations per texel and round"),
         OptionSpec::integer("rounds", 2, 0, 10,
                             "alternations between the view table T and the lobes"),
-        OptionSpec::flag("cosine", true,
-                         "1: the bracket times l_z; 0: seed 001 eq. 4 literally (see laf)")};
+        OptionSpec::flag(
+            "cosine", true,
+            "1: the bracket times l_z; 0: Meseth et al. 2003, eq. 4, literally (see laf)")};
     m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
         return SlafMaterial::fromFile(f);
     };

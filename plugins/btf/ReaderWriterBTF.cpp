@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <system_error>
 
@@ -45,7 +46,9 @@ struct Settings {
     float textureScale = 1.0f;
     std::string cacheDir;  // empty: caching off
     std::string mapFile;   // a coordinate map to draw the material through; empty: none
-    bool mipmap = false;   // fit a mip-mapped material (materials/MipMapping.h)
+    // Fit a mip-mapped material (materials/MipMapping.h): unset means yes, as `btf fit` (at most
+    // 1.41x the file; mipmap=off for the base level alone).
+    std::optional<bool> mipmap;
 };
 
 /** Parses option words; `extra` (from a pseudo-file name) wins over the -O string. */
@@ -106,7 +109,7 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
     const MethodInfo& method = findMethod(settings.method);
     const FitOptions fitOptions = fitOptionsFor(method, settings);
 #if OSGBTF_READERS_FIT
-    return fitCached(path, method, fitOptions, settings.cacheDir, settings.mipmap);
+    return fitCached(path, method, fitOptions, settings.cacheDir, settings.mipmap.value_or(true));
 #else
     throw Error(path + ": fitting a measured BTF needs libosgBTFFit, which this module (" +
                 "osgdb_btfmat, fitted materials only) does not load");
@@ -133,7 +136,7 @@ osg::ref_ptr<Material> openStored(const std::string& path, const Settings& setti
                 break;
             }
     }
-    if (settings.mipmap) ignored += " mipmap=on";
+    if (settings.mipmap.value_or(false)) ignored += " mipmap=on";
     OSGBTF_NOTIFY(
         osg::NOTICE,
         "osgBTF: " << path
@@ -265,7 +268,7 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
         supportsOption("cache=<dir>|off", "fit cache folder (default ~/.cache/osgbtf)");
         supportsOption("mipmap=on|off",
                        "fit a mip-mapped material: minified surfaces without aliasing (default "
-                       "off)");
+                       "on; off: the base level alone)");
     }
     supportsOption("scale=<s>", "texture scale (tiling) of the MaterialNode (default 1)");
     supportsOption("map=<file>",

@@ -27,7 +27,10 @@ uniform vec4 osgBTF_fixedView = vec4(0.0);
 //   in non-uniform control flow, where implicit derivatives are undefined. One evaluation.
 // - TexelFilter::Values (osgBTF_blendTexels): main() evaluates btfEvaluate at each of the four
 //   texels (per level) and blends the values; no method's shader takes part.
-// Neither set (or a coordinate map): the nearest texel (of each of two levels).
+// Neither set: the nearest texel (of each of two levels). Through a coordinate map every method
+// takes the second way over the map's four entries (btfAddMapTaps), whatever its TexelFilter:
+// neighbouring entries name unrelated sample texels, so no hardware filter of the parameter
+// textures can blend them; btfBilinear stays false there.
 uniform bool osgBTF_bilinear = false;
 uniform bool osgBTF_blendTexels = false;
 bool btfBilinear = false;
@@ -73,26 +76,6 @@ float btfShadowFactor(int i) {
 }
 #endif
 
-#ifdef OSGBTF_COORDINATE_MAP
-// The program variant for a coordinate map (materials/CoordinateMapRendering.h): the texture
-// coordinates cover the map, whose entry is the sample texel shown there (one dependent fetch).
-// The map's size comes from the texture itself, so osgBTF_size stays the sample's, which the
-// methods' own texel arithmetic (tiles, stacked layers) needs. Entry = (row << 16) | column.
-uniform isampler2D osgBTF_coordinateMap;
-
-ivec2 btfTexel(vec2 uv) {
-    ivec2 mapSize = textureSize(osgBTF_coordinateMap, 0);
-    vec2 f = fract(uv);
-    ivec2 entry = clamp(ivec2(floor(f * vec2(mapSize))), ivec2(0), mapSize - ivec2(1));
-    int columnRow = texelFetch(osgBTF_coordinateMap, entry, 0).r;
-    return ivec2(columnRow & 0xFFFF, columnRow >> 16);
-}
-#else
-ivec2 btfTexel(vec2 uv) {
-    return btfNearestTexel(uv);
-}
-#endif
-
 // The texels a fragment evaluates and their shares of its value (at most four per level, two
 // levels), in the order Material::evaluateFiltered adds them up. Texels of weight 0 are left out.
 const int btfMaxTaps = 8;
@@ -108,19 +91,43 @@ void btfAddTap(ivec2 texel, float weight) {
     }
 }
 
-#ifndef OSGBTF_COORDINATE_MAP
+#ifdef OSGBTF_COORDINATE_MAP
+// The program variant for a coordinate map (materials/CoordinateMapRendering.h): the texture
+// coordinates cover the map, whose entries are the sample texels shown there (dependent fetches).
+// The map's size comes from the texture itself, so osgBTF_size stays the sample's, which the
+// methods' own texel arithmetic (tiles, stacked layers) needs. Entry = (row << 16) | column.
+uniform isampler2D osgBTF_coordinateMap;
+
+/** The sample texel that map entry `entry` names. */
+ivec2 btfMapEntry(ivec2 entry) {
+    int columnRow = texelFetch(osgBTF_coordinateMap, entry, 0).r;
+    return ivec2(columnRow & 0xFFFF, columnRow >> 16);
+}
+
+/** The four map entries around uv with GL_LINEAR's weights, wrapping at the map's edges (a
+ *  synthesised map tiles: its last column blends with its first), each tap the sample texel its
+ *  entry names: main() blends the method's values there, the render of the materialised
+ *  material's texels (CoordinateMapRendering.h: evaluateThroughMap). The map has one level, so a
+ *  minified map is filtered bilinearly at that level too, as GL_LINEAR without mipmaps would: the
+ *  sample's mip levels would not follow the map's layout (a mip-mapped material is refused). */
+void btfAddMapTaps(vec2 uv) {
+    ivec2 i0, i1;
+    vec2 w;
+    btfBilinearNeighbours(uv, textureSize(osgBTF_coordinateMap, 0), i0, i1, w);
+    btfAddTap(btfMapEntry(i0), (1.0 - w.x) * (1.0 - w.y));
+    btfAddTap(btfMapEntry(ivec2(i1.x, i0.y)), w.x * (1.0 - w.y));
+    btfAddTap(btfMapEntry(ivec2(i0.x, i1.y)), (1.0 - w.x) * w.y);
+    btfAddTap(btfMapEntry(i1), w.x * w.y);
+}
+#else
 /** The four texels of `level` around uv, wrapped inside the level's rectangle of the atlas (the
- *  hardware's GL_REPEAT would wrap at the atlas's edge), with GL_LINEAR's weights: texel centres
- *  at (i + 0.5) / size, weights frac(uv size - 0.5); times `share`. */
+ *  hardware's GL_REPEAT would wrap at the atlas's edge), with GL_LINEAR's weights; times
+ *  `share`. */
 void btfAddBilinearTaps(vec2 uv, int level, float share) {
     ivec4 r = osgBTF_mipLevel[level];
-    vec2 s = fract(uv) * vec2(r.zw) - 0.5;
-    vec2 first = floor(s);
-    vec2 w = s - first;
-    ivec2 i0 = min(ivec2(first), r.zw - ivec2(1));
-    // Left of (below) the first centre: the other neighbour is the last texel.
-    i0 = ivec2(i0.x < 0 ? r.z - 1 : i0.x, i0.y < 0 ? r.w - 1 : i0.y);
-    ivec2 i1 = ivec2(i0.x + 1 == r.z ? 0 : i0.x + 1, i0.y + 1 == r.w ? 0 : i0.y + 1);
+    ivec2 i0, i1;
+    vec2 w;
+    btfBilinearNeighbours(uv, r.zw, i0, i1, w);
     btfAddTap(r.xy + i0, share * (1.0 - w.x) * (1.0 - w.y));
     btfAddTap(r.xy + ivec2(i1.x, i0.y), share * w.x * (1.0 - w.y));
     btfAddTap(r.xy + ivec2(i0.x, i1.y), share * (1.0 - w.x) * w.y);
@@ -155,7 +162,8 @@ void main() {
     btfBilinear = osgBTF_bilinear && osgBTF_mipLevels <= 1;
     btfBilinearCoordinate = btfTexCoord;
 #else
-    btfAddTap(btfTexel(btfTexCoord), 1.0);
+    // btfBilinear stays false: the method reads each tap's own sample texel.
+    btfAddMapTaps(btfTexCoord);
 #endif
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {

@@ -43,6 +43,20 @@ ivec2 btfLevelTexel(vec2 uv, int level) {
     return r.xy + clamp(ivec2(floor(f * vec2(r.zw))), ivec2(0), r.zw - ivec2(1));
 }
 
+/** GL_LINEAR's neighbours of uv in a grid of `size` texels that repeats (GL_REPEAT): along each
+ *  axis the texels i0 and i1 (the next, wrapping) and i1's weight w, texel centres at
+ *  (i + 0.5) / size, w = frac(uv size - 0.5). Left of (below) the first centre, i0 is the last
+ *  texel. Texels relative to the grid: the caller places them (a mip level's rectangle, a
+ *  coordinate map's entries). materials/BilinearTaps.h is the CPU side. */
+void btfBilinearNeighbours(vec2 uv, ivec2 size, out ivec2 i0, out ivec2 i1, out vec2 w) {
+    vec2 s = fract(uv) * vec2(size) - 0.5;
+    vec2 first = floor(s);
+    w = s - first;
+    i0 = min(ivec2(first), size - ivec2(1));
+    i0 = ivec2(i0.x < 0 ? size.x - 1 : i0.x, i0.y < 0 ? size.y - 1 : i0.y);
+    i1 = ivec2(i0.x + 1 == size.x ? 0 : i0.x + 1, i0.y + 1 == size.y ? 0 : i0.y + 1);
+}
+
 /** The nearest base texel. */
 ivec2 btfNearestTexel(vec2 uv) {
     return btfLevelTexel(uv, 0);

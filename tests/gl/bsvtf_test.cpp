@@ -1,10 +1,12 @@
 // BSVTF on the GPU (issue 13): a streamed fmf material from a tile set in a folder, drawn under a
 // StreamingGroup whose feedback pass drives the tile cache. Every frame the render equals the CPU
 // evaluation of what has arrived (StreamedFmfMaterial::snapshot); once converged with a cache that
-// holds every finest tile it equals the fmf material itself; the feedback pass reports level
+// holds every finest tile it equals the fmf material itself, at texel centres and filtered between
+// them, across tile edges and the material's wrap edge; the feedback pass reports level
 // L - k where 2^k texels fall in a pixel (seed 003 eq. 1).
 #include <cmath>
 #include <iostream>
+#include <tuple>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -45,15 +47,18 @@ TileStreamerOptions streamerOptions(int slotsPerSide) {
     return o;
 }
 
-/** The patch with the material's state, one light, a fixed view, tiled `repeats` times. */
+/** The patch with the material's state, one light, a fixed view, tiled `repeats` times; the
+ *  nearest texel unless `filtered`. */
 osg::ref_ptr<osg::Geode> patch(const Material& material, const glm::vec3& view,
-                               const glm::vec3& light, float repeats = 1.0f) {
+                               const glm::vec3& light, float repeats = 1.0f,
+                               bool filtered = false) {
     osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
     stateSet->addUniform(new osg::Uniform(shader::kTextureScale, repeats));
-    // BSVTF's tile cache reads the nearest texel; the fmf material it must converge to is read the
-    // same way here. Filtered, a pixel centre on a texel centre would still blend in rounding
-    // shares (~1e-6) of the neighbours: the interpolated coordinate is not exact.
-    stateSet->addUniform(new osg::Uniform(shader::kBilinear, false));
+    // One pixel per texel, at its centre, compares texel by texel with evaluate(): filtered, a
+    // pixel centre on a texel centre would still blend in rounding shares (~1e-6) of the
+    // neighbours (the interpolated coordinate is not exact), for the fmf material and the cache
+    // alike, so both are read at the nearest texel there.
+    if (!filtered) stateSet->addUniform(new osg::Uniform(shader::kBilinear, false));
     addRectifiedLighting(*stateSet, view, light);
     osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
     geode->setStateSet(stateSet.get());
@@ -72,6 +77,42 @@ double gpuVsCpu(const osg::Image& image, const Material& material, const glm::ve
                                             (1e-3 + std::abs(cpu[c])));
         }
     return worst;
+}
+
+/** An orthographic view of `texels` x `texels` finest texels around texel corner (x, y) of the
+ *  patch tiled `repeats` times, over kPixels x kPixels pixels. */
+struct MagnifiedWindow {
+    static constexpr int kPixels = 64;
+    MagnifiedWindow(double x, double y, double texels, float repeats_) : repeats(repeats_) {
+        // Patch coordinates = texture coordinates / repeats.
+        x0 = (x - 0.5 * texels) / (kWidth * repeats);
+        x1 = (x + 0.5 * texels) / (kWidth * repeats);
+        y0 = (y - 0.5 * texels) / (kHeight * repeats);
+        y1 = (y + 0.5 * texels) / (kHeight * repeats);
+        camera.projection = osg::Matrixd::ortho(x0, x1, y0, y1, -1.0, 1.0);
+        camera.width = camera.height = kPixels;
+    }
+    /** The texture coordinates at pixel (i, j)'s centre. */
+    glm::vec2 uv(int i, int j) const {
+        return {float((x0 + (x1 - x0) * (i + 0.5) / kPixels) * repeats),
+                float((y0 + (y1 - y0) * (j + 0.5) / kPixels) * repeats)};
+    }
+    CameraSetup camera;
+    double x0, x1, y0, y1;
+    float repeats;
+};
+
+/** The largest |value| of the fmf material's texels: the scale of fmf's filtered GPU == CPU
+ *  tolerance (bilinear_filter_test.cpp). GL_LINEAR's weights may be fixed-point (8 bits on common
+ *  GPUs), and the cache and the fmf texture see a pixel's coordinate rounded differently. */
+double largestValue(const glm::vec3& view, const glm::vec3& light) {
+    double scale = 0;
+    for (int y = 0; y < kHeight; ++y)
+        for (int x = 0; x < kWidth; ++x) {
+            const glm::vec3 value = original()->evaluate(x, y, view, light);
+            for (int c = 0; c < 3; ++c) scale = std::max(scale, double(std::abs(value[c])));
+        }
+    return scale;
 }
 
 struct BsvtfGpu : ::testing::Test {
@@ -125,6 +166,190 @@ TEST_F(BsvtfGpu, RendersWhatHasArrivedEveryFrameAndConvergesToTheFmfMaterial) {
     EXPECT_LT(gpuVsCpu(*fmfImage, *original(), view, light), 1e-4);
 }
 
+TEST_F(BsvtfGpu, ConvergedMagnifiedRenderIsFilteredAsTheFmfMaterialAcrossTileAndWrapEdges) {
+    // Every finest tile resident (as above), then magnified views: 4 x 4 texels over 64 x 64
+    // pixels, so every pixel centre lies between texel centres (at odd multiples of 1/32 texel).
+    osg::ref_ptr<StreamingGroup> group = new StreamingGroup(new TileStreamer(streamerOptions(7)));
+    group->setFeedbackScale(1);
+    const osg::ref_ptr<StreamedFmfMaterial> streamed = group->streamer()->open(dir.file("tiles"));
+    ASSERT_EQ(streamed->texelFilter(), Material::TexelFilter::Parameters);
+    const glm::vec3 view = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    group->addChild(patch(*streamed, view, glm::vec3(0, 0, 1)));
+    HeadlessRenderer& renderer = sharedRenderer();
+    renderer.setScene(group.get());
+    renderer.setCamera(orthoUnitSquare(kWidth, kHeight));
+    for (int frames = 0; !group->settled() && frames < 200; ++frames) renderer.render();
+    ASSERT_TRUE(group->settled());
+    for (int g = 0; g < 2; ++g)
+        for (int ty = 0; ty < 3; ++ty)
+            for (int tx = 0; tx < 5; ++tx)
+                ASSERT_TRUE(group->streamer()->scheduler().resident(0, {g, kFinest, tx, ty}));
+
+    // (texel corner at the window's centre, texture repeats): the corner of finest tiles (0, 0),
+    // (1, 0), (0, 1), (1, 1) at texel (8, 8), where each fragment's footprint reaches into the
+    // next tile's texels through its tile's padding; the material's border at (40, 24) seen with
+    // the texture repeated twice, where the footprint wraps to the first column and row.
+    struct Case {
+        int x, y;
+        float repeats;
+        const char* name;
+    };
+    for (const Case& w : {Case{8, 8, 1.0f, "tile corner"}, Case{40, 24, 2.0f, "wrap"}})
+        for (const glm::vec3& light : {glm::normalize(glm::vec3(-0.4f, 0.1f, 0.8f)),
+                                       glm::normalize(glm::vec3(0.5f, 0.6f, 0.6f))}) {
+            const MagnifiedWindow window(w.x, w.y, 4, w.repeats);
+            const osg::ref_ptr<osg::Image> streamedImage = renderer.render(
+                patch(*streamed, view, light, w.repeats, true).get(), window.camera);
+            const osg::ref_ptr<osg::Image> fmfImage = renderer.render(
+                patch(*original(), view, light, w.repeats, true).get(), window.camera);
+            // GPU against GPU, and against the CPU reference of the filter (the fmf material's,
+            // and the streamed material's own), relative to the largest value.
+            const double scale = largestValue(view, light);
+            double streamedVsFmf = 0, streamedVsCpu = 0, ownCpu = 0, filteredVsNearest = 0;
+            for (int j = 0; j < MagnifiedWindow::kPixels; ++j)
+                for (int i = 0; i < MagnifiedWindow::kPixels; ++i) {
+                    const glm::vec2 uv = window.uv(i, j);
+                    const glm::vec3 cpu =
+                        original()->evaluateFiltered(uv.x, uv.y, 0.0f, view, light);
+                    const glm::vec3 own = streamed->evaluateFiltered(uv.x, uv.y, 0.0f, view, light);
+                    const int tx = int(std::floor((uv.x - std::floor(uv.x)) * kWidth));
+                    const int ty = int(std::floor((uv.y - std::floor(uv.y)) * kHeight));
+                    const glm::vec3 nearest = original()->evaluate(tx, ty, view, light);
+                    for (int c = 0; c < 3; ++c) {
+                        const double gpu = pixel(*streamedImage, i, j, c);
+                        streamedVsFmf = std::max(streamedVsFmf,
+                                                 std::abs(gpu - pixel(*fmfImage, i, j, c)) / scale);
+                        streamedVsCpu = std::max(streamedVsCpu, std::abs(gpu - cpu[c]) / scale);
+                        ownCpu = std::max(ownCpu, std::abs(gpu - own[c]) / scale);
+                        filteredVsNearest =
+                            std::max(filteredVsNearest, std::abs(cpu[c] - nearest[c]) / scale);
+                    }
+                }
+            std::cout << w.name << ": streamed vs fmf " << streamedVsFmf << ", vs CPU filtered "
+                      << streamedVsCpu << " (own " << ownCpu << "); filtered vs nearest "
+                      << filteredVsNearest << "\n";
+            EXPECT_LT(streamedVsFmf, 1e-3) << w.name;
+            EXPECT_LT(streamedVsCpu, 1e-3) << w.name;
+            EXPECT_LT(ownCpu, 1e-3) << w.name;
+            // The blend is far from the nearest texel's value: nearest lookups would fail above.
+            EXPECT_GT(filteredVsNearest, 1e-1) << w.name;
+        }
+}
+
+TEST_F(BsvtfGpu, TilesWithoutPaddingBlendTheValuesOfFourTexels) {
+    // P = 0 leaves the cache nothing to filter from inside a slot: btf_main.glsl blends the four
+    // texels' values instead (TexelFilter::Values), each fetched through its own LUT entry.
+    TileBuildOptions build;
+    build.codec = "raw";
+    build.tileSize = kTile;
+    build.padding = 0;
+    buildTileSet(*original(), dir.file("unpadded"), build);
+    TileStreamerOptions options = streamerOptions(7);
+    options.padding = 0;
+    options.cacheSize = 7 * kTile;
+    osg::ref_ptr<StreamingGroup> group = new StreamingGroup(new TileStreamer(options));
+    group->setFeedbackScale(1);
+    const osg::ref_ptr<StreamedFmfMaterial> streamed =
+        group->streamer()->open(dir.file("unpadded"));
+    ASSERT_EQ(streamed->texelFilter(), Material::TexelFilter::Values);
+    const glm::vec3 view = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    const glm::vec3 light = glm::normalize(glm::vec3(-0.4f, 0.1f, 0.8f));
+    group->addChild(patch(*streamed, view, light));
+    HeadlessRenderer& renderer = sharedRenderer();
+    renderer.setScene(group.get());
+    renderer.setCamera(orthoUnitSquare(kWidth, kHeight));
+    for (int frames = 0; !group->settled() && frames < 200; ++frames) renderer.render();
+    ASSERT_TRUE(group->settled());
+    for (int g = 0; g < 2; ++g)
+        for (int ty = 0; ty < 3; ++ty)
+            for (int tx = 0; tx < 5; ++tx)
+                ASSERT_TRUE(group->streamer()->scheduler().resident(0, {g, kFinest, tx, ty}));
+    const double scale = largestValue(view, light);
+    for (const auto& [x, y, repeats] : {std::tuple{8, 8, 1.0f}, {40, 24, 2.0f}}) {
+        const MagnifiedWindow window(x, y, 4, repeats);
+        const osg::ref_ptr<osg::Image> image =
+            renderer.render(patch(*streamed, view, light, repeats, true).get(), window.camera);
+        double worst = 0;
+        for (int j = 0; j < MagnifiedWindow::kPixels; ++j)
+            for (int i = 0; i < MagnifiedWindow::kPixels; ++i) {
+                const glm::vec2 uv = window.uv(i, j);
+                const glm::vec3 cpu = original()->evaluateFiltered(uv.x, uv.y, 0.0f, view, light);
+                for (int c = 0; c < 3; ++c)
+                    worst = std::max(worst, std::abs(pixel(*image, i, j, c) - cpu[c]) / scale);
+            }
+        std::cout << "unpadded around (" << x << ", " << y << "): GPU vs CPU " << worst << "\n";
+        EXPECT_LT(worst, 1e-3) << x << ", " << y;
+    }
+}
+
+TEST_F(BsvtfGpu, AFragmentIsFilteredAtItsTilesResidentLevel) {
+    // The patch tiled 8 times over 40 x 24 pixels: 8 texels per pixel, so the feedback asks for
+    // level 0 (5 x 3 texels, one tile of 8 whose columns 5-7 and rows 3-7 repeat the level) and
+    // nothing finer arrives. Then magnified: each fragment blends the four level-0 texels around
+    // its coordinate / 8, wrapped at the level's edge, from that one tile and its padding.
+    osg::ref_ptr<StreamingGroup> group = new StreamingGroup(new TileStreamer(streamerOptions(7)));
+    group->setFeedbackScale(1);
+    const osg::ref_ptr<StreamedFmfMaterial> streamed = group->streamer()->open(dir.file("tiles"));
+    const glm::vec3 view = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    group->addChild(patch(*streamed, view, glm::vec3(0, 0, 1), 8.0f));
+    HeadlessRenderer& renderer = sharedRenderer();
+    renderer.setScene(group.get());
+    renderer.setCamera(orthoUnitSquare(kWidth, kHeight));
+    for (int frames = 0; !group->settled() && frames < 200; ++frames) renderer.render();
+    ASSERT_TRUE(group->settled());
+    for (int g = 0; g < 2; ++g) {
+        ASSERT_TRUE(group->streamer()->scheduler().resident(0, {g, 0, 0, 0}));
+        ASSERT_FALSE(group->streamer()->scheduler().resident(0, {g, 1, 0, 0}));
+        ASSERT_FALSE(group->streamer()->scheduler().resident(0, {g, 1, 1, 0}));
+    }
+    // The reference blends evaluate()'s values: the random factors decode linearly (no exp).
+    ASSERT_EQ(original()->factors().dynamicRangeReduction, 0u);
+    const glm::vec3 light = glm::normalize(glm::vec3(-0.4f, 0.1f, 0.8f));
+    const double scale = largestValue(view, light);
+    // 4 x 4 level-0 texels around level-0 texel corner (2, 2), and around (5, 3), the level's
+    // border (the patch tiled twice: the coordinates pass 1 there).
+    for (const auto& [x, y] : {std::pair{16, 16}, {40, 24}}) {
+        const MagnifiedWindow window(x, y, 32, 2.0f);
+        const osg::ref_ptr<osg::Image> image =
+            renderer.render(patch(*streamed, view, light, 2.0f, true).get(), window.camera);
+        double worst = 0, filteredVsNearest = 0;
+        for (int j = 0; j < MagnifiedWindow::kPixels; ++j)
+            for (int i = 0; i < MagnifiedWindow::kPixels; ++i) {
+                const glm::vec2 uv = window.uv(i, j);
+                // GL_LINEAR on the 5 x 3 level with wrap-around; level-0 texel (a, b) is what
+                // the streamed material (its snapshot) shows at finest texel (8a, 8b).
+                const auto axis = [](float t, int size, int& i0, int& i1, float& w) {
+                    const float s = (t - std::floor(t)) * float(size) - 0.5f;
+                    i0 = int(std::floor(s));
+                    w = s - float(i0);
+                    i0 = (i0 + size) % size;
+                    i1 = (i0 + 1) % size;
+                };
+                int a0, a1, b0, b1;
+                float wa, wb;
+                axis(uv.x, 5, a0, a1, wa);
+                axis(uv.y, 3, b0, b1, wb);
+                const auto level0 = [&](int a, int b) {
+                    return streamed->evaluate(8 * a, 8 * b, view, light);
+                };
+                const glm::vec3 cpu = (1 - wa) * (1 - wb) * level0(a0, b0) +
+                                      wa * (1 - wb) * level0(a1, b0) +
+                                      (1 - wa) * wb * level0(a0, b1) + wa * wb * level0(a1, b1);
+                const glm::vec3 nearest = level0(int(std::floor((uv.x - std::floor(uv.x)) * 5)),
+                                                 int(std::floor((uv.y - std::floor(uv.y)) * 3)));
+                for (int c = 0; c < 3; ++c) {
+                    worst = std::max(worst, std::abs(pixel(*image, i, j, c) - cpu[c]) / scale);
+                    filteredVsNearest =
+                        std::max(filteredVsNearest, std::abs(cpu[c] - nearest[c]) / scale);
+                }
+            }
+        std::cout << "level 0 around (" << x << ", " << y << "): GPU vs CPU " << worst
+                  << "; filtered vs nearest " << filteredVsNearest << "\n";
+        EXPECT_LT(worst, 1e-3) << x << ", " << y;
+        EXPECT_GT(filteredVsNearest, 1e-2) << x << ", " << y;
+    }
+}
+
 TEST_F(BsvtfGpu, FeedbackLevelIsTheFinestMinusLog2OfTexelsPerPixel) {
     osg::ref_ptr<StreamingGroup> group = new StreamingGroup(new TileStreamer(streamerOptions(7)));
     group->setFeedbackScale(1);
@@ -164,7 +389,10 @@ TEST_F(BsvtfGpu, AMaterialNodeTakesAStreamedMaterialLikeAnyOther) {
     group->setFeedbackScale(1);
     osg::ref_ptr<MaterialNode> streamedNode =
         new MaterialNode(group->streamer()->open(dir.file("tiles")).get());
-    streamedNode->addChild(rectifiedPatch().get());
+    osg::ref_ptr<osg::Geode> streamedPatch = rectifiedPatch();
+    // Both at the nearest texel, as patch() reads them: one pixel per texel.
+    streamedPatch->getOrCreateStateSet()->addUniform(new osg::Uniform(shader::kBilinear, false));
+    streamedNode->addChild(streamedPatch.get());
     group->addChild(streamedNode.get());
     HeadlessRenderer& renderer = sharedRenderer();
     renderer.setScene(group.get());
@@ -178,7 +406,6 @@ TEST_F(BsvtfGpu, AMaterialNodeTakesAStreamedMaterialLikeAnyOther) {
     const osg::ref_ptr<osg::Image> streamedImage = renderer.render();
     osg::ref_ptr<MaterialNode> fmfNode = new MaterialNode(original().get());
     osg::ref_ptr<osg::Geode> fmfPatch = rectifiedPatch();
-    // The nearest texel, as BSVTF's tile cache reads it (see patch()).
     fmfPatch->getOrCreateStateSet()->addUniform(new osg::Uniform(shader::kBilinear, false));
     fmfNode->addChild(fmfPatch.get());
     const osg::ref_ptr<osg::Image> fmfImage =

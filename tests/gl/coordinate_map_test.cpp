@@ -2,20 +2,28 @@
 // method: the GPU render through a random map equals the GPU render of the materialised material
 // (its per-texel textures remapped on the CPU) and shows, at every pixel, the texel the map
 // names in the plain render; the CPU evaluation at the mapped texels equals the materialised
-// material's exactly.
+// material's exactly. Magnified and across the map's wrap edge, a fragment shows the bilinear
+// blend of the four map entries around it (evaluateThroughMap).
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <memory>
 
 #include <gtest/gtest.h>
+#include <osg/Uniform>
 
 #include "harness/MaterialImage.h"
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/ShaderInterface.h"
+#include "materials/fmf/Fmf.h"
 #include "materials/pca/Pca.h"
+#include "materials/ptm/Ptm.h"
 #include "scene/MaterialNode.h"
+#include "tests/RandomFactors.h"
 #include "tests/gl/GlTestEnv.h"
+#include "tests/gl/MaterialGpuCheck.h"
 
 using namespace osgBTF;
 
@@ -89,6 +97,164 @@ TEST_P(CoordinateMapGpu, RenderThroughTheMapEqualsTheMaterialisedMaterial) {
               << ", vs plain render at the mapped texels " << picked << ", GPU vs CPU " << gpuCpu
               << " (plain: "
               << maxAbsDifference(gpuPlain, evaluateMaterialImage(*material, view, light)) << ")\n";
+}
+
+namespace {
+
+/** The render of `material` on the unit patch at texture scale `scale` (the patch shows
+ *  [0, scale]^2), width x height pixels, through `map` (null: the material alone), seen from
+ *  `view` and lit from `light` as a rectified image. Rows bottom-up. */
+osg::ref_ptr<osg::Image> renderPatch(const Material& material, const CoordinateMap* map,
+                                     float scale, int width, int height, const glm::vec3& view,
+                                     const glm::vec3& light) {
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+    osg::ref_ptr<osg::StateSet> render = new osg::StateSet;
+    addRectifiedLighting(*render, view, light);
+    render->addUniform(new osg::Uniform(shader::kTextureScale, scale));
+    osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
+    geode->setStateSet(render.get());
+    osg::ref_ptr<osg::Group> mapped = new osg::Group;
+    if (map) {
+        osg::ref_ptr<osg::Texture2D> texture = createCoordinateMapTexture(*map);
+        mapped->setStateSet(createCoordinateMapStateSet(material, *stateSet, texture.get()));
+    }
+    mapped->addChild(geode.get());
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    root->setStateSet(stateSet.get());
+    root->addChild(mapped.get());
+    return test::sharedRenderer().render(root.get(), orthoUnitSquare(width, height));
+}
+
+/** The GPU-CPU bound of the method's own tests (bilinear_filter_test.cpp's): lambert 1e-5, ptm
+ *  its rounding bound, fmf 1e-3 of the image's largest value (at least 1), the others 1e-3. */
+double methodBound(const Material& m, const glm::vec3& view, const glm::vec3& light) {
+    if (m.methodName() == "lambert") return 1e-5;
+    if (const auto* ptm = dynamic_cast<const PtmMaterial*>(&m)) return test::ptmGpuTolerance(*ptm);
+    if (m.methodName() == "fmf") {
+        double largest = 1;
+        for (int y = 0; y < m.height(); ++y)
+            for (int x = 0; x < m.width(); ++x) {
+                const glm::vec3 value = m.evaluate(x, y, view, light);
+                for (int c = 0; c < 3; ++c) largest = std::max(largest, double(std::abs(value[c])));
+            }
+        return 1e-3 * largest;
+    }
+    return 1e-3;
+}
+
+/** The largest differences of a render through `map`, magnified and across the wrap, per
+ *  channel over every pixel. */
+struct ThroughMapCheck {
+    double gpuCpu = 0;           ///< against evaluateThroughMap
+    double materialisedCpu = 0;  ///< evaluateThroughMap against the materialised evaluateFiltered
+    double materialisedGpu = 0;  ///< against the render of the materialised material
+    double fromNearest = 0;      ///< evaluateThroughMap against the entry under the pixel alone
+};
+
+ThroughMapCheck checkThroughMap(const Material& material, const Material& remapped,
+                                const CoordinateMap& map, const glm::vec3& view,
+                                const glm::vec3& light) {
+    // Texture scale 2: the patch shows the map twice along each axis, so u and v cross 1 (the
+    // wrap edge: the last column blends with the first) in the middle, and the bands left of and
+    // below the first centres blend with the last column and row. 4 pixels per entry: pixel
+    // centres at 1/8, 3/8, 5/8 and 7/8 of an entry, weights exact in any filter's arithmetic.
+    const float scale = 2.0f;
+    const int perEntry = 4;
+    const int width = 2 * map.width * perEntry, height = 2 * map.height * perEntry;
+    const osg::ref_ptr<osg::Image> mapped =
+        renderPatch(material, &map, scale, width, height, view, light);
+    const osg::ref_ptr<osg::Image> materialised =
+        renderPatch(remapped, nullptr, scale, width, height, view, light);
+    ThroughMapCheck r;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const float u = scale * (float(x) + 0.5f) / float(width);
+            const float v = scale * (float(y) + 0.5f) / float(height);
+            const glm::vec3 expected = evaluateThroughMap(material, map, u, v, view, light);
+            const glm::vec3 remappedValue = remapped.evaluateFiltered(u, v, 0.0f, view, light);
+            // The entry under the pixel: what a nearest lookup would show.
+            const int ex = (x / perEntry) % map.width, ey = (y / perEntry) % map.height;
+            const glm::vec3 nearest =
+                material.evaluate(map.sampleX(ex, ey), map.sampleY(ex, ey), view, light);
+            for (int c = 0; c < 3; ++c) {
+                const double got = test::pixel(*mapped, x, y, c);
+                r.gpuCpu = std::max(r.gpuCpu, std::abs(got - double(expected[c])));
+                r.materialisedCpu =
+                    std::max(r.materialisedCpu, double(std::abs(remappedValue[c] - expected[c])));
+                r.materialisedGpu = std::max(
+                    r.materialisedGpu, std::abs(got - double(test::pixel(*materialised, x, y, c))));
+                r.fromNearest = std::max(r.fromNearest, double(std::abs(nearest[c] - expected[c])));
+            }
+        }
+    return r;
+}
+
+}  // namespace
+
+TEST_P(CoordinateMapGpu, MagnifiedAndAcrossTheWrapBlendsTheFourEntries) {
+    SampleOptions options;
+    options.width = 8;
+    options.height = 6;
+    options.views = options.lights = fewDirections();
+    const MethodInfo& info = findMethod(GetParam());
+    osg::ref_ptr<Material> material =
+        info.fit(makeSampleBtf(options), FitOptions::parse(info.quickFitOptions));
+    // Every entry its own random texel: neighbouring entries name unrelated texels.
+    const CoordinateMap map = makeBlockCoordinateMap(12, 10, 8, 6, 1, 11);
+    osg::ref_ptr<Material> remapped = remapMaterial(*material, map);
+    const glm::vec3 view = Direction{31.7f, 77}.toVector();
+    double worstGpuCpu = 0, worstBound = 0, worstMaterialisedCpu = 0, worstMaterialisedGpu = 0;
+    for (const Direction& l : {Direction{52, 200}, Direction{30, 60}}) {
+        const glm::vec3 light = l.toVector();
+        const double bound = methodBound(*material, view, light);
+        const ThroughMapCheck r = checkThroughMap(*material, *remapped, map, view, light);
+        EXPECT_LE(r.gpuCpu, bound) << GetParam() << " light " << l.theta << "/" << l.phi;
+        // The reference blends: a render of the nearest entries would miss it by far more.
+        EXPECT_GT(r.fromNearest, 10 * bound) << GetParam();
+        // The materialised material's own filtered reference is the same blend of the same
+        // values in the same order where it blends values. Where it filters parameters and
+        // finishes the blend (ptm's clamp, fmf's decoding) it equals it while the finishing is
+        // linear over the four entries, as for these fits (not with fmf's exp decoding:
+        // FmfExpDecodingThroughAMapBlendsDecodedValues below).
+        if (remapped->texelFilter() == Material::TexelFilter::Values) {
+            EXPECT_EQ(r.materialisedCpu, 0.0) << GetParam();
+        } else {
+            EXPECT_LE(r.materialisedCpu, bound) << GetParam();
+        }
+        worstGpuCpu = std::max(worstGpuCpu, r.gpuCpu);
+        worstBound = std::max(worstBound, bound);
+        worstMaterialisedCpu = std::max(worstMaterialisedCpu, r.materialisedCpu);
+        worstMaterialisedGpu = std::max(worstMaterialisedGpu, r.materialisedGpu);
+    }
+    std::cout << GetParam() << " through a 12x10 map, magnified x4 across the wrap: GPU vs CPU "
+              << worstGpuCpu << " (bound " << worstBound
+              << "); materialised material: CPU filtered " << worstMaterialisedCpu << ", GPU "
+              << worstMaterialisedGpu << " ("
+              << (remapped->filtersParameters() ? "filters parameters" : "blends values") << ")\n";
+}
+
+TEST(CoordinateMapGpu, FmfExpDecodingThroughAMapBlendsDecodedValues) {
+    // fmf with dynamic-range reduction filters its parameters without a map and decodes (exp)
+    // the blend. Through a map it cannot (neighbouring entries name unrelated sample texels)
+    // and blends the four entries' decoded values like every method: the render equals
+    // evaluateThroughMap, and between entries differs from the materialised material's
+    // evaluateFiltered (exp of the blend), which the test shows is a real difference here.
+    FactoredBtf drr = test::randomFactors(FactorModel::Fmf, {6, 6, 6}, 8, 4, 2);
+    drr.dynamicRangeReduction = 1;
+    drr.cosine = true;
+    osg::ref_ptr<FmfMaterial> material = FmfMaterial::fromFactors(drr, MaterialTexture::Float);
+    const CoordinateMap map = makeBlockCoordinateMap(12, 10, 8, 4, 1, 13);
+    osg::ref_ptr<Material> remapped = remapMaterial(*material, map);
+    ASSERT_TRUE(remapped->filtersParameters());
+    const glm::vec3 view = Direction{31.7f, 77}.toVector(), light = Direction{45, 20}.toVector();
+    const double bound = methodBound(*material, view, light);
+    const ThroughMapCheck r = checkThroughMap(*material, *remapped, map, view, light);
+    EXPECT_LE(r.gpuCpu, bound);
+    EXPECT_GT(r.fromNearest, 10 * bound);
+    EXPECT_GT(r.materialisedCpu, 10 * bound) << "exp of the blend is not the blend of exp";
+    std::cout << "fmf drr through a 12x10 map, magnified x4 across the wrap: GPU vs CPU "
+              << r.gpuCpu << " (bound " << bound << "); materialised material: CPU filtered "
+              << r.materialisedCpu << ", GPU " << r.materialisedGpu << "\n";
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, CoordinateMapGpu, ::testing::ValuesIn(methodNames()),

@@ -1,12 +1,17 @@
 // Environment lighting on the GPU (materials/EnvironmentState.h): per-vertex folded pca, fmf and
-// lpca data, blended across the triangles, against the CPU's evaluateFolded at every pixel, and the
-// white environment against the brute-force integral of the point-light rendering.
+// lpca data, blended across the triangles, against the CPU's evaluateFoldedFiltered at every
+// pixel (magnified: a fragment blends the four texels around it, wrapping at the material's
+// edges), and the white environment against the brute-force integral of the point-light
+// rendering.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <iostream>
 #include <random>
 
 #include <glm/geometric.hpp>
@@ -22,6 +27,7 @@
 
 #include "harness/MaterialImage.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/BilinearTaps.h"
 #include "materials/EnvironmentLighting.h"
 #include "materials/EnvironmentState.h"
 #include "materials/ShaderInterface.h"
@@ -112,8 +118,10 @@ struct Rendered {
     int size;
 };
 
+/** The square at texture scale `scale` (it shows [0, scale]^2 of the material) in 32 x 32
+ *  pixels: 8 pixels per texel of the 4 x 4 materials at scale 1. */
 Rendered render(const Material& material, const std::vector<std::vector<float>>& folded,
-                const glm::vec3& view, float exposure) {
+                const glm::vec3& view, float exposure, float scale = 1.0f) {
     osg::ref_ptr<osg::Group> root = new osg::Group;
     root->setStateSet(material.sharedStateSet());
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
@@ -121,34 +129,68 @@ Rendered render(const Material& material, const std::vector<std::vector<float>>&
     geode->setStateSet(environmentStateSet(material, folded, exposure));
     geode->getStateSet()->addUniform(
         new osg::Uniform(shader::kFixedView, osg::Vec4(view.x, view.y, view.z, 1.0f)));
+    geode->getStateSet()->addUniform(new osg::Uniform(shader::kTextureScale, scale));
     root->addChild(geode);
     const int size = 32;
     return {test::sharedRenderer().render(root, orthoUnitSquare(size, size)), size};
 }
 
-/** Largest |GPU - CPU| over the image relative to the largest CPU value. */
+/** Largest |GPU - CPU| over the image (CPU: evaluateFoldedFiltered at the pixel's texture
+ *  coordinate, the vertices' values blended across the triangle); `largest`: the largest CPU
+ *  value; `fromNearest`, when given: the largest difference between the CPU value and what the
+ *  nearest texel alone would give, how far a render without filtering would be off. */
 double compare(const Material& material, const Rendered& r,
                const std::vector<std::vector<float>>& folded, const glm::vec3& view, float exposure,
-               double* largest) {
+               double* largest, float scale = 1.0f, double* fromNearest = nullptr) {
     double worst = 0;
     *largest = 0;
+    if (fromNearest) *fromNearest = 0;
     for (int y = 0; y < r.size; ++y)
         for (int x = 0; x < r.size; ++x) {
-            const float u = (x + 0.5f) / r.size, v = (y + 0.5f) / r.size;
-            const std::array<float, 4> b = barycentric(u, v);
-            glm::vec3 expected(0.0f);
-            const int tx = int(u * 4), ty = int(v * 4);
+            // Barycentric coordinates on the square; texture coordinates scaled.
+            const float px = (x + 0.5f) / r.size, py = (y + 0.5f) / r.size;
+            const std::array<float, 4> b = barycentric(px, py);
+            const float u = scale * px, v = scale * py;
+            glm::vec3 expected(0.0f), nearest(0.0f);
+            const int tx = int(u * 4) % 4, ty = int(v * 4) % 4;
             for (int k = 0; k < 4; ++k)
-                if (b[k] > 0.0f)
-                    expected += b[k] * evaluateFolded(material, folded[k], tx, ty, view);
+                if (b[k] > 0.0f) {
+                    expected += b[k] * evaluateFoldedFiltered(material, folded[k], u, v, view);
+                    nearest += b[k] * evaluateFolded(material, folded[k], tx, ty, view);
+                }
             expected *= exposure;
+            nearest *= exposure;
             for (int ch = 0; ch < 3; ++ch) {
                 worst = std::max(worst,
                                  double(std::abs(test::pixel(*r.image, x, y, ch) - expected[ch])));
                 *largest = std::max(*largest, double(std::abs(expected[ch])));
+                if (fromNearest)
+                    *fromNearest =
+                        std::max(*fromNearest, double(std::abs(nearest[ch] - expected[ch])));
             }
         }
     return worst;
+}
+
+/** Per-texel values of a 4 x 4 material, [ty * 4 + tx]. */
+using TexelValues = std::array<glm::vec3, 16>;
+
+TexelValues texelValues(const std::function<glm::vec3(int, int)>& value) {
+    TexelValues values;
+    for (int ty = 0; ty < 4; ++ty)
+        for (int tx = 0; tx < 4; ++tx) values[std::size_t(ty * 4 + tx)] = value(tx, ty);
+    return values;
+}
+
+/** What pixel (x, y) of a size x size render of the square (texture scale 1) shows of a 4 x 4
+ *  material whose texels alone show `values`: the blend of the four texels around the pixel
+ *  centre with GL_LINEAR's weights, wrapping at the edges. */
+glm::vec3 filteredPixel(const TexelValues& values, int x, int y, int size) {
+    const BilinearTaps taps((x + 0.5f) / float(size), (y + 0.5f) / float(size), 4, 4);
+    glm::vec3 value(0.0f);
+    for (int k = 0; k < 4; ++k)
+        value += taps.weight[k] * values[std::size_t(taps.y[k] * 4 + taps.x[k])];
+    return value;
 }
 
 }  // namespace
@@ -201,6 +243,47 @@ TEST(EnvironmentGpu, FoldedFmfAndLpcaMatchTheCpu) {
     }
 }
 
+TEST(EnvironmentGpu, FoldedLightingBlendsTheFourTexelsAroundAFragment) {
+    // Texture scale 2: 4 pixels per texel (pixel centres at 1/8, 3/8, 5/8, 7/8 of a texel, none
+    // on a centre), u and v pass 1 in the middle of the square (the last column blends with the
+    // first across the wrap), and the bands left of and below the first centres blend with the
+    // last column and row. Every method with folded lighting, each vertex its own environment,
+    // against evaluateFoldedFiltered within the tests' bound above (1e-4 of the largest value);
+    // the nearest texel alone would be off by far more.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> uniform(0.0f, 0.05f);
+    std::vector<std::string> covered;
+    for (const Material* m :
+         {static_cast<const Material*>(&pca()), static_cast<const Material*>(&fmf()),
+          static_cast<const Material*>(&lpca())}) {
+        ASSERT_TRUE(foldsEnvironment(*m)) << m->methodName();
+        covered.push_back(m->methodName());
+        std::vector<std::vector<float>> folded;
+        for (int v = 0; v < 4; ++v) {
+            std::vector<glm::vec3> g(m->lights().size());
+            for (glm::vec3& x : g) x = glm::vec3(uniform(rng), uniform(rng), uniform(rng));
+            g[std::size_t(v) * 9 + 4] *= 40.0f;
+            folded.push_back(foldEnvironment(*m, g));
+        }
+        const glm::vec3 view = glm::normalize(glm::vec3(0.3f, -0.2f, 0.8f));
+        const float scale = 2.0f;
+        const Rendered r = render(*m, folded, view, 1.0f, scale);
+        double largest = 0, fromNearest = 0;
+        const double worst = compare(*m, r, folded, view, 1.0f, &largest, scale, &fromNearest);
+        EXPECT_GT(largest, 0.01) << m->methodName();
+        EXPECT_LE(worst, 1e-4 * largest) << m->methodName();
+        EXPECT_GT(fromNearest, 1e-2 * largest) << m->methodName();
+        std::cout << m->methodName() << " environment, magnified x4 across the wrap: GPU vs CPU "
+                  << worst << " of largest " << largest << " (nearest texel off by " << fromNearest
+                  << ")\n";
+    }
+    for (const std::string& name : methodNames()) {
+        if (hasFoldedEnvironment(name)) {
+            EXPECT_NE(std::find(covered.begin(), covered.end(), name), covered.end()) << name;
+        }
+    }
+}
+
 TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
     // Issue 15: constant white environment, no occlusion: the GPU image equals sum_i dOmega_i
     // BTF(x, v, l_i), i.e. the CPU's integral of the point-light rendering over the hemisphere.
@@ -211,11 +294,14 @@ TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
     const std::vector<std::vector<float>> folded(4, f);
     const glm::vec3 view = glm::normalize(glm::vec3(-0.2f, 0.4f, 0.7f));
     const Rendered r = render(pca(), folded, view, 1.0f);
+    // Each texel's integral; a pixel shows the blend of the four texels around it.
+    const TexelValues integrals = texelValues(
+        [&](int tx, int ty) { return environmentReference(pca(), tx, ty, view, samples); });
     double largest = 0;
     for (int ty = 0; ty < 4; ++ty)
         for (int tx = 0; tx < 4; ++tx) {
-            const glm::vec3 expected = environmentReference(pca(), tx, ty, view, samples);
             const int x = tx * 8 + 4, y = ty * 8 + 3;
+            const glm::vec3 expected = filteredPixel(integrals, x, y, r.size);
             for (int ch = 0; ch < 3; ++ch) {
                 largest = std::max(largest, double(expected[ch]));
                 EXPECT_NEAR(test::pixel(*r.image, x, y, ch), expected[ch],
@@ -246,10 +332,12 @@ TEST(EnvironmentGpu, OneBrightTexelDrawsThePointLightImage) {
     const glm::vec3 view = glm::normalize(glm::vec3(0.3f, 0.3f, 0.8f));
     const Rendered r = render(pca(), folded, view, 1.0f);
     const float omega = float(map.solidAngle(row));
+    const TexelValues pointLights = texelValues([&](int tx, int ty) {
+        return radiance * omega * pca().evaluate(tx, ty, view, pca().lights().vector(index));
+    });
     for (int ty = 0; ty < 4; ++ty)
         for (int tx = 0; tx < 4; ++tx) {
-            const glm::vec3 pointLight =
-                radiance * omega * pca().evaluate(tx, ty, view, pca().lights().vector(index));
+            const glm::vec3 pointLight = filteredPixel(pointLights, tx * 8 + 4, ty * 8 + 3, r.size);
             for (int ch = 0; ch < 3; ++ch)
                 EXPECT_NEAR(test::pixel(*r.image, tx * 8 + 4, ty * 8 + 3, ch), pointLight[ch],
                             1e-4 * glm::length(pointLight) + 1e-6)
@@ -284,10 +372,12 @@ TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
         light->setExposure(exposure);
         osg::ref_ptr<osg::Image> image =
             test::sharedRenderer().render(node, orthoUnitSquare(32, 32));
+        const TexelValues integrals = texelValues([&](int tx, int ty) {
+            return exposure * environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+        });
         for (int ty = 0; ty < 4; ++ty)
             for (int tx = 0; tx < 4; ++tx) {
-                const glm::vec3 expected =
-                    exposure * environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+                const glm::vec3 expected = filteredPixel(integrals, tx * 8 + 4, ty * 8 + 3, 32);
                 for (int ch = 0; ch < 3; ++ch)
                     EXPECT_NEAR(test::pixel(*image, tx * 8 + 4, ty * 8 + 3, ch), expected[ch],
                                 1e-4 * expected[ch] + 1e-6)
@@ -365,10 +455,12 @@ TEST(EnvironmentGpu, EnvironmentLitGroupLightsItsMaterialNodesByItself) {
     ASSERT_NE(geometry->getStateSet(), nullptr);
     const std::vector<EnvironmentSample> samples = visibleEnvironment(white, SurfaceFrame{});
     osg::ref_ptr<osg::Image> image = test::sharedRenderer().render(group, orthoUnitSquare(32, 32));
+    const TexelValues integrals = texelValues([&](int tx, int ty) {
+        return environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+    });
     for (int ty = 0; ty < 4; ++ty)
         for (int tx = 0; tx < 4; ++tx) {
-            const glm::vec3 expected =
-                environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+            const glm::vec3 expected = filteredPixel(integrals, tx * 8 + 4, ty * 8 + 3, 32);
             for (int ch = 0; ch < 3; ++ch)
                 EXPECT_NEAR(test::pixel(*image, tx * 8 + 4, ty * 8 + 3, ch), expected[ch],
                             1e-4 * expected[ch] + 1e-6)
@@ -457,11 +549,13 @@ TEST(EnvironmentGpu, EnvironmentLitGroupRebuildsRotationsFromItsIlluminationPca)
         const std::vector<EnvironmentSample> samples = visibleEnvironment(turned, SurfaceFrame{});
         osg::ref_ptr<osg::Image> image =
             test::sharedRenderer().render(group, orthoUnitSquare(32, 32));
+        const TexelValues integrals = texelValues([&](int tx, int ty) {
+            return environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+        });
         double largest = 0;
         for (int ty = 0; ty < 4; ++ty)
             for (int tx = 0; tx < 4; ++tx) {
-                const glm::vec3 expected =
-                    environmentReference(pca(), tx, ty, glm::vec3(0, 0, 1), samples);
+                const glm::vec3 expected = filteredPixel(integrals, tx * 8 + 4, ty * 8 + 3, 32);
                 for (int ch = 0; ch < 3; ++ch) {
                     largest = std::max(largest, double(expected[ch]));
                     EXPECT_NEAR(test::pixel(*image, tx * 8 + 4, ty * 8 + 3, ch), expected[ch],

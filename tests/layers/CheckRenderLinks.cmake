@@ -1,18 +1,22 @@
-# ctest layers.render_links: rendering a fitted material loads no fitter and no HTTP client of
-# osgBTF's (libosgBTFStreaming; libcurl neither in NEEDED nor used: no curl_ symbol. Debian's
-# OpenImageIO brings libcurl into the closure through GDAL, which is not osgBTF's to change, so
-# ldd is not asked about libcurl). The render library
+# ctest layers.render_links: rendering a fitted material loads no fitter, no HTTP client and no
+# ray tracer of osgBTF's (libosgBTFStreaming; libcurl neither in NEEDED nor used: no curl_ symbol.
+# Debian's OpenImageIO brings libcurl into the closure through GDAL, which is not osgBTF's to
+# change, so ldd is not asked about libcurl). The render library
 # (libosgBTF) and the render plugin (osgdb_btfmat) must not need Ceres or glog, not even through
 # another library (ldd: the whole closure), and must not need libosgBTFFit (readelf: NEEDED);
 # libosgBTF must not use a symbol libosgBTFFit defines (the fitting code lives there only) nor
 # export Ceres code (Debian's CMake package links Ceres statically: its code would be inside, and
-# only glog in NEEDED). So that the check can fail, the same probes must find glog or Ceres behind
-# libosgBTFFit, Ceres code in it, and libosgBTFFit in a plugin that fits on load (osgdb_btf).
+# only glog in NEEDED). Nor a ray tracer: neither needs libembree or libosgBTFEnvironment (NEEDED
+# and ldd), and libosgBTF calls no Embree function (rtc*) and no function libosgBTFEnvironment
+# defines. So that the check can fail, the same probes must find glog or Ceres behind
+# libosgBTFFit, Ceres code in it, libosgBTFFit in a plugin that fits on load (osgdb_btf), and
+# libembree and its rtc* functions in libosgBTFEnvironment.
 #   cmake -DRENDER_LIBRARY=<libosgBTF> -DRENDER_PLUGIN=<osgdb_btfmat>
 #         -DFIT_LIBRARY=<libosgBTFFit> -DFIT_PLUGIN=<osgdb_btf>
-#         -DSTREAMING_LIBRARY=<libosgBTFStreaming> -P CheckRenderLinks.cmake
+#         -DSTREAMING_LIBRARY=<libosgBTFStreaming>
+#         -DENVIRONMENT_LIBRARY=<libosgBTFEnvironment> -P CheckRenderLinks.cmake
 cmake_minimum_required(VERSION 3.22)
-set(fitting_pattern "ceres|glog|osgBTFFit|osgBTFStreaming")  # NEEDED and ldd
+set(fitting_pattern "ceres|glog|osgBTFFit|osgBTFStreaming|embree|osgBTFEnvironment")  # NEEDED, ldd
 set(direct_pattern "${fitting_pattern}|curl")                   # NEEDED only
 set(RENDER ${RENDER_LIBRARY} ${RENDER_PLUGIN})
 
@@ -52,27 +56,31 @@ foreach(file IN LISTS RENDER)
   closure(${file} all)
   foreach(library IN LISTS direct)
     if(library MATCHES "${direct_pattern}")
-      list(APPEND problems "${name} needs ${library}: rendering must not load a fitter or an "
-                           "HTTP client")
+      list(APPEND problems "${name} needs ${library}: rendering must not load a fitter, an "
+                           "HTTP client or a ray tracer")
     endif()
   endforeach()
   foreach(library IN LISTS all)
     if(library MATCHES "${fitting_pattern}")
-      list(APPEND problems "${name} needs ${library}: rendering must not load a fitter or an "
-                           "HTTP client")
+      list(APPEND problems "${name} needs ${library}: rendering must not load a fitter, an "
+                           "HTTP client or a ray tracer")
     endif()
   endforeach()
 endforeach()
 
-# No symbol of the render library is left for libosgBTFFit or libosgBTFStreaming to define.
+# No symbol of the render library is left for libosgBTFFit, libosgBTFStreaming or
+# libosgBTFEnvironment to define.
 set(render_library ${RENDER_LIBRARY})
 dynamic_symbols(${render_library} --undefined-only render_undefined)
 foreach(symbol IN LISTS render_undefined)
   if(symbol MATCHES "^curl_")
     list(APPEND problems "${render_library} uses ${symbol} (libcurl)")
   endif()
+  if(symbol MATCHES "^rtc[A-Z]")
+    list(APPEND problems "${render_library} uses ${symbol} (Embree)")
+  endif()
 endforeach()
-foreach(upper IN ITEMS ${FIT_LIBRARY} ${STREAMING_LIBRARY})
+foreach(upper IN ITEMS ${FIT_LIBRARY} ${STREAMING_LIBRARY} ${ENVIRONMENT_LIBRARY})
   get_filename_component(upper_name ${upper} NAME)
   dynamic_symbols(${upper} --defined-only upper_defined)
   list(LENGTH upper_defined upper_defined_count)
@@ -128,10 +136,19 @@ needed(${STREAMING_LIBRARY} streaming_direct)
 if(NOT streaming_direct MATCHES "curl")
   list(APPEND problems "readelf finds no libcurl in ${STREAMING_LIBRARY}'s NEEDED (${streaming_direct})")
 endif()
+needed(${ENVIRONMENT_LIBRARY} environment_direct)
+if(NOT environment_direct MATCHES "embree")
+  list(APPEND problems "readelf finds no libembree in ${ENVIRONMENT_LIBRARY}'s NEEDED "
+                       "(${environment_direct})")
+endif()
+dynamic_symbols(${ENVIRONMENT_LIBRARY} --undefined-only environment_undefined)
+if(NOT environment_undefined MATCHES "(^|;)rtc[A-Z]")
+  list(APPEND problems "nm finds no rtc* (Embree) symbol used by ${ENVIRONMENT_LIBRARY}")
+endif()
 
 if(problems)
   list(REMOVE_DUPLICATES problems)
   list(JOIN problems "\n  " text)
   message(FATAL_ERROR "render link check failed:\n  ${text}")
 endif()
-message(STATUS "render library and render plugin load no fitter and no HTTP client")
+message(STATUS "render library and render plugin load no fitter, no HTTP client and no ray tracer")

@@ -571,15 +571,16 @@ TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
     const fs::path plugins = lib / ("osgPlugins-" + std::string(OSGBTF_OSG_VERSION));
     const fs::path include = prefix.path() / "include" / "osgBTF";
     for (const fs::path& file :
-         {lib / "libosgBTF.so", plugins / "osgdb_btfmat.so", plugins / "osgdb_btf.so",
-          plugins / "osgdb_btfzip.so", plugins / "osgdb_btfmaterial.so",
+         {lib / "libosgBTF.so", lib / "libosgBTFEnvironment.so", plugins / "osgdb_btfmat.so",
+          plugins / "osgdb_btf.so", plugins / "osgdb_btfzip.so", plugins / "osgdb_btfmaterial.so",
           plugins / "osgdb_btfexr.so", plugins / "osgdb_serializers_osgbtf.so",
           prefix.path() / "bin" / "btf", prefix.path() / "bin" / "btfviewer",
           prefix.path() / "bin" / "btf-examples", include / "MaterialNode",
           include / "scene" / "MaterialNode.h", include / "Version",
           lib / "cmake" / "osgBTF" / "osgBTFConfig.cmake",
           lib / "cmake" / "osgBTF" / "osgBTFConfigVersion.cmake",
-          lib / "cmake" / "osgBTF" / "osgBTFTargets.cmake", lib / "pkgconfig" / "osgBTF.pc"})
+          lib / "cmake" / "osgBTF" / "osgBTFTargets.cmake", lib / "pkgconfig" / "osgBTF.pc",
+          lib / "pkgconfig" / "osgBTFEnvironment.pc"})
         EXPECT_TRUE(fs::exists(file)) << file << " was not installed";
     // The SDK is the runtime only: the harness (static, inside the tools) is not installed.
     EXPECT_FALSE(fs::exists(include / "harness"));
@@ -635,6 +636,15 @@ TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
     ASSERT_EQ(shim.exitCode, 0) << shim.output;
     EXPECT_EQ(shim.output.find("Unsupported wrapper class osgBTF::MaterialNode"), std::string::npos)
         << shim.output;
+    // EnvironmentLitGroup's wrapper is in libosgBTFEnvironment, which osgDB never loads by name:
+    // osgdb_serializers_osgbtf links it.
+    const CommandResult lit = runCommand(osgconv + "cloth-sky.osgt " +
+                                         shellQuote(prefix.file("cloth-sky.osgt")) + " 2>&1");
+    ASSERT_EQ(lit.exitCode, 0) << lit.output;
+    EXPECT_EQ(lit.output.find("Unsupported wrapper"), std::string::npos) << lit.output;
+    EXPECT_NE(osgBTF::test::readTextFile(prefix.file("cloth-sky.osgt"))
+                  .find("osgBTF::EnvironmentLitGroup"),
+              std::string::npos);
 }
 
 // ---- stock osgviewer under Xvfb ----------------------------------------------------------

@@ -27,8 +27,8 @@ std::string methodsWithOption(const std::string& key) {
 }
 
 void printErrorSummary(const ErrorSummary& e) {
-    std::cout << std::setprecision(5) << "per-texel error (seed 001 sec. 4.1): avg " << e.average
-              << "  min " << e.minimum << "  max " << e.maximum << "\n"
+    std::cout << std::setprecision(5) << "per-texel error (Meseth et al. 2003, sec. 4.1): avg "
+              << e.average << "  min " << e.minimum << "  max " << e.maximum << "\n"
               << "RMSE " << e.rmse << "  PSNR " << std::setprecision(4) << e.psnr << " dB";
     if (e.nonFiniteValues) std::cout << "  (" << e.nonFiniteValues << " NaN/Inf values!)";
     std::cout << "\n";
@@ -43,7 +43,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         std::vector<std::string> settings;
         int lobes = 0, components = 0, clusters = 0;
         long long errorTexels = -1;
-        bool mipmap = false;
+        bool mipmap = false, noMipmap = false;
     };
     auto options = std::make_shared<Options>();
     command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
@@ -68,11 +68,16 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
                      "pairs each); 0 = all. Default: all for data in memory, 4096 for a UBO2014 "
                      "file, which is decoded block by block and never whole")
         ->check(CLI::NonNegativeNumber);
-    command->add_flag(
+    auto* mipmapFlag = command->add_flag(
         "--mipmap", options->mipmap,
-        "Fit a mip-mapped material: every level of box-filtered data (down to 1x1) fitted "
-        "with the method, so minified surfaces render the average of what a pixel covers "
-        "instead of aliasing (1.5x the texels; the error covers every level)");
+        "Fit a mip-mapped material (the default, except for a .btf output): every level of "
+        "box-filtered data (down to 1x1) fitted with the method, so minified surfaces render "
+        "the average of what a pixel covers instead of aliasing (1.5x the texels, at most 1.41x "
+        "the file; the error covers every level)");
+    command
+        ->add_flag("--no-mipmap", options->noMipmap,
+                   "Fit the base level alone (a plain material: smaller, aliases when minified)")
+        ->excludes(mipmapFlag);
     addLoadOptions(*command, common);
     return [&common, options] {
         const MethodInfo& method = findMethod(options->method);
@@ -93,6 +98,9 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         std::string extension = std::filesystem::path(options->output).extension().string();
         for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
         const bool btfOutput = extension == ".btf";
+        // Mip-mapped unless asked otherwise (issue 29: every method's file grows by at most
+        // 1.41x on the built-in sample, tools/README.md), or the format cannot hold the levels.
+        const bool mipmap = options->mipmap || (!options->noMipmap && !btfOutput);
         if (btfOutput && options->mipmap)
             fail(options->output,
                  "a UBO2014 .btf file has no mip levels; save a --mipmap fit as .btfmat or .exr");
@@ -113,12 +121,12 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         const std::unique_ptr<BtfSource> input =
             openBtfSource(options->input, common.loadOptions());
         const std::unique_ptr<BtfSource> atlas =
-            options->mipmap ? std::make_unique<MipAtlasSource>(*input) : nullptr;
+            mipmap ? std::make_unique<MipAtlasSource>(*input) : nullptr;
         // A mip-mapped fit's error is measured against every level's data.
         const BtfSource& btf = atlas ? *atlas : *input;
         const auto loaded = std::chrono::steady_clock::now();
         osg::ref_ptr<Material> material =
-            options->mipmap ? fitMipMapped(method, *input, fit) : method.fit(btf, fit);
+            mipmap ? fitMipMapped(method, *input, fit) : method.fit(btf, fit);
         const double fitSeconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - loaded).count();
         material->fitInfo["seconds"] = std::to_string(fitSeconds);

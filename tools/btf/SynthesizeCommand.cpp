@@ -35,7 +35,8 @@ void requireOutputFolder(const std::string& output) {
 Runner addSynthesizeCommand(CLI::App& app, CommonOptions& common) {
     auto* command = app.add_subcommand(
         "synthesize",
-        "Synthesise a large surface from a measured sample by k-coherence synthesis (seed 002 "
+        "Synthesise a large surface from a measured sample by k-coherence synthesis (Boßerhoff and "
+        "Nicoll 2003, "
         "sec. 4) and write it as a coordinate map (OpenEXR, R = sample x, G = sample y per "
         "output texel); prints the analysis and synthesis times, the coherence rate and the "
         "seam ratio");
@@ -133,10 +134,11 @@ Runner addSynthesizeCommand(CLI::App& app, CommonOptions& common) {
 }
 
 Runner addMakeTileableCommand(CLI::App& app, CommonOptions& common) {
-    auto* command = app.add_subcommand(
-        "make-tileable",
-        "Blend a sample's opposite edges linearly (seed 004 sec. 3.2) so that it tiles without "
-        "a seam; writes a UBO2003-format zip of the same size and directions");
+    auto* command =
+        app.add_subcommand("make-tileable",
+                           "Blend a sample's opposite edges linearly (Sattler et al. 2003, sec. "
+                           "3.2) so that it tiles without "
+                           "a seam; writes a UBO2003-format zip of the same size and directions");
     struct Options {
         std::string input, output, format = "exr";
         int border = 0;

@@ -20,7 +20,7 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
         "Write the BSVTF tile set of an fmf material: every group of 4 Eigen-Textures as a "
         "pyramid of 64x64 tiles (+4 texels of padding) coded against the decoded parent (8x8 "
         "DCT, JPEG-like quantisation, deflate), the tiles' priority weights, U in packets of 4 "
-        "components and an index (seed 003)");
+        "components and an index (Schwartz et al. 2013)");
     struct Options {
         std::string input, output, codec = "dct";
         TileBuildOptions build;
@@ -28,7 +28,8 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
     auto options = std::make_shared<Options>();
     command
         ->add_option("INPUT", options->input,
-                     "An fmf material: a fitted-material file from `btf fit -m fmf`, or a UBO2014 "
+                     "An fmf material: a fitted-material file from `btf fit -m fmf --no-mipmap`, "
+                     "or a UBO2014 "
                      "FMF .btf (its stored factors; DFMF files: fit fmf first)")
         ->required();
     command
@@ -37,7 +38,7 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
         ->required();
     command
         ->add_option("--codec", options->build.codec,
-                     "dct (coded residuals, seed 003) or raw (41,472-byte half tiles)")
+                     "dct (coded residuals, Schwartz et al. 2013) or raw (41,472-byte half tiles)")
         ->check(CLI::IsMember({"dct", "raw"}))
         ->capture_default_str();
     command->add_option("--quality", options->build.quality, "JPEG-like quality of dct, 1..100")
