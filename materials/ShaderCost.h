@@ -29,7 +29,8 @@ struct ShaderCost {
 
     // shaders/common/btf_main.glsl, once per fragment: normal 1, Gram-Schmidt tangent 3,
     // degenerate test 2, normalize 1, bitangent 4, eye direction 4, local view 3 dots, fixed-view
-    // test 1, btfTexel 5, view.z test 1.
+    // test 1, texel selection 5 (the nearest texel; the filtered blends add blendingTexels' own
+// count), view.z test 1.
     static constexpr int kFrameAlu = 25;
     // The light loop body around btfEvaluate: direction select + normalize 4, 3 dots, horizon
     // test 1, colour multiply-add 2.

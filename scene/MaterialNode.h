@@ -22,7 +22,8 @@
 //    unshadowed, its own program and textures PROTECTED from the technique's OVERRIDE, with one
 //    notice;
 //  - optionally draws the material through a coordinate map (setCoordinateMap[File]): a large
-//    non-repeating surface from a small sample, at the cost of one dependent fetch.
+//    non-repeating surface from a small sample, at the cost of four dependent fetches (the
+//    filtered lookup of the map's four entries around a fragment).
 // A material that cannot be loaded is reported with OSG_WARN (file and problem); the node then
 // draws its children with their own state, so the rest of the scene is unaffected.
 #pragma once

@@ -1,6 +1,7 @@
 // osgBTF: k-coherence BTF synthesis (seed 002 section 4, after Tong et al. 2002): a large
 // surface is made of texels of a small measured sample, and the result is a CoordinateMap (which
-// sample texel each output texel shows), rendered with one dependent fetch (seed 002 section 5).
+// sample texel each output texel shows), rendered through dependent fetches (seed 002 section 5;
+// filtered: the four map entries around a fragment).
 //
 // Two steps, each its own function so the analysis can be timed apart from the synthesis (seed
 // 002 Table 1 times the synthesis alone):
