@@ -54,18 +54,16 @@ glm::vec3 evaluateFolded(const Material& material, const std::vector<float>& fol
 }
 
 glm::vec3 evaluateFoldedFiltered(const Material& material, const std::vector<float>& folded,
-                                 float u, float v, const glm::vec3& view) {
+                                 float u, float v, float lod, const glm::vec3& view) {
     const EnvironmentHooks& hooks = hooksOf(material);
-    const MipLayout& mip = material.mipLayout();
-    const MipLevel base =
-        mip.mipMapped() ? mip.levels()[0] : MipLevel{0, 0, material.width(), material.height()};
-    const BilinearTaps taps(u, v, base.width, base.height);
+    // The texels and weights point lights blend (Material::evaluateFiltered), as environment.glsl
+    // shares surface_frame.glsl's btfAddMipTaps with btf_main.glsl.
+    const FilterTaps taps =
+        mipFilterTaps(material.mipLayout(), material.width(), material.height(), u, v, lod);
     glm::vec3 value(0.0f);
-    for (int k = 0; k < 4; ++k)
-        // As the shader: a texel of weight 0 is not evaluated.
-        if (taps.weight[k] > 0.0f)
-            value += taps.weight[k] * hooks.evaluateFolded(material, folded, base.x + taps.x[k],
-                                                           base.y + taps.y[k], view);
+    for (int k = 0; k < taps.count; ++k)
+        value += taps.taps[k].weight *
+                 hooks.evaluateFolded(material, folded, taps.taps[k].x, taps.taps[k].y, view);
     return value;
 }
 

@@ -9,9 +9,10 @@
 // coordinates; the fragment blends the three vertices' folded values across the triangle and
 // interpolates views as the method's point-light shader does. Only the nearest views of each
 // fragment are read, so the cost per texel is 3 vertices x 3 views x (c + 1) fetches. Texels are
-// filtered as point lights filter them: a fragment blends the values of the four base texels
-// around its texture coordinate (GL_LINEAR's weights, wrapping; evaluateFoldedFiltered), up to 4
-// texels' cost where it lies between texel centres; minified, the same at the base level.
+// filtered as point lights filter them: a fragment blends the values of the four texels around
+// its texture coordinate (GL_LINEAR's weights, wrapping; evaluateFoldedFiltered), up to 4 texels'
+// cost where it lies between texel centres; a minified mip-mapped material blends two levels'
+// four texels by the level of detail (GL_LINEAR_MIPMAP_LINEAR), up to 8.
 //
 // Use: the material's sharedStateSet() above the geometry (textures, tables, uniforms), the
 // environmentStateSet() on the geometry (program, data texture, exposure).
@@ -59,13 +60,15 @@ std::vector<float> foldEnvironment(const Material& material, const std::vector<g
 glm::vec3 evaluateFolded(const Material& material, const std::vector<float>& folded, int x, int y,
                          const glm::vec3& view);
 
-/** What the environment shader draws at texture coordinate (u, v) (after the texture scale) from
- *  one vertex's folded data: the bilinear blend, with wrap-around, of evaluateFolded at the four
- *  base texels around (u, v), with GL_LINEAR's weights (as Material::evaluateFiltered at level 0:
- *  a mip-mapped material's base level; its coarser levels are not used). Throws Error as
+/** What the environment shader draws at texture coordinate (u, v) (after the texture scale) and
+ *  level of detail `lod` (log2 of base texels per pixel) from one vertex's folded data: the
+ *  bilinear blend, with wrap-around, of evaluateFolded at the four texels around (u, v), with
+ *  GL_LINEAR's weights; for a mip-mapped material at a lod between two levels, the blend of both
+ *  levels' such blends by the lod (the texels and weights of Material::evaluateFiltered: lod
+ *  <= 0, NaN, or a material without levels reads the base texels). Throws Error as
  *  foldEnvironment. */
 glm::vec3 evaluateFoldedFiltered(const Material& material, const std::vector<float>& folded,
-                                 float u, float v, const glm::vec3& view);
+                                 float u, float v, float lod, const glm::vec3& view);
 
 /** RGB values per vertex in foldEnvironment's result. Throws Error as foldEnvironment. */
 std::size_t foldedStride(const Material& material);

@@ -81,67 +81,22 @@ void Material::setMipLayout(const MipLayout& layout) {
     _sharedStateSet = nullptr;
 }
 
-namespace {
-
-/** One texel of a filtered lookup and its share of the value. */
-struct FilterTap {
-    int x, y;
-    float weight;
-};
-
-/** The texels a filtered lookup blends, in the order btf_main.glsl adds them up. */
-struct FilterTaps {
-    FilterTap taps[8];
-    int count = 0;
-    void add(int x, int y, float weight) {
-        // A texel whose weight is 0 is not evaluated, on the GPU neither.
-        if (weight > 0.0f) taps[count++] = {x, y, weight};
-    }
-};
-
-/** btf_main.glsl's btfAddBilinearTaps: the four texels of `level` around uv, wrapped inside the
- *  level's rectangle, with GL_LINEAR's weights (frac(uv size - 0.5) along each axis) times
- *  `share`, in the shader's float arithmetic. */
-void addBilinearTaps(FilterTaps& taps, float u, float v, const MipLevel& level, float share) {
-    int x0, x1, y0, y1;
-    float a, b;
-    bilinearAxis(u, level.width, x0, x1, a);
-    bilinearAxis(v, level.height, y0, y1, b);
-    taps.add(level.x + x0, level.y + y0, share * (1.0f - a) * (1.0f - b));
-    taps.add(level.x + x1, level.y + y0, share * a * (1.0f - b));
-    taps.add(level.x + x0, level.y + y1, share * (1.0f - a) * b);
-    taps.add(level.x + x1, level.y + y1, share * a * b);
-}
-
-}  // namespace
-
 glm::vec3 Material::evaluateFiltered(float u, float v, float lod, const glm::vec3& view,
                                      const glm::vec3& light) const {
-    FilterTaps taps;
-    const MipLevel base{0, 0, _width, _height};
     if (filtersParameters()) {
         // The hardware filters the parameters, which blends evaluateLinear's values; the rest of
         // the evaluation applies to the blend (GL_LINEAR's weights are exact where they are
         // multiples of a power of two, which its fixed-point weights represent too).
-        addBilinearTaps(taps, u, v, base, 1.0f);
+        FilterTaps taps;
+        addBilinearTaps(taps, u, v, MipLevel{0, 0, _width, _height}, 1.0f);
         glm::vec3 linear(0.0f);
         for (int k = 0; k < taps.count; ++k)
             linear +=
                 taps.taps[k].weight * evaluateLinear(taps.taps[k].x, taps.taps[k].y, view, light);
         return finishLinear(linear, view, light);
     }
-    if (!_mipLayout.mipMapped()) {
-        addBilinearTaps(taps, u, v, base, 1.0f);
-    } else {
-        const int last = _mipLayout.levelCount() - 1;
-        // As the shader: NaN or negative (magnification) clamps to level 0.
-        const float clamped = std::clamp(std::isnan(lod) ? 0.0f : lod, 0.0f, float(last));
-        const int a = int(std::floor(clamped)), b = std::min(a + 1, last);
-        const float coarser = clamped - float(a);
-        addBilinearTaps(taps, u, v, _mipLayout.levels()[std::size_t(a)], 1.0f - coarser);
-        if (coarser > 0.0f)
-            addBilinearTaps(taps, u, v, _mipLayout.levels()[std::size_t(b)], coarser);
-    }
+    // The level selection environment lighting shares (evaluateFoldedFiltered).
+    const FilterTaps taps = mipFilterTaps(_mipLayout, _width, _height, u, v, lod);
     glm::vec3 value(0.0f);
     for (int k = 0; k < taps.count; ++k)
         value += taps.taps[k].weight * evaluate(taps.taps[k].x, taps.taps[k].y, view, light);

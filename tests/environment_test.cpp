@@ -14,6 +14,7 @@
 #include "materials/EnvironmentState.h"
 #include "materials/IlluminationPca.h"
 #include "materials/Material.h"
+#include "materials/MipMapping.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/lpca/Lpca.h"
 #include "materials/pca/Pca.h"
@@ -241,7 +242,7 @@ TEST(Environment, FilteredFoldedBlendsTheFourTexelsAroundACoordinate) {
     const glm::vec3 view = glm::normalize(glm::vec3(0.2f, 0.3f, 0.9f));
     const auto texel = [&](int x, int y) { return evaluateFolded(pca, folded, x, y, view); };
     const auto filtered = [&](float u, float v) {
-        return evaluateFoldedFiltered(pca, folded, u, v, view);
+        return evaluateFoldedFiltered(pca, folded, u, v, 0.0f, view);
     };
     const double scale = glm::length(texel(1, 2));
     ASSERT_GT(scale, 1e-3);
@@ -257,6 +258,54 @@ TEST(Environment, FilteredFoldedBlendsTheFourTexelsAroundACoordinate) {
     // A quarter of the way from texel 1's centre to texel 2's.
     expectClose(filtered(1.75f / 4, 2.5f / 4), 0.75f * texel(1, 2) + 0.25f * texel(2, 2), scale,
                 1e-6);
+}
+
+TEST(Environment, FilteredFoldedBlendsTwoMipLevelsByTheLevelOfDetail) {
+    // A mip-mapped pca of an 8 x 8 base: level 1 (4 x 4 texels) at (8, 0) of the atlas, level 2
+    // (2 x 2) at (8, 4), level 3 (1 x 1) at (8, 6). At lod 1.25 and (u, v) = (1.75, 3.25) / 4,
+    // level 1 blends columns 1 and 2 (weights 3/4, 1/4) and rows 2 and 3 (1/4, 3/4), level 2
+    // columns 0 and 1 (5/8, 3/8) and rows 1 and 0 (7/8, 1/8: across the wrap), the levels by
+    // 3/4 and 1/4: all exact in float, written out here rather than through the shared helper.
+    SampleOptions options;
+    options.width = options.height = 8;
+    const osg::ref_ptr<Material> pca =
+        fitMipMapped(findMethod("pca"), makeSampleBtf(options), FitOptions::parse("components=5"));
+    const MipLayout& mip = pca->mipLayout();
+    ASSERT_EQ(mip.levelCount(), 4);
+    const auto rectangle = [&](int l) {
+        const MipLevel& r = mip.levels()[std::size_t(l)];
+        return std::to_string(r.x) + " " + std::to_string(r.y) + " " + std::to_string(r.width) +
+               " " + std::to_string(r.height);
+    };
+    ASSERT_EQ(rectangle(1), "8 0 4 4");
+    ASSERT_EQ(rectangle(2), "8 4 2 2");
+    ASSERT_EQ(rectangle(3), "8 6 1 1");
+    const std::vector<float> folded = foldEnvironment(
+        *pca, projectEnvironment(visibleEnvironment(randomMap(32, 16, 9), SurfaceFrame{}),
+                                 DirectionInterpolator(pca->lights())));
+    const glm::vec3 view = glm::normalize(glm::vec3(-0.3f, 0.2f, 0.9f));
+    const auto texel = [&](int x, int y) { return evaluateFolded(*pca, folded, x, y, view); };
+    const float u = 1.75f / 4, v = 3.25f / 4;
+    const glm::vec3 level1 = 0.75f * 0.25f * texel(9, 2) + 0.25f * 0.25f * texel(10, 2) +
+                             0.75f * 0.75f * texel(9, 3) + 0.25f * 0.75f * texel(10, 3);
+    const glm::vec3 level2 = 0.625f * 0.875f * texel(8, 5) + 0.375f * 0.875f * texel(9, 5) +
+                             0.625f * 0.125f * texel(8, 4) + 0.375f * 0.125f * texel(9, 4);
+    const double scale = glm::length(level1);
+    ASSERT_GT(scale, 1e-3);
+    // The levels differ, so their blend shows.
+    ASSERT_GT(glm::length(level1 - level2), 1e-3 * scale);
+    expectClose(evaluateFoldedFiltered(*pca, folded, u, v, 1.25f, view),
+                0.75f * level1 + 0.25f * level2, scale, 1e-6);
+    // A whole lod reads that level alone; beyond the last level, the last (one texel).
+    expectClose(evaluateFoldedFiltered(*pca, folded, u, v, 1.0f, view), level1, scale, 1e-6);
+    expectClose(evaluateFoldedFiltered(*pca, folded, u, v, 2.0f, view), level2, scale, 1e-6);
+    expectClose(evaluateFoldedFiltered(*pca, folded, u, v, 9.0f, view), texel(8, 6), scale, 1e-6);
+    // Magnified (negative lod) or no derivative (NaN): the base level, whose texel (3, 6) has its
+    // centre at (u, v).
+    const glm::vec3 base = texel(3, 6);
+    ASSERT_GT(glm::length(base - level1), 1e-3 * scale);
+    for (float lod : {0.0f, -2.0f, std::nanf("")})
+        expectClose(evaluateFoldedFiltered(*pca, folded, u, v, lod, view), base, scale, 1e-6);
 }
 
 TEST(Environment, FoldedFmfAndLpcaEqualTheProjectedSum) {

@@ -1,7 +1,9 @@
-// A method defined entirely here, in the test binary, registered like the built-in ones: it must
-// show up in every place that lists methods (fit --help, compare, the serializers, the scene
-// round trip, the shader program) without any other file naming it. This is the "one method =
-// one folder" promise: nothing outside the method's own sources has to change.
+// A method defined entirely in the test binary (tests/DummyMethod.{h,cpp}), registered like the
+// built-in ones: it must show up in every place that lists methods (fit --help, compare, the
+// serializers, the scene round trip, the shader program) without any other file naming it. This
+// is the "one method = one folder" promise: nothing outside the method's own sources has to
+// change. tests/gl/method_plugin_gl_test.cpp renders it: mip-mapped, through a coordinate map and
+// under folded environment lighting.
 #include <algorithm>
 #include <filesystem>
 
@@ -18,101 +20,10 @@
 #include "materials/Material.h"
 #include "materials/MaterialState.h"
 #include "scene/MaterialNode.h"
+#include "tests/DummyMethod.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
-
-namespace osgBTFTest {
-
-using namespace osgBTF;
-
-/** rho(x) * gain * l_z: a lit texture with one option, enough to exercise everything. */
-class DummyMaterial : public Material {
-public:
-    DummyMaterial() = default;
-    DummyMaterial(const DummyMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
-        : Material(other, copyop), value(other.value) {}
-    META_Object(osgBTFTest, DummyMaterial)
-
-        static osg::ref_ptr<DummyMaterial> fit(const BtfSource& btf, const FitOptions& options) {
-        const OptionValues o = validateOptions("dummy", options);
-        osg::ref_ptr<DummyMaterial> m = new DummyMaterial;
-        m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());
-        m->value.assign(btf.texelCount() * 3, 0.0f);
-        const float gain = float(o.number("gain"));
-        std::vector<float> abrdf(btf.imageCount() * 3);
-        for (std::size_t t = 0; t < btf.texelCount(); ++t) {
-            btf.readAbrdfs(&t, 1, abrdf.data());
-            // The first measured value, as a plain colour: a poor model, but a deterministic one.
-            for (int c = 0; c < 3; ++c) m->value[t * 3 + c] = abrdf[std::size_t(c)] * gain;
-        }
-        return m;
-    }
-    static osg::ref_ptr<DummyMaterial> fromFile(const FittedMaterial& file) {
-        osg::ref_ptr<DummyMaterial> m = new DummyMaterial;
-        m->readCommon(file);
-        m->value = file.texture("value").data;
-        return m;
-    }
-
-    std::string methodName() const override { return "dummy"; }
-    glm::vec3 evaluate(int x, int y, const glm::vec3&, const glm::vec3& light) const override {
-        const std::size_t t = (std::size_t(y) * std::size_t(_width) + std::size_t(x)) * 3;
-        return glm::vec3(value[t], value[t + 1], value[t + 2]) * light.z;
-    }
-    MemoryFootprint memory() const override { return {3.0, 12.0, std::uint64_t(value.size()) * 4}; }
-    FittedMaterial toFittedMaterial() const override {
-        FittedMaterial file = writeCommon();
-        file.textures.push_back({"value", _width, _height, 1, 3, MaterialTexture::Float, value});
-        return file;
-    }
-    osg::ref_ptr<osg::StateSet> createStateSet() const override {
-        osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-        addCommonState(*stateSet, *this);
-        addTexture(
-            *stateSet,
-            createFloatTexture({"value", _width, _height, 1, 3, MaterialTexture::Float, value})
-                .get(),
-            "dummyValue", 0);
-        return stateSet;
-    }
-    void assignFrom(const Material& other) override {
-        value = assignCommon<DummyMaterial>(other).value;
-    }
-
-    std::vector<float> value;  ///< RGB per texel
-};
-
-const char* const kDummyShader = R"(#version 330 compatibility
-// Method "dummy" (tests/method_plugin_test.cpp): value(x) * l_z.
-#pragma include "common/btf_main.glsl"
-
-uniform sampler2D dummyValue;
-
-vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
-    return texelFetch(dummyValue, texel, 0).rgb * light.z;
-}
-)";
-
-const bool registered = registerMethod([] {
-    MethodInfo m;
-    m.name = "dummy";
-    m.description = "test-only lit texture defined in the test binary";
-    m.options = {OptionSpec::number("gain", 1, 0, 4, "factor on the first measured value")};
-    m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return DummyMaterial::fit(btf, o);
-    };
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return DummyMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new DummyMaterial; };
-    m.shaderCost = [](const Material&) { return ShaderCost::ofEvaluate(1, 1, "ALU 11, TEX 1"); };
-    m.fragmentShader = kDummyShader;
-    m.order = 1000;
-    return m;
-}());
-
-}  // namespace osgBTFTest
 
 using namespace osgBTF;
 using namespace osgBTF::test;

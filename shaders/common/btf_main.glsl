@@ -76,20 +76,8 @@ float btfShadowFactor(int i) {
 }
 #endif
 
-// The texels a fragment evaluates and their shares of its value (at most four per level, two
-// levels), in the order Material::evaluateFiltered adds them up. Texels of weight 0 are left out.
-const int btfMaxTaps = 8;
-ivec2 btfTapTexel[btfMaxTaps];
-float btfTapWeight[btfMaxTaps];
-int btfTapCount = 0;
-
-void btfAddTap(ivec2 texel, float weight) {
-    if (weight > 0.0) {
-        btfTapTexel[btfTapCount] = texel;
-        btfTapWeight[btfTapCount] = weight;
-        ++btfTapCount;
-    }
-}
+// The texels a fragment evaluates (btfTapTexel, btfTapWeight, btfTapCount; btfAddTap,
+// btfAddMipTaps) come from surface_frame.glsl, shared with environment lighting.
 
 #ifdef OSGBTF_COORDINATE_MAP
 // The program variant for a coordinate map (materials/CoordinateMapRendering.h): the texture
@@ -119,20 +107,6 @@ void btfAddMapTaps(vec2 uv) {
     btfAddTap(btfMapEntry(ivec2(i0.x, i1.y)), (1.0 - w.x) * w.y);
     btfAddTap(btfMapEntry(i1), w.x * w.y);
 }
-#else
-/** The four texels of `level` around uv, wrapped inside the level's rectangle of the atlas (the
- *  hardware's GL_REPEAT would wrap at the atlas's edge), with GL_LINEAR's weights; times
- *  `share`. */
-void btfAddBilinearTaps(vec2 uv, int level, float share) {
-    ivec4 r = osgBTF_mipLevel[level];
-    ivec2 i0, i1;
-    vec2 w;
-    btfBilinearNeighbours(uv, r.zw, i0, i1, w);
-    btfAddTap(r.xy + i0, share * (1.0 - w.x) * (1.0 - w.y));
-    btfAddTap(r.xy + ivec2(i1.x, i0.y), share * w.x * (1.0 - w.y));
-    btfAddTap(r.xy + ivec2(i0.x, i1.y), share * (1.0 - w.x) * w.y);
-    btfAddTap(r.xy + i1, share * w.x * w.y);
-}
 #endif
 
 void main() {
@@ -140,25 +114,9 @@ void main() {
     btfSurfaceFrame(t, b, n);
     vec3 view = btfLocalView(t, b, n);
 #ifndef OSGBTF_COORDINATE_MAP
-    // A mip-mapped material blends two levels as GL_LINEAR_MIPMAP_LINEAR: levels floor(lod) and
-    // the next, by lod - floor(lod); magnified fragments read level 0 alone.
-    float lod = btfMipLod(btfTexCoord);
-    int level = 0;
-    float coarserWeight = 0.0;
-    if (osgBTF_mipLevels > 1) {
-        // NaN (no derivative) or negative: level 0.
-        lod = lod > 0.0 ? min(lod, float(osgBTF_mipLevels - 1)) : 0.0;
-        level = int(floor(lod));
-        coarserWeight = lod - float(level);
-    }
-    int coarser = min(level + 1, osgBTF_mipLevels - 1);
-    if (osgBTF_blendTexels) {
-        btfAddBilinearTaps(btfTexCoord, level, 1.0 - coarserWeight);
-        if (coarserWeight > 0.0) btfAddBilinearTaps(btfTexCoord, coarser, coarserWeight);
-    } else {
-        btfAddTap(btfLevelTexel(btfTexCoord, level), 1.0 - coarserWeight);
-        if (coarserWeight > 0.0) btfAddTap(btfLevelTexel(btfTexCoord, coarser), coarserWeight);
-    }
+    // A mip-mapped material blends two levels as GL_LINEAR_MIPMAP_LINEAR (btfAddMipTaps: the
+    // level selection environment.glsl shares); the four texels of each, or the nearest one.
+    btfAddMipTaps(btfTexCoord, osgBTF_blendTexels);
     btfBilinear = osgBTF_bilinear && osgBTF_mipLevels <= 1;
     btfBilinearCoordinate = btfTexCoord;
 #else

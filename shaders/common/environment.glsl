@@ -37,30 +37,24 @@ vec3 btfEnvData(int slot) {
            btfEnvBarycentric.z * btfEnvFetch(btfEnvVertices.z, slot);
 }
 
-// A fragment shows the bilinear blend, with wrap-around, of btfEnvironmentEvaluate at the four
-// base texels around its texture coordinate (GL_LINEAR's weights, as btf_main.glsl's
-// TexelFilter::Values at level 0; evaluateFoldedFiltered in materials/EnvironmentState.h is the
-// CPU reference). The methods' environment shaders read their textures with texelFetch, so the
-// blend of four evaluations is the one way that works for each of them unchanged. Minified
-// fragments filter level 0 the same way (GL_LINEAR without mipmaps): a mip-mapped material's
-// coarser levels are not read here.
+// A fragment shows what point lights show of a texture coordinate (btf_main.glsl's
+// TexelFilter::Values, surface_frame.glsl's btfAddMipTaps): the bilinear blend, with wrap-around,
+// of btfEnvironmentEvaluate at the four texels around it, and for a minified mip-mapped material
+// the blend of two levels' such lookups by the level of detail (GL_LINEAR_MIPMAP_LINEAR), up to
+// 8 evaluations; evaluateFoldedFiltered in materials/EnvironmentState.h is the CPU reference.
+// The methods' environment shaders read their textures with texelFetch, so the blend of the
+// evaluations is the one way that works for each of them unchanged; without the coarser levels a
+// distant surface would alias (moire) under environment lighting only.
 void main() {
     vec3 t, b, n;
     btfSurfaceFrame(t, b, n);
     vec3 view = btfLocalView(t, b, n);
+    // Before any branch: the level of detail takes derivatives.
+    btfAddMipTaps(btfTexCoord, true);
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {
-        ivec4 r = osgBTF_mipLevel[0];
-        ivec2 i0, i1;
-        vec2 w;
-        btfBilinearNeighbours(btfTexCoord, r.zw, i0, i1, w);
-        ivec2 texels[4] = ivec2[4](i0, ivec2(i1.x, i0.y), ivec2(i0.x, i1.y), i1);
-        float weights[4] = float[4]((1.0 - w.x) * (1.0 - w.y), w.x * (1.0 - w.y),
-                                    (1.0 - w.x) * w.y, w.x * w.y);
-        for (int k = 0; k < 4; ++k)
-            // A texel of weight 0 costs no evaluation (a texel centre, a rectified image).
-            if (weights[k] > 0.0)
-                color += weights[k] * btfEnvironmentEvaluate(r.xy + texels[k], view);
+        for (int k = 0; k < btfTapCount; ++k)
+            color += btfTapWeight[k] * btfEnvironmentEvaluate(btfTapTexel[k], view);
         color *= osgBTF_envExposure;
     }
     gl_FragColor = vec4(color, 1.0);

@@ -1,5 +1,6 @@
-// The local frame, view direction and texel of a fragment, shared by btf_main.glsl (point
-// lights) and environment.glsl (environment lighting) so that both shade the same directions.
+// The local frame, view direction and filtered texels of a fragment, shared by btf_main.glsl
+// (point lights) and environment.glsl (environment lighting) so that both shade the same
+// directions and blend the same texels.
 // Included by them after they declare btfTexCoord, btfEyePosition, btfEyeNormal, btfEyeTangent,
 // osgBTF_size and osgBTF_fixedView.
 
@@ -68,4 +69,59 @@ float btfMipLod(vec2 uv) {
     vec2 base = vec2(osgBTF_mipLevel[0].zw);
     vec2 dx = dFdx(uv) * base, dy = dFdy(uv) * base;
     return 0.5 * log2(max(dot(dx, dx), dot(dy, dy)));
+}
+
+// The texels a fragment evaluates and their shares of its value (at most four per level, two
+// levels), in the order the CPU references add them up (materials/BilinearTaps.h: FilterTaps,
+// mipFilterTaps). Texels of weight 0 are left out: they cost no evaluation.
+const int btfMaxTaps = 8;
+ivec2 btfTapTexel[btfMaxTaps];
+float btfTapWeight[btfMaxTaps];
+int btfTapCount = 0;
+
+void btfAddTap(ivec2 texel, float weight) {
+    if (weight > 0.0) {
+        btfTapTexel[btfTapCount] = texel;
+        btfTapWeight[btfTapCount] = weight;
+        ++btfTapCount;
+    }
+}
+
+/** The four texels of `level` around uv, wrapped inside the level's rectangle of the atlas (the
+ *  hardware's GL_REPEAT would wrap at the atlas's edge), with GL_LINEAR's weights; times
+ *  `share`. */
+void btfAddBilinearTaps(vec2 uv, int level, float share) {
+    ivec4 r = osgBTF_mipLevel[level];
+    ivec2 i0, i1;
+    vec2 w;
+    btfBilinearNeighbours(uv, r.zw, i0, i1, w);
+    btfAddTap(r.xy + i0, share * (1.0 - w.x) * (1.0 - w.y));
+    btfAddTap(r.xy + ivec2(i1.x, i0.y), share * w.x * (1.0 - w.y));
+    btfAddTap(r.xy + ivec2(i0.x, i1.y), share * (1.0 - w.x) * w.y);
+    btfAddTap(r.xy + i1, share * w.x * w.y);
+}
+
+/** The taps at uv of a mip-mapped material as GL_LINEAR_MIPMAP_LINEAR (`bilinear`) or
+ *  GL_NEAREST_MIPMAP_LINEAR picks them: levels floor(lod) and the next, the coarser one's share
+ *  lod - floor(lod); magnified fragments, and a material without levels, read level 0 alone.
+ *  One definition for point lights (btf_main.glsl) and environment lighting (environment.glsl),
+ *  so that both filter a minified material alike. Calls btfMipLod: uniform control flow. */
+void btfAddMipTaps(vec2 uv, bool bilinear) {
+    float lod = btfMipLod(uv);
+    int level = 0;
+    float coarserWeight = 0.0;
+    if (osgBTF_mipLevels > 1) {
+        // NaN (no derivative) or negative: level 0.
+        lod = lod > 0.0 ? min(lod, float(osgBTF_mipLevels - 1)) : 0.0;
+        level = int(floor(lod));
+        coarserWeight = lod - float(level);
+    }
+    int coarser = min(level + 1, osgBTF_mipLevels - 1);
+    if (bilinear) {
+        btfAddBilinearTaps(uv, level, 1.0 - coarserWeight);
+        if (coarserWeight > 0.0) btfAddBilinearTaps(uv, coarser, coarserWeight);
+    } else {
+        btfAddTap(btfLevelTexel(uv, level), 1.0 - coarserWeight);
+        if (coarserWeight > 0.0) btfAddTap(btfLevelTexel(uv, coarser), coarserWeight);
+    }
 }

@@ -10,7 +10,9 @@
 #include <osg/Uniform>
 
 #include "core/ShaderSource.h"
+#include "harness/MaterialImage.h"
 #include "harness/PassCost.h"
+#include "materials/CoordinateMapRendering.h"
 #include "materials/ShaderInterface.h"
 #include "materials/ptm/Ptm.h"
 
@@ -305,6 +307,96 @@ double ptmGpuTolerance(const PtmMaterial& m) {
                 largest = std::max(largest, sum);
             }
     return 64 * std::ldexp(1.0, -24) * largest;
+}
+
+osg::ref_ptr<osg::Image> renderRectifiedPatch(const Material& material,
+                                              const RectifiedPatchRender& r) {
+    // The material's StateSet above the map's (which replaces its program and adds the map) and
+    // the render's own uniforms on the patch, as a scene layers them: the patch's values win.
+    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
+    osg::ref_ptr<osg::StateSet> render = new osg::StateSet;
+    addRectifiedLighting(*render, r.view, r.light);
+    render->addUniform(new osg::Uniform(shader::kTextureScale, r.textureScale));
+    if (r.mipLevels >= 0) render->addUniform(new osg::Uniform(shader::kMipLevels, r.mipLevels));
+    if (!r.blendTexels) render->addUniform(new osg::Uniform(shader::kBlendTexels, false));
+    osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
+    geode->setStateSet(render.get());
+    osg::ref_ptr<osg::Group> mapped = new osg::Group;
+    if (r.map) {
+        osg::ref_ptr<osg::Texture2D> texture = createCoordinateMapTexture(*r.map);
+        mapped->setStateSet(createCoordinateMapStateSet(material, *stateSet, texture.get()));
+    }
+    mapped->addChild(geode.get());
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    root->setStateSet(stateSet.get());
+    root->addChild(mapped.get());
+    return sharedRenderer().render(root.get(), orthoUnitSquare(r.width, r.height));
+}
+
+osg::ref_ptr<osg::Geometry> trianglePatch() {
+    osg::ref_ptr<osg::Geometry> g = new osg::Geometry;
+    osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array;
+    osg::ref_ptr<osg::Vec2Array> texCoords = new osg::Vec2Array;
+    for (const osg::Vec2& p :
+         {osg::Vec2(0, 0), osg::Vec2(1, 0), osg::Vec2(1, 1), osg::Vec2(0, 1)}) {
+        vertices->push_back(osg::Vec3(p, 0.0f));
+        texCoords->push_back(p);
+    }
+    g->setVertexArray(vertices);
+    g->setTexCoordArray(0, texCoords);
+    osg::ref_ptr<osg::Vec3Array> normals = new osg::Vec3Array;
+    normals->assign(4, osg::Vec3(0, 0, 1));
+    g->setNormalArray(normals, osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::Vec4Array> tangents = new osg::Vec4Array;
+    tangents->assign(4, osg::Vec4(1, 0, 0, 1));
+    g->setVertexAttribArray(shader::kTangentAttribute, tangents, osg::Array::BIND_PER_VERTEX);
+    osg::ref_ptr<osg::DrawElementsUInt> triangles = new osg::DrawElementsUInt(GL_TRIANGLES);
+    for (unsigned i : {0u, 1u, 2u, 0u, 2u, 3u}) triangles->push_back(i);
+    g->addPrimitiveSet(triangles);
+    g->setUseDisplayList(false);
+    g->setUseVertexBufferObjects(true);
+    return g;
+}
+
+ThroughMapCheck checkThroughMap(const Material& material, const Material& remapped,
+                                const CoordinateMap& map, const glm::vec3& view,
+                                const glm::vec3& light) {
+    // Texture scale 2: the patch shows the map twice along each axis, so u and v cross 1 (the
+    // wrap edge: the last column blends with the first) in the middle, and the bands left of and
+    // below the first centres blend with the last column and row. 4 pixels per entry: pixel
+    // centres at 1/8, 3/8, 5/8 and 7/8 of an entry, weights exact in any filter's arithmetic.
+    const int perEntry = 4;
+    RectifiedPatchRender render;
+    render.view = view;
+    render.light = light;
+    render.textureScale = 2.0f;
+    render.width = 2 * map.width * perEntry;
+    render.height = 2 * map.height * perEntry;
+    const osg::ref_ptr<osg::Image> materialised = renderRectifiedPatch(remapped, render);
+    render.map = &map;
+    const osg::ref_ptr<osg::Image> mapped = renderRectifiedPatch(material, render);
+    ThroughMapCheck r;
+    for (int y = 0; y < render.height; ++y)
+        for (int x = 0; x < render.width; ++x) {
+            const float u = render.textureScale * (float(x) + 0.5f) / float(render.width);
+            const float v = render.textureScale * (float(y) + 0.5f) / float(render.height);
+            const glm::vec3 expected = evaluateThroughMap(material, map, u, v, view, light);
+            const glm::vec3 remappedValue = remapped.evaluateFiltered(u, v, 0.0f, view, light);
+            // The entry under the pixel: what a nearest lookup would show.
+            const int ex = (x / perEntry) % map.width, ey = (y / perEntry) % map.height;
+            const glm::vec3 nearest =
+                material.evaluate(map.sampleX(ex, ey), map.sampleY(ex, ey), view, light);
+            for (int c = 0; c < 3; ++c) {
+                const double got = pixel(*mapped, x, y, c);
+                r.gpuCpu = std::max(r.gpuCpu, std::abs(got - double(expected[c])));
+                r.materialisedCpu =
+                    std::max(r.materialisedCpu, double(std::abs(remappedValue[c] - expected[c])));
+                r.materialisedGpu = std::max(r.materialisedGpu,
+                                             std::abs(got - double(pixel(*materialised, x, y, c))));
+                r.fromNearest = std::max(r.fromNearest, double(std::abs(nearest[c] - expected[c])));
+            }
+        }
+    return r;
 }
 
 }  // namespace osgBTF::test

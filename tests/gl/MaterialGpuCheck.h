@@ -13,8 +13,10 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <osg/Drawable>
+#include <osg/Geometry>
 #include <osg/Matrixd>
 
+#include "core/CoordinateMap.h"
 #include "harness/Pictures.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
@@ -107,5 +109,49 @@ GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRend
  *  polynomial, 3 blended views, and the view weights equal to rounding, so a few tens of u times
  *  the largest sum of |terms| (|a_k| times the colour; every monomial is at most 1). */
 double ptmGpuTolerance(const PtmMaterial& material);
+
+/** A rectified render of the unit patch (harness/MaterialImage.h: rectifiedPatch under
+ *  orthoUnitSquare, the view fixed to `view`, one white light from `light`, both local) at a
+ *  texture scale, optionally through a coordinate map: what the mip-map, coordinate-map and
+ *  dummy-method tests compare with Material::evaluateFiltered / evaluateThroughMap at pixel
+ *  centres ((i + 0.5) / width times the scale). */
+struct RectifiedPatchRender {
+    glm::vec3 view{0, 0, 1}, light{0, 0, 1};
+    /** osgBTF_textureScale: the patch shows [0, textureScale]^2 (beyond 1 the texture wraps). */
+    float textureScale = 1.0f;
+    int width = 32, height = 32;
+    /** osgBTF_mipLevels when >= 0 (1: the base level only); < 0: the material's own. */
+    int mipLevels = -1;
+    /** osgBTF_blendTexels: false reads the nearest texel (of each level) instead of four. */
+    bool blendTexels = true;
+    /** Rendered through this map (createCoordinateMapStateSet) when not null. */
+    const CoordinateMap* map = nullptr;
+};
+
+/** Renders `material` (its createStateSet) as `render` says with sharedRenderer(): an RGBA float
+ *  image, rows bottom-up (pixel()). */
+osg::ref_ptr<osg::Image> renderRectifiedPatch(const Material& material,
+                                              const RectifiedPatchRender& render);
+
+/** The unit patch of rectifiedPatch() (normal +Z, tangent attribute +X, texture coordinates =
+ *  position) as two indexed triangles (0 1 2, 0 2 3): what environment lighting needs (its
+ *  geometry stage takes triangles, scene/VertexEnvironment.h lights only triangles). */
+osg::ref_ptr<osg::Geometry> trianglePatch();
+
+/** The largest differences of a render through a coordinate map, magnified and across the wrap,
+ *  per channel over every pixel (checkThroughMap). */
+struct ThroughMapCheck {
+    double gpuCpu = 0;           ///< against evaluateThroughMap
+    double materialisedCpu = 0;  ///< evaluateThroughMap against the materialised evaluateFiltered
+    double materialisedGpu = 0;  ///< against the render of the materialised material
+    double fromNearest = 0;      ///< evaluateThroughMap against the entry under the pixel alone
+};
+
+/** Renders `material` through `map` and `remapped` (remapMaterial(material, map)) without it at
+ *  texture scale 2, 4 pixels per map entry, as rectified images seen from `view` and lit from
+ *  `light`, and compares every pixel with evaluateThroughMap. */
+ThroughMapCheck checkThroughMap(const Material& material, const Material& remapped,
+                                const CoordinateMap& map, const glm::vec3& view,
+                                const glm::vec3& light);
 
 }  // namespace osgBTF::test

@@ -101,30 +101,6 @@ TEST_P(CoordinateMapGpu, RenderThroughTheMapEqualsTheMaterialisedMaterial) {
 
 namespace {
 
-/** The render of `material` on the unit patch at texture scale `scale` (the patch shows
- *  [0, scale]^2), width x height pixels, through `map` (null: the material alone), seen from
- *  `view` and lit from `light` as a rectified image. Rows bottom-up. */
-osg::ref_ptr<osg::Image> renderPatch(const Material& material, const CoordinateMap* map,
-                                     float scale, int width, int height, const glm::vec3& view,
-                                     const glm::vec3& light) {
-    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
-    osg::ref_ptr<osg::StateSet> render = new osg::StateSet;
-    addRectifiedLighting(*render, view, light);
-    render->addUniform(new osg::Uniform(shader::kTextureScale, scale));
-    osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
-    geode->setStateSet(render.get());
-    osg::ref_ptr<osg::Group> mapped = new osg::Group;
-    if (map) {
-        osg::ref_ptr<osg::Texture2D> texture = createCoordinateMapTexture(*map);
-        mapped->setStateSet(createCoordinateMapStateSet(material, *stateSet, texture.get()));
-    }
-    mapped->addChild(geode.get());
-    osg::ref_ptr<osg::Group> root = new osg::Group;
-    root->setStateSet(stateSet.get());
-    root->addChild(mapped.get());
-    return test::sharedRenderer().render(root.get(), orthoUnitSquare(width, height));
-}
-
 /** The GPU-CPU bound of the method's own tests (bilinear_filter_test.cpp's): lambert 1e-5, ptm
  *  its rounding bound, fmf 1e-3 of the image's largest value (at least 1), the others 1e-3. */
 double methodBound(const Material& m, const glm::vec3& view, const glm::vec3& light) {
@@ -142,52 +118,8 @@ double methodBound(const Material& m, const glm::vec3& view, const glm::vec3& li
     return 1e-3;
 }
 
-/** The largest differences of a render through `map`, magnified and across the wrap, per
- *  channel over every pixel. */
-struct ThroughMapCheck {
-    double gpuCpu = 0;           ///< against evaluateThroughMap
-    double materialisedCpu = 0;  ///< evaluateThroughMap against the materialised evaluateFiltered
-    double materialisedGpu = 0;  ///< against the render of the materialised material
-    double fromNearest = 0;      ///< evaluateThroughMap against the entry under the pixel alone
-};
-
-ThroughMapCheck checkThroughMap(const Material& material, const Material& remapped,
-                                const CoordinateMap& map, const glm::vec3& view,
-                                const glm::vec3& light) {
-    // Texture scale 2: the patch shows the map twice along each axis, so u and v cross 1 (the
-    // wrap edge: the last column blends with the first) in the middle, and the bands left of and
-    // below the first centres blend with the last column and row. 4 pixels per entry: pixel
-    // centres at 1/8, 3/8, 5/8 and 7/8 of an entry, weights exact in any filter's arithmetic.
-    const float scale = 2.0f;
-    const int perEntry = 4;
-    const int width = 2 * map.width * perEntry, height = 2 * map.height * perEntry;
-    const osg::ref_ptr<osg::Image> mapped =
-        renderPatch(material, &map, scale, width, height, view, light);
-    const osg::ref_ptr<osg::Image> materialised =
-        renderPatch(remapped, nullptr, scale, width, height, view, light);
-    ThroughMapCheck r;
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
-            const float u = scale * (float(x) + 0.5f) / float(width);
-            const float v = scale * (float(y) + 0.5f) / float(height);
-            const glm::vec3 expected = evaluateThroughMap(material, map, u, v, view, light);
-            const glm::vec3 remappedValue = remapped.evaluateFiltered(u, v, 0.0f, view, light);
-            // The entry under the pixel: what a nearest lookup would show.
-            const int ex = (x / perEntry) % map.width, ey = (y / perEntry) % map.height;
-            const glm::vec3 nearest =
-                material.evaluate(map.sampleX(ex, ey), map.sampleY(ex, ey), view, light);
-            for (int c = 0; c < 3; ++c) {
-                const double got = test::pixel(*mapped, x, y, c);
-                r.gpuCpu = std::max(r.gpuCpu, std::abs(got - double(expected[c])));
-                r.materialisedCpu =
-                    std::max(r.materialisedCpu, double(std::abs(remappedValue[c] - expected[c])));
-                r.materialisedGpu = std::max(
-                    r.materialisedGpu, std::abs(got - double(test::pixel(*materialised, x, y, c))));
-                r.fromNearest = std::max(r.fromNearest, double(std::abs(nearest[c] - expected[c])));
-            }
-        }
-    return r;
-}
+using test::checkThroughMap;
+using test::ThroughMapCheck;
 
 }  // namespace
 

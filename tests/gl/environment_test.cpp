@@ -1,13 +1,14 @@
 // Environment lighting on the GPU (materials/EnvironmentState.h): per-vertex folded pca, fmf and
 // lpca data, blended across the triangles, against the CPU's evaluateFoldedFiltered at every
 // pixel (magnified: a fragment blends the four texels around it, wrapping at the material's
-// edges), and the white environment against the brute-force integral of the point-light
-// rendering.
+// edges; minified, a mip-mapped material's two levels around the level of detail), and the white
+// environment against the brute-force integral of the point-light rendering.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -30,6 +31,7 @@
 #include "materials/BilinearTaps.h"
 #include "materials/EnvironmentLighting.h"
 #include "materials/EnvironmentState.h"
+#include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/lpca/Lpca.h"
@@ -135,13 +137,30 @@ Rendered render(const Material& material, const std::vector<std::vector<float>>&
     return {test::sharedRenderer().render(root, orthoUnitSquare(size, size)), size};
 }
 
-/** Largest |GPU - CPU| over the image (CPU: evaluateFoldedFiltered at the pixel's texture
- *  coordinate, the vertices' values blended across the triangle); `largest`: the largest CPU
- *  value; `fromNearest`, when given: the largest difference between the CPU value and what the
- *  nearest texel alone would give, how far a render without filtering would be off. */
+/** What pixel (x, y) of a size x size render shows on the CPU: evaluateFoldedFiltered at the
+ *  pixel's texture coordinate and level of detail `lod`, the vertices' values blended across the
+ *  triangle, times the exposure. */
+glm::vec3 expectedPixel(const Material& material, const std::vector<std::vector<float>>& folded,
+                        const glm::vec3& view, float exposure, float scale, float lod, int x, int y,
+                        int size) {
+    const float px = (x + 0.5f) / size, py = (y + 0.5f) / size;
+    const std::array<float, 4> b = barycentric(px, py);
+    glm::vec3 expected(0.0f);
+    for (int k = 0; k < 4; ++k)
+        if (b[k] > 0.0f)
+            expected += b[k] * evaluateFoldedFiltered(material, folded[k], scale * px, scale * py,
+                                                      lod, view);
+    return expected * exposure;
+}
+
+/** Largest |GPU - CPU| over the image (CPU: expectedPixel at level of detail `lod`); `largest`:
+ *  the largest CPU value; `fromNearest`, when given: the largest difference between the CPU
+ *  value and what the nearest texel alone would give, how far a render without filtering would
+ *  be off. */
 double compare(const Material& material, const Rendered& r,
                const std::vector<std::vector<float>>& folded, const glm::vec3& view, float exposure,
-               double* largest, float scale = 1.0f, double* fromNearest = nullptr) {
+               double* largest, float scale = 1.0f, double* fromNearest = nullptr,
+               float lod = 0.0f) {
     double worst = 0;
     *largest = 0;
     if (fromNearest) *fromNearest = 0;
@@ -151,14 +170,13 @@ double compare(const Material& material, const Rendered& r,
             const float px = (x + 0.5f) / r.size, py = (y + 0.5f) / r.size;
             const std::array<float, 4> b = barycentric(px, py);
             const float u = scale * px, v = scale * py;
-            glm::vec3 expected(0.0f), nearest(0.0f);
+            const glm::vec3 expected =
+                expectedPixel(material, folded, view, exposure, scale, lod, x, y, r.size);
+            glm::vec3 nearest(0.0f);
             const int tx = int(u * 4) % 4, ty = int(v * 4) % 4;
             for (int k = 0; k < 4; ++k)
-                if (b[k] > 0.0f) {
-                    expected += b[k] * evaluateFoldedFiltered(material, folded[k], u, v, view);
+                if (b[k] > 0.0f)
                     nearest += b[k] * evaluateFolded(material, folded[k], tx, ty, view);
-                }
-            expected *= exposure;
             nearest *= exposure;
             for (int ch = 0; ch < 3; ++ch) {
                 worst = std::max(worst,
@@ -253,9 +271,18 @@ TEST(EnvironmentGpu, FoldedLightingBlendsTheFourTexelsAroundAFragment) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> uniform(0.0f, 0.05f);
     std::vector<std::string> covered;
-    for (const Material* m :
-         {static_cast<const Material*>(&pca()), static_cast<const Material*>(&fmf()),
-          static_cast<const Material*>(&lpca())}) {
+    std::vector<const Material*> materials = {&pca(), &fmf(), &lpca()};
+    // Any other method with folded lighting (the test-only "dummy" of tests/DummyMethod.cpp, which
+    // the GL tests link, or a new method): its quick fit of the same sample, so none goes
+    // unchecked; after the three above, whose environments stay those of the rng's first draws.
+    std::vector<osg::ref_ptr<Material>> others;
+    for (const std::string& name : methodNames())
+        if (hasFoldedEnvironment(name) && name != "pca" && name != "fmf" && name != "lpca") {
+            const MethodInfo& method = findMethod(name);
+            others.push_back(method.fit(sample4(), FitOptions::parse(method.quickFitOptions)));
+            materials.push_back(others.back().get());
+        }
+    for (const Material* m : materials) {
         ASSERT_TRUE(foldsEnvironment(*m)) << m->methodName();
         covered.push_back(m->methodName());
         std::vector<std::vector<float>> folded;
@@ -281,6 +308,57 @@ TEST(EnvironmentGpu, FoldedLightingBlendsTheFourTexelsAroundAFragment) {
         if (hasFoldedEnvironment(name)) {
             EXPECT_NE(std::find(covered.begin(), covered.end(), name), covered.end()) << name;
         }
+    }
+}
+
+TEST(EnvironmentGpu, MinifiedMipMappedLightingBlendsTwoLevelsBilinearly) {
+    // Mip-mapped pca, fmf and lpca of an 8 x 8 base under the shared StateSet's mip uniforms, at
+    // texture scale 12: 3 base texels per pixel, lod log2(3) = 1.58 between level 1 (4 x 4
+    // texels) and level 2 (2 x 2), pixel centres between the texel centres of both (1.5 x + 0.25
+    // of level 1's, 0.75 x - 0.125 of level 2's), so every fragment blends eight texels, as
+    // btf_main.glsl does for point lights (MipMapGpu's MinifiedBetweenLevels test). Against
+    // evaluateFoldedFiltered at that lod within the bound of the tests above; the base level
+    // alone (the shader before mip-mapped environment lighting) would be off by far more.
+    SampleOptions options;
+    options.width = options.height = 8;
+    const MeasuredBtf btf = makeSampleBtf(options);
+    constexpr float kScale = 12.0f;
+    const float lod = std::log2(kScale * 8.0f / 32.0f);
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> uniform(0.0f, 0.05f);
+    for (const std::string name : {"pca", "fmf", "lpca"}) {
+        const MethodInfo& method = findMethod(name);
+        const osg::ref_ptr<Material> m =
+            fitMipMapped(method, btf, FitOptions::parse(method.quickFitOptions));
+        ASSERT_EQ(m->mipLayout().levelCount(), 4) << name;
+        ASSERT_TRUE(foldsEnvironment(*m)) << name;
+        std::vector<std::vector<float>> folded;
+        for (int v = 0; v < 4; ++v) {
+            std::vector<glm::vec3> g(m->lights().size());
+            for (glm::vec3& x : g) x = glm::vec3(uniform(rng), uniform(rng), uniform(rng));
+            g[std::size_t(v) * 9 + 4] *= 40.0f;
+            folded.push_back(foldEnvironment(*m, g));
+        }
+        const glm::vec3 view = glm::normalize(glm::vec3(-0.3f, 0.4f, 0.8f));
+        const Rendered r = render(*m, folded, view, 1.0f, kScale);
+        double largest = 0;
+        const double worst = compare(*m, r, folded, view, 1.0f, &largest, kScale, nullptr, lod);
+        double fromBase = 0;
+        for (int y = 0; y < r.size; ++y)
+            for (int x = 0; x < r.size; ++x) {
+                const glm::vec3 d =
+                    expectedPixel(*m, folded, view, 1.0f, kScale, lod, x, y, r.size) -
+                    expectedPixel(*m, folded, view, 1.0f, kScale, 0.0f, x, y, r.size);
+                for (int ch = 0; ch < 3; ++ch)
+                    fromBase = std::max(fromBase, double(std::abs(d[ch])));
+            }
+        std::cout << name << " environment, minified between mip levels 1 and 2: GPU vs CPU "
+                  << worst << " of largest " << largest << " (base level alone off by " << fromBase
+                  << ")\n";
+        EXPECT_GT(largest, 0.01) << name;
+        EXPECT_LE(worst, 1e-4 * largest) << name;
+        // The test would see a shader that reads level 0 alone.
+        EXPECT_GT(fromBase, 1e-2 * largest) << name;
     }
 }
 

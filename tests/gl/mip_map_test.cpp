@@ -10,16 +10,13 @@
 #include <iostream>
 
 #include <gtest/gtest.h>
-#include <osg/Geode>
-#include <osg/Uniform>
 
-#include "harness/MaterialImage.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MipMapping.h"
-#include "materials/ShaderInterface.h"
 #include "tests/SmallSample.h"
 #include "tests/gl/GlTestEnv.h"
+#include "tests/gl/MaterialGpuCheck.h"
 
 using namespace osgBTF;
 using namespace osgBTF::test;
@@ -51,15 +48,14 @@ struct MinifiedRender {
  *  false reads the nearest texel (of each level) instead of blending four. */
 MinifiedRender render(const Material& material, const glm::vec3& view, const glm::vec3& light,
                       int levels, bool blend = true, float repeats = float(kRepeats)) {
-    osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
-    stateSet->addUniform(new osg::Uniform(shader::kTextureScale, repeats));
-    stateSet->addUniform(new osg::Uniform(shader::kMipLevels, levels));
-    if (!blend) stateSet->addUniform(new osg::Uniform(shader::kBlendTexels, false));
-    addRectifiedLighting(*stateSet, view, light);
-    osg::ref_ptr<osg::Geode> geode = rectifiedPatch();
-    geode->setStateSet(stateSet.get());
-    const osg::ref_ptr<osg::Image> image =
-        sharedRenderer().render(geode.get(), orthoUnitSquare(kPixels, kPixels));
+    RectifiedPatchRender r;
+    r.view = view;
+    r.light = light;
+    r.textureScale = repeats;
+    r.width = r.height = kPixels;
+    r.mipLevels = levels;
+    r.blendTexels = blend;
+    const osg::ref_ptr<osg::Image> image = renderRectifiedPatch(material, r);
     MinifiedRender out;
     for (int j = 0; j < kPixels; ++j)
         for (int i = 0; i < kPixels; ++i)
