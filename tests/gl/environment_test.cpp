@@ -41,8 +41,10 @@
 #include "scene/MaterialNode.h"
 #include "scene/VertexEnvironment.h"
 #include "tests/gl/GlTestEnv.h"
+#include "tests/gl/MaterialGpuCheck.h"
 
 using namespace osgBTF;
+using osgBTF::test::trianglePatch;
 
 namespace {
 
@@ -84,31 +86,6 @@ EnvironmentMap uniformMap(int width, float radiance) {
     return map;
 }
 
-osg::ref_ptr<osg::Geometry> square() {
-    osg::ref_ptr<osg::Geometry> g = new osg::Geometry;
-    osg::ref_ptr<osg::Vec3Array> v = new osg::Vec3Array;
-    osg::ref_ptr<osg::Vec2Array> t = new osg::Vec2Array;
-    for (const osg::Vec2& p :
-         {osg::Vec2(0, 0), osg::Vec2(1, 0), osg::Vec2(1, 1), osg::Vec2(0, 1)}) {
-        v->push_back(osg::Vec3(p, 0.0f));
-        t->push_back(p);
-    }
-    g->setVertexArray(v);
-    g->setTexCoordArray(0, t);
-    osg::ref_ptr<osg::Vec3Array> normals = new osg::Vec3Array;
-    normals->assign(4, osg::Vec3(0, 0, 1));
-    g->setNormalArray(normals, osg::Array::BIND_PER_VERTEX);
-    osg::ref_ptr<osg::Vec4Array> tangents = new osg::Vec4Array;
-    tangents->assign(4, osg::Vec4(1, 0, 0, 1));
-    g->setVertexAttribArray(shader::kTangentAttribute, tangents, osg::Array::BIND_PER_VERTEX);
-    osg::ref_ptr<osg::DrawElementsUInt> tris = new osg::DrawElementsUInt(GL_TRIANGLES);
-    for (unsigned i : {0u, 1u, 2u, 0u, 2u, 3u}) tris->push_back(i);
-    g->addPrimitiveSet(tris);
-    g->setUseDisplayList(false);
-    g->setUseVertexBufferObjects(true);
-    return g;
-}
-
 /** Barycentric coordinates of point (u, v) of the square over its 4 vertices. */
 std::array<float, 4> barycentric(float u, float v) {
     if (u >= v) return {1.0f - u, u - v, v, 0.0f};
@@ -127,7 +104,7 @@ Rendered render(const Material& material, const std::vector<std::vector<float>>&
     osg::ref_ptr<osg::Group> root = new osg::Group;
     root->setStateSet(material.sharedStateSet());
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(square());
+    geode->addDrawable(trianglePatch());
     geode->setStateSet(environmentStateSet(material, folded, exposure));
     geode->getStateSet()->addUniform(
         new osg::Uniform(shader::kFixedView, osg::Vec4(view.x, view.y, view.z, 1.0f)));
@@ -433,7 +410,7 @@ TEST(EnvironmentGpu, MaterialNodeSceneLitByApplyEnvironmentLighting) {
     osg::ref_ptr<MaterialNode> node = new MaterialNode;
     node->setMaterial(const_cast<PcaMaterial*>(&pca()));
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(square());
+    geode->addDrawable(trianglePatch());
     node->addChild(geode);
     // A rectified image of the same method first, its view fixed at 60 degrees: GL keeps a
     // program's uniform values until they are set again, so environmentStateSet sets the real
@@ -517,7 +494,7 @@ TEST(EnvironmentGpu, EnvironmentLitGroupLightsItsMaterialNodesByItself) {
     group->setRepresentativeLights(4);
     osg::ref_ptr<MaterialNode> node = new MaterialNode;
     node->setMaterial(const_cast<PcaMaterial*>(&pca()));
-    osg::ref_ptr<osg::Geometry> geometry = square();
+    osg::ref_ptr<osg::Geometry> geometry = trianglePatch();
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
     geode->addDrawable(geometry);
     node->addChild(geode);
@@ -608,7 +585,7 @@ TEST(EnvironmentGpu, EnvironmentLitGroupRebuildsRotationsFromItsIlluminationPca)
     osg::ref_ptr<MaterialNode> node = new MaterialNode;
     node->setMaterial(const_cast<PcaMaterial*>(&pca()));
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(square());
+    geode->addDrawable(trianglePatch());
     node->addChild(geode);
     group->addChild(node);
     group->finish();
@@ -657,7 +634,7 @@ TEST(EnvironmentGpu, EnvironmentLitGroupPlacesMaterialNodesUnderTransformsWhereT
     light->setMap(white);
     osg::ref_ptr<EnvironmentLitGroup> group = new EnvironmentLitGroup;
     group->setLight(light.get());
-    osg::ref_ptr<osg::Geometry> roof = square();
+    osg::ref_ptr<osg::Geometry> roof = trianglePatch();
     osg::ref_ptr<osg::Vec3Array> corners = new osg::Vec3Array;
     for (const osg::Vec3& c : {osg::Vec3(-1, -1, 0.05f), osg::Vec3(2, -1, 0.05f),
                                osg::Vec3(2, 2, 0.05f), osg::Vec3(-1, 2, 0.05f)})
@@ -669,7 +646,7 @@ TEST(EnvironmentGpu, EnvironmentLitGroupPlacesMaterialNodesUnderTransformsWhereT
     osg::ref_ptr<MaterialNode> node = new MaterialNode;
     node->setMaterial(const_cast<PcaMaterial*>(&pca()));
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(square());
+    geode->addDrawable(trianglePatch());
     node->addChild(geode);
     osg::ref_ptr<osg::MatrixTransform> moved =
         new osg::MatrixTransform(osg::Matrix::translate(100, 0, 0));
@@ -697,10 +674,10 @@ TEST(EnvironmentGpu, RepresentativeLightsAreOccludedPerVertex) {
     osg::ref_ptr<MaterialNode> node = new MaterialNode;
     node->setMaterial(findMethod("lambert").fit(sample4(), FitOptions::parse("")).get());
     osg::ref_ptr<osg::Geode> geode = new osg::Geode;
-    geode->addDrawable(square());
+    geode->addDrawable(trianglePatch());
     node->addChild(geode);
     group->addChild(node);
-    osg::ref_ptr<osg::Geometry> wall = square();
+    osg::ref_ptr<osg::Geometry> wall = trianglePatch();
     osg::ref_ptr<osg::Vec3Array> corners = new osg::Vec3Array;
     for (const osg::Vec3& c : {osg::Vec3(1.5f, -2, -0.1f), osg::Vec3(1.5f, 3, -0.1f),
                                osg::Vec3(1.5f, 3, 2), osg::Vec3(1.5f, -2, 2)})
