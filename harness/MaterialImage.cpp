@@ -150,9 +150,8 @@ FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& mater
 FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,
                                const CoordinateMap& map, const glm::vec3& view,
                                const glm::vec3& light) {
-    checkCoordinateMapMatches(material, map, "coordinate map");
     osg::ref_ptr<osg::StateSet> stateSet = material.createStateSet();
-    osg::ref_ptr<osg::Texture2D> mapTexture = createCoordinateMapTexture(map);
+    osg::ref_ptr<osg::Texture2D> mapTexture = createCoordinateMapTexture(material, map);
     osg::ref_ptr<osg::StateSet> mapState =
         createCoordinateMapStateSet(material, *stateSet, mapTexture.get());
     return renderImage(renderer, stateSet.get(), mapState.get(), map.width, map.height, view,

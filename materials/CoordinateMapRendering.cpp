@@ -1,6 +1,7 @@
 #include "materials/CoordinateMapRendering.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <mutex>
 
@@ -98,17 +99,38 @@ std::vector<std::string> sharedTextures(const std::string& method) {
 
 void checkCoordinateMapMatches(const Material& material, const CoordinateMap& map,
                                const std::string& mapName) {
-    // The map's entries are base texels; the levels' averages do not follow a map's layout.
-    if (material.mipLayout().mipMapped())
-        throw Error(mapName + ": material '" +
-                    (material.sourceFile.empty() ? material.methodName() : material.sourceFile) +
-                    "' is mip-mapped; a coordinate map needs a material fitted without mip levels");
-    if (map.sampleWidth == material.width() && map.sampleHeight == material.height()) return;
+    // A mip-mapped material's texels are an atlas; the map names texels of its base level.
+    const MipLayout& layout = material.mipLayout();
+    const int width = layout.mipMapped() ? layout.baseWidth() : material.width();
+    const int height = layout.mipMapped() ? layout.baseHeight() : material.height();
+    if (map.sampleWidth == width && map.sampleHeight == height) return;
     const std::string name =
         material.sourceFile.empty() ? material.methodName() : material.sourceFile;
     throw Error(mapName + ": made for a " + sizeText(map.sampleWidth, map.sampleHeight) +
-                " sample, but material '" + name + "' is " +
-                sizeText(material.width(), material.height()));
+                " sample, but material '" + name + "' is " + sizeText(width, height));
+}
+
+std::vector<CoordinateMap> coordinateMapChain(const CoordinateMap& map,
+                                              const MipLayout& sampleLayout) {
+    std::vector<CoordinateMap> chain{map};
+    if (!sampleLayout.mipMapped()) return chain;
+    const std::vector<MipLevel>& levels = sampleLayout.levels();
+    for (int l = 1; chain.back().width > 1 || chain.back().height > 1; ++l) {
+        const MipLevel& r = levels[std::size_t(std::min(l, sampleLayout.levelCount() - 1))];
+        const int shift = std::min(l, sampleLayout.levelCount() - 1);
+        CoordinateMap level(std::max(1, map.width >> l), std::max(1, map.height >> l),
+                            sampleLayout.atlasWidth(), sampleLayout.atlasHeight());
+        for (int y = 0; y < level.height; ++y)
+            for (int x = 0; x < level.width; ++x) {
+                // The level texel whose footprint ([j 2^l, (j + 1) 2^l)) holds the sample texel
+                // of the block's first entry.
+                const int bx = x << l, by = y << l;
+                level.sampleX(x, y) = r.x + std::min(map.sampleX(bx, by) >> shift, r.width - 1);
+                level.sampleY(x, y) = r.y + std::min(map.sampleY(bx, by) >> shift, r.height - 1);
+            }
+        chain.push_back(std::move(level));
+    }
+    return chain;
 }
 
 FittedMaterial remapFittedMaterial(const FittedMaterial& file, const CoordinateMap& map) {
@@ -138,53 +160,121 @@ FittedMaterial remapFittedMaterial(const FittedMaterial& file, const CoordinateM
 }
 
 osg::ref_ptr<Material> remapMaterial(const Material& material, const CoordinateMap& map) {
+    if (material.mipLayout().mipMapped())
+        throw Error("coordinate map: material '" +
+                    (material.sourceFile.empty() ? material.methodName() : material.sourceFile) +
+                    "' is mip-mapped; only a material without mip levels can be remapped through "
+                    "a map (a render through the map filters its levels)");
     checkCoordinateMapMatches(material, map, "coordinate map");
     return materialFromFile(remapFittedMaterial(material.toFittedMaterial(), map));
 }
 
-glm::vec3 evaluateThroughMap(const Material& material, const CoordinateMap& map, float u, float v,
-                             const glm::vec3& view, const glm::vec3& light) {
-    const BilinearTaps taps(u, v, map.width, map.height);
+namespace {
+
+/** btf_main.glsl's btfAddMapLevelTaps: the four entries of a map level around (u, v) with
+ *  GL_LINEAR's weights times `share`, each tap the sample texel the entry names; the arithmetic
+ *  of addBilinearTaps (an identity map gives the material's own taps). */
+void addMapTaps(FilterTaps& taps, const CoordinateMap& level, float u, float v, float share) {
+    int x0, x1, y0, y1;
+    float a, b;
+    bilinearAxis(u, level.width, x0, x1, a);
+    bilinearAxis(v, level.height, y0, y1, b);
+    const auto add = [&](int x, int y, float weight) {
+        taps.add(level.sampleX(x, y), level.sampleY(x, y), weight);
+    };
+    add(x0, y0, share * (1.0f - a) * (1.0f - b));
+    add(x1, y0, share * a * (1.0f - b));
+    add(x0, y1, share * (1.0f - a) * b);
+    add(x1, y1, share * a * b);
+}
+
+glm::vec3 blend(const Material& material, const FilterTaps& taps, const glm::vec3& view,
+                const glm::vec3& light) {
     glm::vec3 value(0.0f);
-    for (int k = 0; k < 4; ++k)
-        // As the shader: an entry of weight 0 is not evaluated.
-        if (taps.weight[k] > 0.0f)
-            value +=
-                taps.weight[k] * material.evaluate(map.sampleX(taps.x[k], taps.y[k]),
-                                                   map.sampleY(taps.x[k], taps.y[k]), view, light);
+    for (int k = 0; k < taps.count; ++k)
+        value +=
+            taps.taps[k].weight * material.evaluate(taps.taps[k].x, taps.taps[k].y, view, light);
     return value;
 }
 
-osg::ref_ptr<osg::Texture2D> createCoordinateMapTexture(const CoordinateMap& map) {
+}  // namespace
+
+glm::vec3 evaluateThroughMap(const Material& material, const CoordinateMap& map, float u, float v,
+                             const glm::vec3& view, const glm::vec3& light) {
+    FilterTaps taps;
+    addMapTaps(taps, map, u, v, 1.0f);
+    return blend(material, taps, view, light);
+}
+
+glm::vec3 evaluateThroughMap(const Material& material, const std::vector<CoordinateMap>& chain,
+                             float u, float v, float lod, const glm::vec3& view,
+                             const glm::vec3& light) {
+    // btf_main.glsl's btfAddMapTaps: a material without levels reads the map's base level.
+    const int last = material.mipLayout().mipMapped() ? int(chain.size()) - 1 : 0;
+    const float clamped = std::clamp(std::isnan(lod) ? 0.0f : lod, 0.0f, float(last));
+    const int a = int(std::floor(clamped)), b = std::min(a + 1, last);
+    const float coarser = clamped - float(a);
+    FilterTaps taps;
+    addMapTaps(taps, chain[std::size_t(a)], u, v, 1.0f - coarser);
+    if (coarser > 0.0f) addMapTaps(taps, chain[std::size_t(b)], u, v, coarser);
+    return blend(material, taps, view, light);
+}
+
+osg::ref_ptr<osg::Texture2D> createCoordinateMapTexture(const std::vector<CoordinateMap>& chain) {
+    if (chain.empty()) throw Error("coordinate map: no levels");
+    const CoordinateMap& map = chain.front();
     validateCoordinateMap(map, "coordinate map");
-    if (map.sampleWidth > 65535 || map.sampleHeight > 65535)
-        throw Error(
-            "coordinate map: samples up to 65535x65535 texels can be drawn through a map, "
-            "got " +
-            sizeText(map.sampleWidth, map.sampleHeight));
+    for (const CoordinateMap& level : chain)
+        if (level.sampleWidth > 65535 || level.sampleHeight > 65535)
+            throw Error(
+                "coordinate map: samples up to 65535x65535 texels (with their mip levels) can "
+                "be drawn through a map, got " +
+                sizeText(level.sampleWidth, level.sampleHeight));
     // One R32I texel per entry, x in the low 16 bits and y above: OSG 3.6.5's osg::Image knows no
     // two-channel integer format (GL_RG_INTEGER), and one channel is also the smallest texture.
-    osg::ref_ptr<osg::Image> image = new osg::Image;
-    image->allocateImage(map.width, map.height, 1, GL_RED_INTEGER, GL_INT);
-    image->setInternalTextureFormat(GL_R32I);
-    auto* texels = reinterpret_cast<std::int32_t*>(image->data());
+    // The levels follow each other in one block, as osg::Image keeps mip levels.
+    std::size_t total = 0;
+    osg::Image::MipmapDataType offsets;
+    for (std::size_t l = 0; l < chain.size(); ++l) {
+        if (l > 0) offsets.push_back(static_cast<unsigned int>(total * sizeof(std::int32_t)));
+        total += std::size_t(chain[l].width) * std::size_t(chain[l].height);
+    }
+    auto* texels = new std::int32_t[total];
+    std::size_t at = 0;
     // Rows bottom-up in both: the map's row y is the texture's row y, as texelFetch reads it.
-    const std::size_t entries = std::size_t(map.width) * std::size_t(map.height);
-    for (std::size_t i = 0; i < entries; ++i)
-        texels[i] = std::int32_t((std::uint32_t(map.coordinates[2 * i + 1]) << 16) |
-                                 std::uint32_t(map.coordinates[2 * i]));
+    for (const CoordinateMap& level : chain) {
+        const std::size_t entries = std::size_t(level.width) * std::size_t(level.height);
+        for (std::size_t i = 0; i < entries; ++i)
+            texels[at++] = std::int32_t((std::uint32_t(level.coordinates[2 * i + 1]) << 16) |
+                                        std::uint32_t(level.coordinates[2 * i]));
+    }
+    osg::ref_ptr<osg::Image> image = new osg::Image;
+    image->setImage(map.width, map.height, 1, GL_R32I, GL_RED_INTEGER, GL_INT,
+                    reinterpret_cast<unsigned char*>(texels), osg::Image::USE_NEW_DELETE);
+    image->setMipmapLevels(offsets);
     osg::ref_ptr<osg::Texture2D> texture = new osg::Texture2D(image.get());
     texture->setInternalFormat(GL_R32I);
     texture->setSourceFormat(GL_RED_INTEGER);
     texture->setSourceType(GL_INT);
     texture->setResizeNonPowerOfTwoHint(false);
     texture->setUseHardwareMipMapGeneration(false);
-    texture->setFilter(osg::Texture::MIN_FILTER, osg::Texture::NEAREST);
+    // texelFetch ignores the filters; a mip-mapped one makes OSG upload the image's levels (an
+    // integer texture is complete with NEAREST filters and every level down to 1 x 1).
+    texture->setFilter(osg::Texture::MIN_FILTER, chain.size() > 1
+                                                     ? osg::Texture::NEAREST_MIPMAP_NEAREST
+                                                     : osg::Texture::NEAREST);
     texture->setFilter(osg::Texture::MAG_FILTER, osg::Texture::NEAREST);
     texture->setWrap(osg::Texture::WRAP_S, osg::Texture::CLAMP_TO_EDGE);
     texture->setWrap(osg::Texture::WRAP_T, osg::Texture::CLAMP_TO_EDGE);
     texture->setName("osgBTF_coordinateMap");
     return texture;
+}
+
+osg::ref_ptr<osg::Texture2D> createCoordinateMapTexture(const Material& material,
+                                                        const CoordinateMap& map) {
+    validateCoordinateMap(map, "coordinate map");
+    checkCoordinateMapMatches(material, map, "coordinate map");
+    return createCoordinateMapTexture(coordinateMapChain(map, material.mipLayout()));
 }
 
 osg::ref_ptr<osg::StateSet> createCoordinateMapStateSet(const Material& material,
@@ -199,6 +289,9 @@ osg::ref_ptr<osg::StateSet> createCoordinateMapStateSet(const Material& material
                     std::to_string(unit) + ", which the coordinate map needs");
     stateSet->setTextureAttribute(unit, mapTexture, osg::StateAttribute::ON);
     stateSet->addUniform(new osg::Uniform(shader::kCoordinateMap, unit));
+    const osg::Image* image = mapTexture->getImage();
+    stateSet->addUniform(new osg::Uniform(shader::kCoordinateMapLevels,
+                                          int(image ? image->getNumMipmapLevels() : 1)));
     // The compile pass makes this program current with this StateSet's uniforms alone (see
     // addSamplerUnits): every sampler gets its unit here too.
     addSamplerUnits(*stateSet, *program, materialState);

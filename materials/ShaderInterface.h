@@ -39,6 +39,9 @@ constexpr int kMaxMipLevels = 16;  ///< surface_frame.glsl's `const int osgBTF_m
  * adds, and the integer sampler it then reads (R32I, (sample row << 16) | sample column). */
 constexpr const char* kCoordinateMapDefine = "OSGBTF_COORDINATE_MAP";
 constexpr const char* kCoordinateMap = "osgBTF_coordinateMap";
+/** The map texture's mip levels (int, createCoordinateMapStateSet): its chain over a mip-mapped
+ *  material (coordinateMapChain), else 1. */
+constexpr const char* kCoordinateMapLevels = "osgBTF_coordinateMapLevels";
 /** The map's texture unit: the last of the 16 every GL 3.x fragment stage has. A fixed unit
  *  rather than the first free one, because methods also point samplers their variant never
  *  reads at units without a texture (ptm), and GL refuses to draw when samplers of different

@@ -58,13 +58,14 @@ SharedObjects<std::string, Material, std::string>& sharedMaterials() {
     return *cache;
 }
 
-/** One StateSet per coordinate map, method and number of texture units the material binds
- *  (createCoordinateMapStateSet checks that number against the map's unit): the map's texture,
+/** One StateSet per coordinate map, method, number of texture units the material binds
+ *  (createCoordinateMapStateSet checks that number against the map's unit) and number of mip
+ *  levels of the material (the map's chain follows them): the map's texture,
  *  uploaded once per context, and the method's map program, shared by every node drawing the
  *  map. Nodes push it at cull, so the texture's list of parent StateSets, which OSG does not
  *  guard, never changes when nodes are made or deleted on other threads (issue 31). The stamp is
  *  the map itself: the entry keeps it alive, so no other map can take its address meanwhile. */
-using MapStateSets = SharedObjects<std::tuple<const CoordinateMap*, std::string, std::size_t>,
+using MapStateSets = SharedObjects<std::tuple<const CoordinateMap*, std::string, std::size_t, int>,
                                    osg::StateSet, std::shared_ptr<const CoordinateMap>>;
 MapStateSets& mapStateSets() {
     static auto* const cache = new MapStateSets;
@@ -93,9 +94,10 @@ osg::ref_ptr<osg::StateSet> sharedMapStateSet(const std::shared_ptr<const Coordi
                                               const Material& material) {
     const osg::StateSet& materialState = *material.sharedStateSet();
     const std::size_t units = materialState.getTextureAttributeList().size();
-    return mapStateSets().get({map.get(), material.methodName(), units}, map, [&] {
+    const int levels = material.mipLayout().levelCount();
+    return mapStateSets().get({map.get(), material.methodName(), units, levels}, map, [&] {
         return createCoordinateMapStateSet(material, materialState,
-                                           createCoordinateMapTexture(*map).get());
+                                           createCoordinateMapTexture(material, *map).get());
     });
 }
 

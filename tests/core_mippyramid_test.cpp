@@ -183,6 +183,7 @@ TEST(MipMappedMaterial, BadLevelsAreRefusedWithTheirReason) {
     CoordinateMap map;
     map.sampleWidth = map.sampleHeight = 8;
     EXPECT_EQ(errorOf([&] { remapMaterial(*material, map); }),
-              "coordinate map: material 'lambert' is mip-mapped; a coordinate map needs a "
-              "material fitted without mip levels");
+              "coordinate map: material 'lambert' is mip-mapped; only a material without mip "
+              "levels can be remapped through a map (a render through the map filters its "
+              "levels)");
 }

@@ -12,6 +12,7 @@
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 
 using namespace osgBTF;
@@ -123,6 +124,82 @@ TEST(CoordinateMapRemap, ThroughTheMapBlendsTheFourEntriesAroundACoordinate) {
                0.25f * (entry(7, 3) + entry(0, 3) + entry(7, 0) + entry(0, 0)));
 }
 
+TEST(CoordinateMapChain, LevelsNameTheSampleLevelTexelOfTheirFirstEntryWorkedByHand) {
+    // A 4 x 4 sample's atlas (MipLayout): level 0 at (0, 0), level 1 (2 x 2) at (4, 0), level 2
+    // (1 x 1) at (4, 2); 6 x 4 texels.
+    CoordinateMap map(4, 2, 4, 4);
+    const int entries[2][4][2] = {{{3, 1}, {0, 2}, {2, 3}, {1, 0}},
+                                  {{0, 0}, {1, 1}, {2, 2}, {3, 3}}};
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) {
+            map.sampleX(x, y) = entries[y][x][0];
+            map.sampleY(x, y) = entries[y][x][1];
+        }
+    const std::vector<CoordinateMap> chain = coordinateMapChain(map, MipLayout::forBase(4, 4));
+    ASSERT_EQ(chain.size(), 3u);  // 4 x 2, 2 x 1, 1 x 1
+    EXPECT_EQ(chain[0].coordinates, map.coordinates);
+    EXPECT_EQ(chain[1].width, 2);
+    EXPECT_EQ(chain[1].height, 1);
+    EXPECT_EQ(chain[1].sampleWidth, 6);
+    EXPECT_EQ(chain[1].sampleHeight, 4);
+    // Level 1: base entries (0, 0) -> (3, 1) and (2, 0) -> (2, 3), halved, at (4, 0).
+    EXPECT_EQ(chain[1].coordinates, (std::vector<std::int32_t>{5, 0, 5, 1}));
+    // Level 2: base entry (0, 0) -> (3, 1), quartered: (0, 0) at (4, 2).
+    EXPECT_EQ(chain[2].width, 1);
+    EXPECT_EQ(chain[2].height, 1);
+    EXPECT_EQ(chain[2].coordinates, (std::vector<std::int32_t>{4, 2}));
+
+    // A map with more levels than its sample: the coarse ones name the sample's last level
+    // (a 2 x 2 sample: level 1 is 1 x 1 at (2, 0)).
+    CoordinateMap wide(8, 1, 2, 2);
+    const std::vector<CoordinateMap> long_ = coordinateMapChain(wide, MipLayout::forBase(2, 2));
+    ASSERT_EQ(long_.size(), 4u);  // 8, 4, 2, 1 entries wide
+    for (std::size_t l = 1; l < long_.size(); ++l)
+        for (int x = 0; x < long_[l].width; ++x) {
+            EXPECT_EQ(long_[l].sampleX(x, 0), 2) << "level " << l;
+            EXPECT_EQ(long_[l].sampleY(x, 0), 0) << "level " << l;
+        }
+    // A material without levels: the map alone.
+    EXPECT_EQ(coordinateMapChain(map, MipLayout()).size(), 1u);
+}
+
+TEST(CoordinateMapChain, IdentityMapThroughTheChainIsTheMaterialsOwnTrilinearFilter) {
+    // The identity map of a mip-mapped material: level l of its chain names level l's own texels,
+    // so a lookup through it at any level of detail is the material's own filtered lookup, texel
+    // for texel and weight for weight (the same float arithmetic: exactly equal).
+    SampleOptions options;
+    options.width = options.height = 8;
+    options.views = options.lights = fewDirections();
+    const MethodInfo& info = findMethod("pca");
+    const osg::ref_ptr<Material> material =
+        fitMipMapped(info, makeSampleBtf(options), FitOptions::parse(info.quickFitOptions));
+    ASSERT_EQ(material->mipLayout().levelCount(), 4);
+    CoordinateMap identity(8, 8, 8, 8);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+            identity.sampleX(x, y) = x;
+            identity.sampleY(x, y) = y;
+        }
+    checkCoordinateMapMatches(*material, identity, "identity");  // the base's size, not the atlas's
+    const std::vector<CoordinateMap> chain = coordinateMapChain(identity, material->mipLayout());
+    ASSERT_EQ(chain.size(), 4u);
+    const glm::vec3 view = Direction{31.7f, 77}.toVector(), light = Direction{52, 200}.toVector();
+    int compared = 0;
+    for (float lod : {-1.0f, 0.0f, 0.4f, 1.0f, 1.7f, 2.5f, 3.0f, 9.0f})
+        for (float u : {0.03f, 0.31f, 0.5f, 0.97f, 1.6f})
+            for (float v : {0.0f, 0.22f, 0.74f}) {
+                const glm::vec3 own = material->evaluateFiltered(u, v, lod, view, light);
+                const glm::vec3 through =
+                    evaluateThroughMap(*material, chain, u, v, lod, view, light);
+                EXPECT_EQ(own, through) << "lod " << lod << " at " << u << ", " << v;
+                ++compared;
+            }
+    // The levels differ (the test would see a chain that stays at level 0).
+    EXPECT_NE(evaluateThroughMap(*material, chain, 0.31f, 0.22f, 0.0f, view, light),
+              evaluateThroughMap(*material, chain, 0.31f, 0.22f, 2.0f, view, light));
+    EXPECT_EQ(compared, 120);
+}
+
 TEST(CoordinateMapRemap, FitOfTheMaterialisedBtfEqualsTheRemappedFit) {
     // lambert fits each texel from that texel's data alone, so fitting the synthesised BTF
     // (core's materialiseCoordinateMap of the measured data) and remapping the sample's fit must
@@ -165,6 +242,23 @@ TEST(CoordinateMapRemapErrors, MapForAnotherSampleSize) {
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(),
                      "map.exr: made for a 8x16 sample, but material 'wool.btfmat' is 8x6");
+    }
+}
+
+TEST(CoordinateMapRemapErrors, MipMappedMaterialIsMatchedByItsBaseLevel) {
+    // A mip-mapped 8 x 8 material's textures are a 12 x 8 atlas; a map names base texels.
+    SampleOptions options;
+    options.width = options.height = 8;
+    options.views = options.lights = fewDirections();
+    const osg::ref_ptr<Material> material =
+        fitMipMapped(findMethod("lambert"), makeSampleBtf(options), {});
+    ASSERT_EQ(material->width(), 12);
+    EXPECT_NO_THROW(checkCoordinateMapMatches(*material, CoordinateMap(16, 16, 8, 8), "map.exr"));
+    try {
+        checkCoordinateMapMatches(*material, CoordinateMap(16, 16, 12, 8), "map.exr");
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "map.exr: made for a 12x8 sample, but material 'lambert' is 8x8");
     }
 }
 

@@ -52,6 +52,10 @@ TEST(ShaderInterface, GlslDeclaresTheSameNamesAndLimits) {
     EXPECT_TRUE(declares(vert, std::string("uniform int ") + shader::kShadowTexGenUnit + "\\b"));
     EXPECT_TRUE(declares(frag, std::string("uniform sampler2DShadow ") + shader::kShadowMap + ";"));
     EXPECT_TRUE(declares(frag, std::string("uniform int ") + shader::kShadowLight + "\\b"));
+    // The coordinate-map variant: the map and its number of mip levels.
+    EXPECT_TRUE(declares(frag, std::string("#ifdef ") + shader::kCoordinateMapDefine + "\\b"));
+    EXPECT_TRUE(declares(frag, std::string("uniform isampler2D ") + shader::kCoordinateMap + ";"));
+    EXPECT_TRUE(declares(frag, std::string("uniform int ") + shader::kCoordinateMapLevels + "\\b"));
     // No other copy of the limit: MaterialNode uses the header's.
     EXPECT_EQ(kMaxLights, shader::kMaxLights);
 }

@@ -28,9 +28,9 @@ uniform vec4 osgBTF_fixedView = vec4(0.0);
 // - TexelFilter::Values (osgBTF_blendTexels): main() evaluates btfEvaluate at each of the four
 //   texels (per level) and blends the values; no method's shader takes part.
 // Neither set: the nearest texel (of each of two levels). Through a coordinate map every method
-// takes the second way over the map's four entries (btfAddMapTaps), whatever its TexelFilter:
-// neighbouring entries name unrelated sample texels, so no hardware filter of the parameter
-// textures can blend them; btfBilinear stays false there.
+// takes the second way over the map's four entries per level (btfAddMapTaps), whatever its
+// TexelFilter: neighbouring entries name unrelated sample texels, so no hardware filter of the
+// parameter textures can blend them; btfBilinear stays false there.
 uniform bool osgBTF_bilinear = false;
 uniform bool osgBTF_blendTexels = false;
 bool btfBilinear = false;
@@ -83,29 +83,45 @@ float btfShadowFactor(int i) {
 // The program variant for a coordinate map (materials/CoordinateMapRendering.h): the texture
 // coordinates cover the map, whose entries are the sample texels shown there (dependent fetches).
 // The map's size comes from the texture itself, so osgBTF_size stays the sample's, which the
-// methods' own texel arithmetic (tiles, stacked layers) needs. Entry = (row << 16) | column.
+// methods' own texel arithmetic (tiles, stacked layers) needs. Entry = (row << 16) | column, in
+// the material's atlas texels. Over a mip-mapped material the map has a mip chain
+// (coordinateMapChain): level l's entries name texels of the sample's level l.
 uniform isampler2D osgBTF_coordinateMap;
+uniform int osgBTF_coordinateMapLevels = 1;
 
-/** The sample texel that map entry `entry` names. */
-ivec2 btfMapEntry(ivec2 entry) {
-    int columnRow = texelFetch(osgBTF_coordinateMap, entry, 0).r;
+/** The sample texel that entry `entry` of map level `level` names. */
+ivec2 btfMapEntry(ivec2 entry, int level) {
+    int columnRow = texelFetch(osgBTF_coordinateMap, entry, level).r;
     return ivec2(columnRow & 0xFFFF, columnRow >> 16);
 }
 
-/** The four map entries around uv with GL_LINEAR's weights, wrapping at the map's edges (a
- *  synthesised map tiles: its last column blends with its first), each tap the sample texel its
- *  entry names: main() blends the method's values there, the render of the materialised
- *  material's texels (CoordinateMapRendering.h: evaluateThroughMap). The map has one level, so a
- *  minified map is filtered bilinearly at that level too, as GL_LINEAR without mipmaps would: the
- *  sample's mip levels would not follow the map's layout (a mip-mapped material is refused). */
-void btfAddMapTaps(vec2 uv) {
+/** The four entries of map level `level` around uv with GL_LINEAR's weights times `share`,
+ *  wrapping at the level's edges (a synthesised map tiles: its last column blends with its
+ *  first), each tap the sample texel its entry names. */
+void btfAddMapLevelTaps(vec2 uv, int level, float share) {
     ivec2 i0, i1;
     vec2 w;
-    btfBilinearNeighbours(uv, textureSize(osgBTF_coordinateMap, 0), i0, i1, w);
-    btfAddTap(btfMapEntry(i0), (1.0 - w.x) * (1.0 - w.y));
-    btfAddTap(btfMapEntry(ivec2(i1.x, i0.y)), w.x * (1.0 - w.y));
-    btfAddTap(btfMapEntry(ivec2(i0.x, i1.y)), (1.0 - w.x) * w.y);
-    btfAddTap(btfMapEntry(i1), w.x * w.y);
+    btfBilinearNeighbours(uv, textureSize(osgBTF_coordinateMap, level), i0, i1, w);
+    btfAddTap(btfMapEntry(i0, level), share * (1.0 - w.x) * (1.0 - w.y));
+    btfAddTap(btfMapEntry(ivec2(i1.x, i0.y), level), share * w.x * (1.0 - w.y));
+    btfAddTap(btfMapEntry(ivec2(i0.x, i1.y), level), share * (1.0 - w.x) * w.y);
+    btfAddTap(btfMapEntry(i1, level), share * w.x * w.y);
+}
+
+/** The map's taps at uv, as GL_LINEAR_MIPMAP_LINEAR over the map's chain: levels floor(lod) and
+ *  the next, the coarser one's share lod - floor(lod), the lod in map texels; main() blends the
+ *  method's values there (CoordinateMapRendering.h: evaluateThroughMap is the CPU reference).
+ *  Over a material without levels the map's base level at any distance, as GL_LINEAR without
+ *  mip-maps. Calls btfLod: uniform control flow. */
+void btfAddMapTaps(vec2 uv) {
+    float lod = btfLod(uv, vec2(textureSize(osgBTF_coordinateMap, 0)));
+    int last = osgBTF_mipLevels > 1 ? osgBTF_coordinateMapLevels - 1 : 0;
+    // NaN (no derivative) or negative: level 0.
+    lod = lod > 0.0 ? min(lod, float(last)) : 0.0;
+    int level = int(floor(lod));
+    float coarserWeight = lod - float(level);
+    btfAddMapLevelTaps(uv, level, 1.0 - coarserWeight);
+    if (coarserWeight > 0.0) btfAddMapLevelTaps(uv, min(level + 1, last), coarserWeight);
 }
 #endif
 

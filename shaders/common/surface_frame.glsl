@@ -63,12 +63,16 @@ ivec2 btfNearestTexel(vec2 uv) {
     return btfLevelTexel(uv, 0);
 }
 
-/** The level of detail at uv as GL computes it for a texture of the base's size: log2 of the
- *  longer screen-space step in base texels. Called in uniform control flow (derivatives). */
-float btfMipLod(vec2 uv) {
-    vec2 base = vec2(osgBTF_mipLevel[0].zw);
-    vec2 dx = dFdx(uv) * base, dy = dFdy(uv) * base;
+/** The level of detail at uv as GL computes it for a texture of `size` texels: log2 of the
+ *  longer screen-space step in texels. Called in uniform control flow (derivatives). */
+float btfLod(vec2 uv, vec2 size) {
+    vec2 dx = dFdx(uv) * size, dy = dFdy(uv) * size;
     return 0.5 * log2(max(dot(dx, dx), dot(dy, dy)));
+}
+
+/** btfLod for the material's base level. */
+float btfMipLod(vec2 uv) {
+    return btfLod(uv, vec2(osgBTF_mipLevel[0].zw));
 }
 
 // The texels a fragment evaluates and their shares of its value (at most four per level, two

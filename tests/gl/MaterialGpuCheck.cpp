@@ -323,7 +323,7 @@ osg::ref_ptr<osg::Image> renderRectifiedPatch(const Material& material,
     geode->setStateSet(render.get());
     osg::ref_ptr<osg::Group> mapped = new osg::Group;
     if (r.map) {
-        osg::ref_ptr<osg::Texture2D> texture = createCoordinateMapTexture(*r.map);
+        osg::ref_ptr<osg::Texture2D> texture = createCoordinateMapTexture(material, *r.map);
         mapped->setStateSet(createCoordinateMapStateSet(material, *stateSet, texture.get()));
     }
     mapped->addChild(geode.get());

@@ -3,7 +3,8 @@
 // (its per-texel textures remapped on the CPU) and shows, at every pixel, the texel the map
 // names in the plain render; the CPU evaluation at the mapped texels equals the materialised
 // material's exactly. Magnified and across the map's wrap edge, a fragment shows the bilinear
-// blend of the four map entries around it (evaluateThroughMap).
+// blend of the four map entries around it (evaluateThroughMap); minified over a mip-mapped
+// material, the trilinear blend of two levels of the map's chain.
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -16,6 +17,7 @@
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/pca/Pca.h"
@@ -187,6 +189,79 @@ TEST(CoordinateMapGpu, FmfExpDecodingThroughAMapBlendsDecodedValues) {
     std::cout << "fmf drr through a 12x10 map, magnified x4 across the wrap: GPU vs CPU "
               << r.gpuCpu << " (bound " << bound << "); materialised material: CPU filtered "
               << r.materialisedCpu << ", GPU " << r.materialisedGpu << "\n";
+}
+
+TEST_P(CoordinateMapGpu, MinifiedOverAMipMappedMaterialBlendsTwoLevelsOfTheMapsChain) {
+    // A mip-mapped fit of an 8 x 8 sample (levels 8, 4, 2, 1) through a 32 x 32 patchwork of
+    // 4 x 4 blocks, 6 map entries per pixel: lod log2(6) = 2.58, map levels 2 (8 x 8 entries,
+    // naming the sample's 2 x 2 level) and 3 (4 x 4, its 1 x 1 level), pixel centres between the
+    // entries of both. The render equals evaluateThroughMap through the map's chain; the map's
+    // base level alone (what a map without a chain shows) is far from it.
+    SampleOptions options;
+    options.width = options.height = 8;
+    options.views = options.lights = fewDirections();
+    const MethodInfo& info = findMethod(GetParam());
+    const osg::ref_ptr<Material> material =
+        fitMipMapped(info, makeSampleBtf(options), FitOptions::parse(info.quickFitOptions));
+    const CoordinateMap map = makeBlockCoordinateMap(32, 32, 8, 8, 4, 5);
+    const std::vector<CoordinateMap> chain = coordinateMapChain(map, material->mipLayout());
+    constexpr int kPixels = 32;
+    constexpr float kScale = 6.0f;
+    const float lod = std::log2(kScale * float(map.width) / float(kPixels));
+    const glm::vec3 view = Direction{31.7f, 77}.toVector(), light = Direction{52, 200}.toVector();
+    test::RectifiedPatchRender r;
+    r.view = view;
+    r.light = light;
+    r.textureScale = kScale;
+    r.width = r.height = kPixels;
+    r.map = &map;
+    const osg::ref_ptr<osg::Image> gpu = test::renderRectifiedPatch(*material, r);
+    r.mipLevels = 1;  // the material's base level: the map's base level alone
+    const osg::ref_ptr<osg::Image> baseOnly = test::renderRectifiedPatch(*material, r);
+    double worst = 0, mean = 0, fromBase = 0;
+    for (int j = 0; j < kPixels; ++j)
+        for (int i = 0; i < kPixels; ++i) {
+            const float u = (float(i) + 0.5f) / kPixels * kScale;
+            const float v = (float(j) + 0.5f) / kPixels * kScale;
+            const glm::vec3 cpu = evaluateThroughMap(*material, chain, u, v, lod, view, light);
+            for (int c = 0; c < 3; ++c) {
+                const double got = test::pixel(*gpu, i, j, c);
+                worst = std::max(worst, std::abs(got - double(cpu[c])));
+                fromBase = std::max(
+                    fromBase, std::abs(double(test::pixel(*baseOnly, i, j, c)) - double(cpu[c])));
+                mean += double(cpu[c]) / (3.0 * kPixels * kPixels);
+            }
+        }
+    // The bound of tests/gl/mip_map_test.cpp (8-bit and half storage of some methods).
+    const double bound = 1e-3 * (1.0 + mean) + 2e-3 * mean;
+    std::cout << GetParam() << " minified through a 32x32 map's chain (lod " << lod
+              << "): GPU vs CPU " << worst << " (bound " << bound
+              << "), the map's base level alone " << fromBase << ", mean " << mean << "\n";
+    EXPECT_LE(worst, bound) << GetParam();
+    EXPECT_GT(mean, 0.01) << "nothing rendered";
+    EXPECT_GT(fromBase, 10 * bound) << GetParam();
+
+    // The identity map: through its chain the render is the material's own trilinear render
+    // (the same texels and weights at every level; 1.5 map entries per pixel, levels 0 and 1).
+    CoordinateMap identity(8, 8, 8, 8);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+            identity.sampleX(x, y) = x;
+            identity.sampleY(x, y) = y;
+        }
+    r.mipLevels = -1;
+    r.map = &identity;
+    const osg::ref_ptr<osg::Image> throughIdentity = test::renderRectifiedPatch(*material, r);
+    r.map = nullptr;
+    const osg::ref_ptr<osg::Image> own = test::renderRectifiedPatch(*material, r);
+    double identityDifference = 0;
+    for (int j = 0; j < kPixels; ++j)
+        for (int i = 0; i < kPixels; ++i)
+            for (int c = 0; c < 3; ++c)
+                identityDifference = std::max(
+                    identityDifference, std::abs(double(test::pixel(*throughIdentity, i, j, c)) -
+                                                 double(test::pixel(*own, i, j, c))));
+    EXPECT_LE(identityDifference, kSameArithmetic) << GetParam();
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, CoordinateMapGpu, ::testing::ValuesIn(methodNames()),
