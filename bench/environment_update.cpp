@@ -1,4 +1,4 @@
-// Benchmark: seed 004 Table 2's environment update and visibility times on our CPU path.
+// Benchmark: Sattler et al. 2003 Table 2's environment update and visibility times on our CPU path.
 // Usage: bench_environment_update [--vertices N] [--width W] [--components C]
 //                                 [--illumination-pca on|off]
 //   A UV sphere of about N vertices standing on a ground plane (self-occlusion by the ground
@@ -7,8 +7,8 @@
 //   not depend on the texel count). Prints: per-vertex projection with Embree visibility,
 //   the same without visibility, folding (views x (C + 1) RGB per vertex), the folded data's
 //   size, the illumination-PCA rebuild of one rotation from 30 samples with 5 components, and
-//   the frame time of the lit sphere and ground at 1920x1080 into an RGBA8 target (seed 004
-//   Table 2's fps; --fps-frames N timed frames, 0 skips it; the GL renderer is printed).
+//   the frame time of the lit sphere and ground at 1920x1080 into an RGBA8 target (Sattler et al.
+//   2003 Table 2's fps; --fps-frames N timed frames, 0 skips it; the GL renderer is printed).
 #include <chrono>
 #include <cmath>
 #include <cstdio>

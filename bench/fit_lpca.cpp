@@ -1,8 +1,9 @@
-// Benchmark: LPCA fit time and peak memory on a Bonn-81 BTF (seed 001: 1-2 hours for 32x8).
-// Usage: bench_fit_lpca [--size N] [--options "clusters=32 components=8"] [--float] [--error]
+// Benchmark: LPCA fit time and peak memory on a Bonn-81 BTF (Meseth et al. 2003: 1-2 hours for
+// 32x8). Usage: bench_fit_lpca [--size N] [--options "clusters=32 components=8"] [--float]
+// [--error]
 //   Generates the built-in sample at N x N texels (default 256, half storage unless --float),
 //   fits "lpca" with the options, prints fit time, iterations, peak resident memory, memory per
-//   texel and, with --error, the per-texel error of seed 001 section 4.1.
+//   texel and, with --error, the per-texel error of Meseth et al. 2003 section 4.1.
 #include <sys/resource.h>
 
 #include <chrono>

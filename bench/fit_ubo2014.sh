@@ -1,5 +1,5 @@
 #!/bin/sh
-# Issue 11 section 3: methods fitted straight from a UBO2014 file's factors (BtfSource: each
+# methods fitted straight from a UBO2014 file's factors (BtfSource: each
 # block a method reads is decoded with one GEMM; the 22 GB of values never exist at once).
 # Each `btf fit` runs under /usr/bin/time -v for wall time and peak RSS; its own output gives
 # the fit time and the error (on btf fit's default random subsample of 4096 texels). The base

@@ -25,7 +25,8 @@
 #   SCENE_SIZE=32 SCENE_METHODS=lambert,laf,slaf,rf,pca,lpca,lpca-revised
 #   SCENE_RESOLUTION=1920x1080
 #   LPCA_VIEWPORT=1024     viewport of bench_lpca_pass_time
-#   BSVTF_ARGS="--width 1280 --height 720"  options of bench_bsvtf (seed 003 Tables 1-2, Fig. 5)
+#   BSVTF_ARGS="--width 1280 --height 720"  options of bench_bsvtf (Schwartz et al. 2013,
+#                                            Tables 1-2, Fig. 5)
 # A step that fails is reported in tables.md and the others still run; the exit status is the
 # number of failed steps (0: all ran).
 set -u
@@ -145,7 +146,8 @@ if step scenes "$bin/btf-examples" --no-progress --out "$work/examples" --size "
     cp "$work/examples/bench-fps.md" "$work/examples/bench-fps.csv" "$out/"
 fi
 
-# 3. Original against revised LPCA per pass (seed 000 Table 1), when the benchmarks were built.
+# 3. Original against revised LPCA per pass (Schneider 2004 Table 1), when the benchmarks were
+#    built.
 if [ -x "$bin/bench_lpca_pass_time" ]; then
     if step lpca-pass-time "$bin/bench_lpca_pass_time" --size "$SIZE" --frames "$FRAMES" \
         --viewport "$LPCA_VIEWPORT"; then
@@ -173,7 +175,7 @@ if [ -x "$bin/bench_fit_analytic" ]; then
     fi
 fi
 
-# 5. fmf at the seed's rank (C = 100; step 1 times the default C = 32): issue 11's pass time.
+# 5. fmf at the rank of Schwartz et al. 2013 (C = 100; step 1 times the default C = 32).
 if [ -f "$sample" ]; then
     resolution=${RESOLUTIONS%% *}
     name="compare-fmf100-${resolution}-1l"
@@ -189,8 +191,9 @@ if [ -f "$sample" ]; then
     fi
 fi
 
-# 6. BSVTF (issue 13): GPU memory and frame time for 1, 5, 25 and 100 streamed materials against
-#    plain fmf, preprocessing, bytes received against SSIM (seed 003 Tables 1-2, Fig. 5).
+# 6. BSVTF: GPU memory and frame time for 1, 5, 25 and 100 streamed materials against
+#    plain fmf, preprocessing, bytes received against SSIM (Schwartz et al. 2013 Tables 1-2,
+#    Fig. 5).
 if [ -x "$bin/bench_bsvtf" ]; then
     # shellcheck disable=SC2086  # BSVTF_ARGS is a list of options
     if step bsvtf "$bin/bench_bsvtf" --work "$work/bsvtf" --frames "$FRAMES" \

@@ -1,11 +1,11 @@
-// Benchmark: seed 000 Table 1 in our own run: time per pass of the original LPCA rendering
+// Benchmark: Schneider 2004 Table 1 in our own run: time per pass of the original LPCA rendering
 // (3x3 manual direction interpolation) and the revised one (3D texture, 2 fetches + 1 lerp per
 // component) for c = 2, 4, 8 at 1024x1024, the same fitted data in the same run.
 // Usage: bench_lpca_pass_time [--size N] [--frames F] [--viewport P] [--resolution R] [--unorm8 1]
 //   Renders a full-viewport patch through the headless renderer (OSGBTF_HEADLESS picks EGL or
 //   OSMesa); prints the GL renderer, wall / CPU / GPU-timer ms per pass (medians), the speed-up,
 //   and the extra per-texel error of the resampled model. --unorm8 1 times the revised method's
-//   8-bit storage (the seed's RGBA8 3D textures) instead of half floats.
+//   8-bit storage (Schneider 2004's RGBA8 3D textures) instead of half floats.
 #include <cstdio>
 #include <string>
 

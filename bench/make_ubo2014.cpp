@@ -1,4 +1,4 @@
-// Benchmark input: a full-size UBO2014 DFMF file (issue 11 benchmarks) written with the project's
+// Benchmark input: a full-size UBO2014 DFMF file written with the project's
 // writer (writeUbo2014): 400x400 texels, 151 x 151 Dome-1 directions, K = 100 components per
 // channel, colour model 11 (exp-YUV), half scalars by default.
 // Usage: bench_make_ubo2014 -o FILE [--size N] [--components K] [--scalar 2|4] [--cosine]

@@ -1,4 +1,4 @@
-// Benchmark (issue 11): a UBO2014 file opened as stored (scene/OpenMaterial.h: readUbo2014, then
+// Benchmark: a UBO2014 file opened as stored (scene/OpenMaterial.h: readUbo2014, then
 // the fmf material of its factors; nothing decoded) and its first rendered frame, headless.
 // Goal at full size (bench_make_ubo2014: 400x400, 151x151, DFMF K = 100): open + first frame
 // <= 5 s, peak resident memory <= 1.5 GB.

@@ -1,5 +1,5 @@
 #!/bin/sh
-# Issue 11 benchmarks on a full-size UBO2014 file used as stored (no decode, no refit):
+# Benchmarks on a full-size UBO2014 file used as stored (no decode, no refit):
 #   1. `btf info FILE` (header and factors; goal < 1 s),
 #   2. bench_open_ubo2014: open (read + fmf material) and the first rendered frame, headless
 #      (goal <= 5 s, peak RSS <= 1.5 GB),

@@ -1,4 +1,4 @@
-// Soak (issue 16 section 4): a headless viewer renders fitted materials for 10,000 frames,
+// Soak: a headless viewer renders fitted materials for 10,000 frames,
 // switching every node's material every 10 frames and reloading the scene from its files (through
 // osgDB) every 500, and samples the RSS and the GL objects alive in the context. Exits 1 when
 // anything grew after the warm-up beyond its tolerance (README "Reliability"), 2 on bad usage.

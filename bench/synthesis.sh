@@ -1,6 +1,6 @@
 #!/bin/sh
-# Seed 002 Table 1 in our run: `btf synthesize` with 3 levels on the 64x64 built-in sample (all
-# 6561 images), at the paper's five settings, beside the paper's times (Pentium 4 2.4 GHz; the
+# Boßerhoff and Nicoll 2003 Table 1 in our run: `btf synthesize` with 3 levels on the 64x64
+# built-in sample (all 6561 images), at the paper's five settings, beside the paper's times (Pentium 4 2.4 GHz; the
 # paper times the synthesis "without the time for calculating the texton map", so the table's
 # `synthesis` column is the one to compare; `analysis` is our texton map, texton matrix and
 # candidate lists, which depend on k and the neighbourhood).

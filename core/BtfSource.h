@@ -1,4 +1,4 @@
-// osgBTF: where a fitter reads measured data from (issue 11 section 3).
+// osgBTF: where a fitter reads measured data from.
 //
 // Two kinds of input exist: a MeasuredBtf, every value in memory, and a FactoredBtf, a UBO2014
 // file's factors B = U * SxV^T, which are ~100 MB where the values would be 22 GB. Fitters only

@@ -1,6 +1,7 @@
-// osgBTF: coordinate maps, the output of BTF synthesis (seed 002 section 5): for every texel of a
-// large surface, the texel of the small measured sample whose appearance it shows. Rendering
-// through a map costs dependent fetches (four, filtered) and stores nothing per view or light.
+// osgBTF: coordinate maps, the output of BTF synthesis (Boßerhoff and Nicoll 2003 section 5): for
+// every texel of a large surface, the texel of the small measured sample whose appearance it shows.
+// Rendering through a map costs dependent fetches (four, filtered) and stores nothing per view or
+// light.
 //
 // File format (version 1): a single-part scanline OpenEXR file, ZIP-compressed, width x height =
 // the output size, two FLOAT channels "R" (sample x, the column) and "G" (sample y, the row

@@ -1,9 +1,9 @@
 // osgBTF: interpolation between measured directions.
 //
 // Directions are mapped to a disc with the parabolic map p = (x, y) / (1 + z) (formats.md §3; the
-// map btflib and seed 003 use). It is a stereographic projection, which maps circles on the
-// sphere to circles in the plane, so the planar Delaunay triangulation of the mapped samples is the
-// spherical Delaunay triangulation of the directions themselves. A query direction gets the
+// map btflib and Schwartz et al. 2013 use). It is a stereographic projection, which maps circles on
+// the sphere to circles in the plane, so the planar Delaunay triangulation of the mapped samples is
+// the spherical Delaunay triangulation of the directions themselves. A query direction gets the
 // barycentric weights of the triangle that contains it: at most 3 indices, weights >= 0 summing
 // to 1, (index, 1) at a measured direction up to float rounding. Outside the convex hull of the
 // samples (below theta 75 for Bonn data) it takes the closest point of the hull boundary, i.e. it

@@ -25,7 +25,7 @@ public:
     DirectionSet() = default;
     DirectionSet(std::string name, std::vector<Direction> directions);
 
-    /** The 81 Bonn directions (seed 004 Table 1 "H2"), in the UBO2003 index order. */
+    /** The 81 Bonn directions (Sattler et al. 2003 Table 1 "H2"), in the UBO2003 index order. */
     static DirectionSet bonn81();
     /** The 151 UBO2014 "Dome 1" directions (formats.md section 3), zenith first, rings upward. */
     static DirectionSet ubo2014();

@@ -1,10 +1,11 @@
 // osgBTF: how far a model is from the measured data.
 //
-// Per-texel error (seed 001 section 4.1): for texel x, the mean over all measured (view, light)
-// pairs of the length of the RGB difference |BTF(x, v, l) - M(x, v, l)|, with 8-bit data scaled to
-// [0, 1] (the loaders already do). Reported as average, minimum and maximum over texels. RMSE is
-// over every channel value; PSNR uses a peak of 1 (the 8-bit white level), so it stays comparable
-// between materials; for HDR data it is still defined but values above 1 make it pessimistic.
+// Per-texel error (Meseth et al. 2003 section 4.1): for texel x, the mean over all measured (view,
+// light) pairs of the length of the RGB difference |BTF(x, v, l) - M(x, v, l)|, with 8-bit data
+// scaled to [0, 1] (the loaders already do). Reported as average, minimum and maximum over texels.
+// RMSE is over every channel value; PSNR uses a peak of 1 (the 8-bit white level), so it stays
+// comparable between materials; for HDR data it is still defined but values above 1 make it
+// pessimistic.
 #pragma once
 
 #include <functional>

@@ -1,4 +1,5 @@
-// osgBTF: a BTF kept as low-rank factors, B = U * SxV^T (seed 003 section 3: FMF; the UBO2014
+// osgBTF: a BTF kept as low-rank factors, B = U * SxV^T (Schwartz et al. 2013 section 3: FMF; the
+// UBO2014
 // ".btf" files store exactly this, formats.md section 2).
 //
 // The ABRDF matrix has one row per (view, light[, channel]) and one column per texel. U holds the

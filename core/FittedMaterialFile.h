@@ -39,8 +39,8 @@ struct MaterialTexture {
     int depth = 1;
     int channels = 0;
     /** Precision in the file (and on the GPU). Half data is rounded to half when saved; kept as
-     *  float in memory. UNorm8 data (8-bit fixed point, as seed 001 stores colours) must be
-     *  multiples of 1/255 in [0, 1]; the file holds the integers 0..255 in half channels (exact)
+     *  float in memory. UNorm8 data (8-bit fixed point, as Meseth et al. 2003 store colours) must
+     * be multiples of 1/255 in [0, 1]; the file holds the integers 0..255 in half channels (exact)
      *  with the part attribute osgBTF.storage = "unorm8", and GPUs get GL_RGBA8-style textures. */
     PixelKind kind = Float;
     std::vector<float> data;

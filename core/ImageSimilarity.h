@@ -1,5 +1,5 @@
 // osgBTF: the structural similarity index (SSIM; Wang, Bovik, Sheikh, Simoncelli 2004), which
-// seed 003 reports for streamed renders ("95.4 % to the converged image after 25 MB").
+// Schwartz et al. 2013 report for streamed renders ("95.4 % to the converged image after 25 MB").
 #pragma once
 
 #include <vector>

@@ -1,4 +1,4 @@
-// osgBTF: mip-mapped BTFs (issue 12 section 2). Minified surfaces must show the average of the
+// osgBTF: mip-mapped BTFs. Minified surfaces must show the average of the
 // measured data over a pixel's footprint, not one texel of it: the averaged ABRDFs of every level
 // are laid out in one atlas and fitted like any measured texels, so every method gets prefiltered
 // data its own way (per-texel methods fit each level's averages, LPCA assigns clusters and weights

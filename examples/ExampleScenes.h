@@ -56,20 +56,20 @@ osg::ref_ptr<osg::Group> createSideBySideScene(osg::Node* model,
                                                const std::vector<SceneItem>& items, float spacing,
                                                float textureScale, const osgDB::Options* options);
 
-/** The shadowed cloth scene (seed 004's setting): the draped cloth (createClothModel(56): 3249
- *  vertices, coarse enough to show what the smooth terminator does) under a MaterialNode with
- *  `materialFile`, on its round table, over a floor, inside an osgShadow::ShadowedScene with an
- *  osgShadow::ShadowMap (2048 texels), lit by a cool fill light and a warm key light that casts
- *  the shadows (the last light: ShadowMap's and MaterialNode's default choice). The table and
- *  floor are plain OSG geometry, drawn by ShadowMap's own shader. Throws Error like
- *  createSideBySideScene. */
+/** The shadowed cloth scene (Sattler et al. 2003's setting): the draped cloth
+ * (createClothModel(56): 3249 vertices, coarse enough to show what the smooth terminator does)
+ * under a MaterialNode with `materialFile`, on its round table, over a floor, inside an
+ * osgShadow::ShadowedScene with an osgShadow::ShadowMap (2048 texels), lit by a cool fill light and
+ * a warm key light that casts the shadows (the last light: ShadowMap's and MaterialNode's default
+ * choice). The table and floor are plain OSG geometry, drawn by ShadowMap's own shader. Throws
+ * Error like createSideBySideScene. */
 osg::ref_ptr<osg::Group> createShadowedClothScene(const std::string& materialFile,
                                                   float textureScale,
                                                   const osgDB::Options* options);
 
 /** The draped cloth (createClothModel(56)) under a MaterialNode with `materialFile`, inside an
- *  osgBTF::EnvironmentLitGroup lit by the HDR map `environmentFile` (seed 004 section 5: the
- *  folds shadow the environment per vertex): the group computes the lighting by itself when a
+ *  osgBTF::EnvironmentLitGroup lit by the HDR map `environmentFile` (Sattler et al. 2003 section 5:
+ * the folds shadow the environment per vertex): the group computes the lighting by itself when a
  *  viewer first updates it, so stock osgviewer shows it. Throws Error like
  *  createSideBySideScene, or naming an unusable map. */
 osg::ref_ptr<osg::Group> createEnvironmentLitClothScene(const std::string& materialFile,

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# CI's short fuzz pass (issue 16): every target for SECONDS on its seeds and regression inputs,
+# CI's short fuzz pass: every target for SECONDS on its seeds and regression inputs,
 # JOBS targets at a time (one process each), in a fresh temporary folder. Fails when a target
 # exits non-zero or leaves a crash-/leak-/timeout-/oom- file (libFuzzer stops at its first
 # finding), and prints that target's log.
@@ -29,7 +29,7 @@ run_target() {
   # "Open"): OSG's reader keeps a scene whose UniqueIDs make a cycle of ref_ptrs, and a 31-byte
   # string from an uninstrumented image library on a damaged PNG. osgBTF's own leaks are checked by
   # the unit tests, which run with LeakSanitizer on.
-  # -timeout=5: an input over 5 s is a hang (issue 16). The new inputs go to the temporary corpus
+  # -timeout=5: an input over 5 s is a hang. The new inputs go to the temporary corpus
   # (the first folder), never into the source tree.
   ASAN_OPTIONS="detect_leaks=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}" "$build/bin/fuzz_$t" "$corpus" -dict="$here/dict/$t.dict" -max_total_time="$seconds" \
     -timeout=5 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 -detect_leaks=0 \

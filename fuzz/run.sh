@@ -24,7 +24,7 @@ for t in "${targets[@]}"; do
   mkdir -p "$corpus"
   if [ -d "$seeds/$t" ]; then cp -n "$seeds/$t"/* "$corpus"/ 2>/dev/null || true; fi
   cp -n "$here/regression/$t"/* "$corpus"/ 2>/dev/null || true
-  # -timeout=5: an input over 5 s is a hang (issue 16); -rss_limit_mb: libFuzzer's default,
+  # -timeout=5: an input over 5 s is a hang; -rss_limit_mb: libFuzzer's default,
   # stated; -max_len: large enough for the seeds (fitted materials of a few KB).
   set +e
   # shellcheck disable=SC2086  # FUZZ_ARGS: separate libFuzzer flags

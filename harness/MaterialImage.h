@@ -47,8 +47,8 @@ FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& mater
 FloatImage evaluateMaterialImage(const Material& material, const CoordinateMap& map,
                                  const glm::vec3& view, const glm::vec3& light);
 
-/** Environment lighting of the patch (normal +Z, tangent +X, nothing occluding it; seed 004
- *  section 5): the map projected onto the material's measured light directions, g_i = sum over
+/** Environment lighting of the patch (normal +Z, tangent +X, nothing occluding it; Sattler et al.
+ * 2003 section 5): the map projected onto the material's measured light directions, g_i = sum over
  *  the upper hemisphere's texels of w_i(d) L Omega (materials/EnvironmentLighting.h). */
 std::vector<glm::vec3> projectPatchEnvironment(const Material& material, const EnvironmentMap& map);
 

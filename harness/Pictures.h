@@ -26,7 +26,7 @@ struct SphereSetting {
     float cameraElevation = 0;  ///< degrees: the camera orbits up around the sphere's x axis
     osg::Vec3 lightDirection;   ///< eye space, towards the light
 };
-/** Front, grazing and back-lit settings (seed 001 Fig. 5/6 show a few such lights). */
+/** Front, grazing and back-lit settings (Meseth et al. 2003 Fig. 5/6 show a few such lights). */
 std::vector<SphereSetting> defaultSphereSettings();
 
 /** The material on the sphere seen from a perspective camera, one directional light; RGB, rows

@@ -1,4 +1,5 @@
-// osgBTF harness: what one fragment of a fitted material's shader costs (seed 001 Table 3).
+// osgBTF harness: what one fragment of a fitted material's shader costs (Meseth et al. 2003 Table
+// 3).
 #pragma once
 
 #include "materials/Material.h"

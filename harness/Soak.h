@@ -1,6 +1,6 @@
 // A long headless viewer run that switches materials and reloads its scene, sampling the
 // process's memory and the GL objects alive in the context: what must stay flat for an
-// application that runs for days (issue 16 section 4). bench/soak.cpp runs it for 10,000 frames,
+// application that runs for days. bench/soak.cpp runs it for 10,000 frames,
 // tests/gl/soak_test.cpp a short version.
 #pragma once
 

@@ -1,5 +1,5 @@
-// osgBTF::EnvironmentLight: an HDR environment (lat-long map) that lights BTF materials (seed 004
-// section 5; the math is in materials/EnvironmentLighting.h).
+// osgBTF::EnvironmentLight: an HDR environment (lat-long map) that lights BTF materials (Sattler et
+// al. 2003 section 5; the math is in materials/EnvironmentLighting.h).
 //
 // The map is read through osgDB: Radiance .hdr with OSG's own hdr plugin, OpenEXR with the
 // project's osgdb_btfexr. Lat-long convention (EnvironmentMap): +Z up, the image's top row is the

@@ -1,6 +1,6 @@
-// osgBTF::EnvironmentLitGroup: a Group whose MaterialNodes are lit by an HDR environment (seed 004
-// section 5), kept up to date by itself, so a scene file lights its materials in any viewer
-// (stock osgviewer included) without application code.
+// osgBTF::EnvironmentLitGroup: a Group whose MaterialNodes are lit by an HDR environment (Sattler
+// et al. 2003 section 5), kept up to date by itself, so a scene file lights its materials in any
+// viewer (stock osgviewer included) without application code.
 //
 // In the update traversal it looks for MaterialNodes below it and, when the light's map, rotation
 // or projection width, or the set of MaterialNodes and their materials changed since the last
@@ -51,12 +51,12 @@ public:
     void setVisibility(bool on);
     bool getVisibility() const { return _visibility; }
 
-    /** Illumination PCA (seed 004 section 5.3): with A > 0, the folded data are computed for A
-     *  rotations of the map (360 / A degrees apart; A times the work and, while building, A
+    /** Illumination PCA (Sattler et al. 2003 section 5.3): with A > 0, the folded data are computed
+     * for A rotations of the map (360 / A degrees apart; A times the work and, while building, A
      *  times the data's memory) and compressed to `components` principal components per
      *  geometry, and a new rotation is then rebuilt in the update traversal from the two
      *  neighbouring samples' coefficients (no worker, no ray casting). 0 (default): every new
-     *  rotation is computed exactly on the worker. The seed's setting: 30 and 5. */
+     *  rotation is computed exactly on the worker. The paper's setting: 30 and 5. */
     void setRotationSamples(int samples);
     int getRotationSamples() const { return _rotationSamples; }
     void setRotationComponents(int components);

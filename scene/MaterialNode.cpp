@@ -63,7 +63,7 @@ SharedObjects<std::string, Material, std::string>& sharedMaterials() {
  *  levels of the material (the map's chain follows them): the map's texture,
  *  uploaded once per context, and the method's map program, shared by every node drawing the
  *  map. Nodes push it at cull, so the texture's list of parent StateSets, which OSG does not
- *  guard, never changes when nodes are made or deleted on other threads (issue 31). The stamp is
+ *  guard, never changes when nodes are made or deleted on other threads. The stamp is
  *  the map itself: the entry keeps it alive, so no other map can take its address meanwhile. */
 using MapStateSets = SharedObjects<std::tuple<const CoordinateMap*, std::string, std::size_t, int>,
                                    osg::StateSet, std::shared_ptr<const CoordinateMap>>;

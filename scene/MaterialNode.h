@@ -14,7 +14,8 @@
 //  - feeds every osg::LightSource of the scene being culled (up to 8) to the shaders in eye
 //    space, for each camera and frame; with no LightSource in the scene, the view's own light
 //    (osgViewer's headlight or sky light), or a white headlight when there is no view.
-//  - multiplies each light's term by seed 004's smooth shadow terminator (on by default, alpha
+//  - multiplies each light's term by Sattler et al. 2003's smooth shadow terminator (on by default,
+//  alpha
 //    15 degrees; scene/ShadowTerminator.h);
 //  - below an osgShadow::ShadowedScene whose technique is an osgShadow::ShadowMap, SoftShadowMap
 //    or ViewDependentShadowMap (its first map), samples the technique's shadow map for the light
@@ -120,8 +121,8 @@ public:
     /** Whether the material is drawn through the map (both set, sizes matching). */
     bool usesCoordinateMap() const { return _mapStateSet.valid(); }
 
-    /** Seed 004's smooth shadow terminator (scene/ShadowTerminator.h), for every light and
-     *  method: per vertex u = (1 + cos(alpha + angle(n, l))) / 2 into a blurred 1D step of
+    /** Sattler et al. 2003's smooth shadow terminator (scene/ShadowTerminator.h), for every light
+     * and method: per vertex u = (1 + cos(alpha + angle(n, l))) / 2 into a blurred 1D step of
      *  `softness` width. On by default; off draws exactly what the node drew without it. */
     void setShadowTerminator(bool enabled);
     bool getShadowTerminator() const { return _terminator; }

@@ -1,6 +1,6 @@
 // osgBTF: opening a material file the way every front end does (the osgDB plugins, MaterialNode,
 // `btf eval`, btfviewer through the plugins): a fitted-material file as saved, and a UBO2014
-// ".btf" as what it is, an `fmf` material made of its stored factors (issue 11 section 2): no
+// ".btf" as what it is, an `fmf` material made of its stored factors: no
 // decode of the measured data and no refit, so a full-size file (22 GB decoded, ~100 MB stored)
 // opens in seconds. Fitting a method to a .btf (`-O method=...`, `btf fit`) decodes it as
 // before. Lives in scene/ because it joins loaders/ and materials/, which may not include each

@@ -10,7 +10,7 @@
 //                     written as given, found like MaterialFile); only when the node has a map
 //                     file. A map set in memory (setCoordinateMap) is not stored.
 //   ShadowTerminator, TerminatorAlpha, TerminatorSoftness
-//                     seed 004's smooth terminator (on, 15 degrees, 0.1 by default).
+//                     Sattler et al. 2003's smooth terminator (on, 15 degrees, 0.1 by default).
 //   ShadowLight       the light an osgShadow::ShadowMap above shadows (-1: the last).
 //   EmbeddedMaterial  only for a material that has no file (fitted in memory): its whole
 //                     FittedMaterial (method, parameters, direction sets, textures with their

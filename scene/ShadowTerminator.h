@@ -1,4 +1,4 @@
-// osgBTF: the smooth shadow terminator of seed 004 (sec. 4.3), the CPU reference of what
+// osgBTF: the smooth shadow terminator of Sattler et al. 2003 (sec. 4.3), the CPU reference of what
 // shaders/common/btf.vert and btf_main.glsl compute.
 //
 // Per vertex and light, u = (1 + cos(alpha + angle(n, l))) / 2 (n the vertex normal, l the
@@ -7,7 +7,8 @@
 // is multiplied by the value. The boundary u = 0.5 lies at angle(n, l) = 90 - alpha degrees,
 // alpha before the faceted silhouette of a coarse mesh, so the light's cut at n.l = 0 and the
 // cast shadow's zig-zag boundary fall where the factor is already 0, and the interpolated u puts
-// the boundary on each edge where the angles at its two vertices place it (seed 004 figure 9).
+// the boundary on each edge where the angles at its two vertices place it (Sattler et al. 2003
+// figure 9).
 #pragma once
 
 #include <vector>
@@ -19,7 +20,8 @@
 
 namespace osgBTF {
 
-/** Seed 004's texture size and offset (chosen there for a high-resolution pair of trousers). */
+/** Sattler et al. 2003's texture size and offset (chosen there for a high-resolution pair of
+ * trousers). */
 constexpr int kTerminatorTexels = 1024;
 constexpr float kDefaultTerminatorAlpha = 15.0f;  // degrees
 /** Width in u of the blurred step (u falls by about 0.5 per radian of angle near the boundary,
@@ -50,7 +52,7 @@ float terminatorFactor(float u, float softness);
  *  on shader::kTerminatorUnit, shared by every caller with the same softness while one holds it.
  *  Nodes push it at cull rather than binding the shared texture in StateSets of their own: a
  *  StateAttribute's list of parent StateSets is not thread-safe, and nodes are made and deleted
- *  on any thread (a DatabasePager's, say), each adding or removing itself there (issue 31). */
+ *  on any thread (a DatabasePager's, say), each adding or removing itself there. */
 osg::ref_ptr<osg::StateSet> terminatorStateSet(float softness);
 
 /** The texture terminatorStateSet(softness) binds. */

@@ -7,7 +7,7 @@
 // osg::observer_ptr. An observer shares the object's osg::ObserverSet, which ~Referenced
 // releases and frees inside libosg, whose copy of OSG's inline atomics ThreadSanitizer does not
 // see: every observer dropped here while another thread deleted the object was reported as a
-// race (issue 31; docs/reliability.md "Threads"). Here each change of an object's count made by
+// race (docs/reliability.md "Threads"). Here each change of an object's count made by
 // the cache is one of OSG's inline atomics compiled into osgBTF, which the sanitizer sees, and an
 // object is deleted by its last outside holder or, once only the cache holds it, by the cache.
 #include <condition_variable>

@@ -1,9 +1,9 @@
-// osgBTF: per-vertex environment lighting of a scene (seed 004 section 5.2): for every vertex of
-// the geometries below a node, the visible environment projected onto a material's measured light
-// directions (g_i, materials/EnvironmentLighting.h), with hemisphere visibility of the whole scene
-// ray-cast by Embree (SceneOccluder).
+// osgBTF: per-vertex environment lighting of a scene (Sattler et al. 2003 section 5.2): for every
+// vertex of the geometries below a node, the visible environment projected onto a material's
+// measured light directions (g_i, materials/EnvironmentLighting.h), with hemisphere visibility of
+// the whole scene ray-cast by Embree (SceneOccluder).
 //
-// The seed rasterises a hemicube per vertex; casting one ray per environment texel from the
+// The paper rasterises a hemicube per vertex; casting one ray per environment texel from the
 // vertex gives the same visibility without a GL context, on all cores, and lets the projection
 // use each texel's exact solid angle (see EnvironmentLighting.h). The work runs on TBB worker
 // threads and reports progress (callback and core/Progress.h).

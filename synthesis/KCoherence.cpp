@@ -134,7 +134,7 @@ std::vector<float> appearanceVectors(const BtfSource& source,
 }
 
 /** The level below: 2x2 box averages (the vectors are linear in the values, so this equals the
- *  vectors of the box-filtered images, the seed's image pyramid). */
+ *  vectors of the box-filtered images, the paper's image pyramid). */
 std::vector<float> halve(const std::vector<float>& features, int width, int height, int d) {
     const int w = width / 2, h = height / 2;
     std::vector<float> out(std::size_t(w) * h * d);
@@ -211,7 +211,7 @@ void clusterTextons(SynthesisLevel& level, int textons, int iterations, int leve
         }
         progress.finish();
     }
-    // The seed's matrix of texton dot products M, stored as the distances it gives.
+    // The paper's matrix of texton dot products M, stored as the distances it gives.
     checkMemory(std::uint64_t(t) * t * sizeof(float), "synthesis: texton matrix");
     const RowMatrix dots = centres * centres.transpose();
     level.textonDistance.resize(std::size_t(t) * t);
@@ -245,7 +245,7 @@ std::int32_t wrappedTexel(const SynthesisLevel& level, std::int32_t texel, int d
 }
 
 /** For each texel, the m texels with the smallest sum of texton distances over the whole wrapped
- *  neighbourhood (centre included), by brute force as the seed (fine up to ~128x128 samples). */
+ *  neighbourhood (centre included), by brute force as the paper (fine up to ~128x128 samples). */
 void findSimilar(SynthesisLevel& level, int m, int r, int levelIndex) {
     const std::size_t n = level.texels();
     m = int(std::min<std::size_t>(std::size_t(m), n - 1));
@@ -558,7 +558,8 @@ CoordinateMap synthesizeMap(const SampleAnalysis& analysis, const SynthesisOptio
                 minimum = std::max(1, std::min(level.width, level.height) / 4);
             }
         } else {
-            // Seed 002: a quarter of the texels take the coarser output's coordinates times 2.
+            // Boßerhoff and Nicoll 2003: a quarter of the texels take the coarser output's
+            // coordinates times 2.
             const SynthesisLevel& coarser = analysis.levels[std::size_t(l) - 1];
             for (int y = 0; y < previous.height; ++y)
                 for (int x = 0; x < previous.width; ++x) {

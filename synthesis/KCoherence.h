@@ -1,7 +1,7 @@
-// osgBTF: k-coherence BTF synthesis (seed 002 section 4, after Tong et al. 2002): a large
-// surface is made of texels of a small measured sample, and the result is a CoordinateMap (which
-// sample texel each output texel shows), rendered through dependent fetches (seed 002 section 5;
-// filtered: the four map entries around a fragment).
+// osgBTF: k-coherence BTF synthesis (Boßerhoff and Nicoll 2003 section 4, after Tong et al. 2002):
+// a large surface is made of texels of a small measured sample, and the result is a CoordinateMap
+// (which sample texel each output texel shows), rendered through dependent fetches (Boßerhoff and
+// Nicoll 2003 section 5; filtered: the four map entries around a fragment).
 //
 // Two steps, each its own function so the analysis can be timed apart from the synthesis (seed
 // 002 Table 1 times the synthesis alone):
@@ -10,7 +10,7 @@
 //                   dot-product matrix (as squared distances) and, per sample texel, the k-1
 //                   texels with the most similar neighbourhoods (the k-coherence candidate lists)
 //   synthesizeMap   hierarchical scanline k-coherence synthesis into a CoordinateMap
-// measureSynthesis gives the quality figures the tool prints. The algorithm, the seed's equations
+// measureSynthesis gives the quality figures the tool prints. The algorithm, the paper's equations
 // and our choices: synthesis/README.md.
 #pragma once
 
@@ -27,12 +27,13 @@ struct SynthesisOptions {
     int width = 512;  ///< output texels (--size)
     int height = 512;
     /** Candidates per synthesised neighbour: its shifted source and its k-1 most similar texels
-     *  (--k; seed 002 uses 1..6). */
+     *  (--k; Boßerhoff and Nicoll 2003 use 1..6). */
     int k = 5;
-    /** Neighbourhood radius r: a (2r+1)x(2r+1) square (--neighbourhood; seed 002 uses 1..3). */
+    /** Neighbourhood radius r: a (2r+1)x(2r+1) square (--neighbourhood; Boßerhoff and Nicoll 2003
+     * use 1..3). */
     int neighbourhood = 2;
-    /** Pyramid levels (--levels; seed 002: 3). The sample's sides must be multiples of
-     *  2^(levels-1). */
+    /** Pyramid levels (--levels; Boßerhoff and Nicoll 2003: 3). The sample's sides must be
+     * multiples of 2^(levels-1). */
     int levels = 3;
     std::uint64_t seed = 1;  ///< everything random derives from it (--seed)
     /** Images used for the appearance vectors: 0 = all, else this many spread evenly over the

@@ -1,6 +1,6 @@
-// osgBTF: making a measured sample tile seamlessly by linear edge blending (seed 004 section 3.2:
-// "linear edgeblending is applied, which reduces the usual tiling artifacts"; the seed gives no
-// formula, ours is in synthesis/README.md).
+// osgBTF: making a measured sample tile seamlessly by linear edge blending (Sattler et al. 2003
+// section 3.2: "linear edgeblending is applied, which reduces the usual tiling artifacts"; the
+// paper gives no formula, ours is in synthesis/README.md).
 //
 // Per image, channel and row, the jump e = I(W-1) - I(0) that tiling would show between the
 // right and the left edge is spread linearly over the 2b+1 steps from texel W-1-b to texel b of

@@ -1,6 +1,6 @@
 // Several threads reading the same .btfmat, .zip (fitted, through the fit cache) and UBO2014
 // .btf at once through osgDB: from std::threads calling osgDB::readRefNodeFile, and through an
-// osgDB::DatabasePager whose threads load ProxyNodes naming the same files (issue 16 section 3).
+// osgDB::DatabasePager whose threads load ProxyNodes naming the same files.
 // These run in the ThreadSanitizer build too (ctest label "concurrency", README "Reliability").
 #include <atomic>
 #include <chrono>
@@ -91,7 +91,7 @@ void expectCompleteCacheEntries(const std::string& cache) {
 
 #if defined(__SANITIZE_THREAD__)
 // tests/CMakeLists.txt runs these with a libtbb that has no libtbbmalloc beside it: TBB's own
-// allocator recycles memory between threads where ThreadSanitizer cannot see it (issue 31).
+// allocator recycles memory between threads where ThreadSanitizer cannot see it.
 TEST(Concurrency, OneTbbAllocatesThroughMallocUnderThreadSanitizer) {
     std::atomic<int> sum{0};
     tbb::parallel_for(0, 64, [&](int i) { sum += i; });  // TBB picks its allocator on first use
@@ -132,7 +132,7 @@ TEST(Concurrency, ThreadsReadTheSameFilesThroughOsgDB) {
     expectCompleteCacheEntries(f.cache);
 }
 
-// Issue 31: the last holder of a shared material drops it on one thread while another thread
+// the last holder of a shared material drops it on one thread while another thread
 // replaces the material's cache entry (the file changed, so it is read again). The two threads
 // are ordered only by a relaxed atomic, which gives ThreadSanitizer no happens-before edge, so
 // every access the cache makes to the old material must be one it can order by itself. With an

@@ -1,4 +1,4 @@
-// BtfSource (issue 11 section 3): fitters read a MeasuredBtf in memory and a FactoredBtf decoded
+// BtfSource: fitters read a MeasuredBtf in memory and a FactoredBtf decoded
 // block by block through one interface. The factored reads must give what decoding the whole
 // gives, subsampled errors must be the full computation's at those texels, and every method must
 // fit factored input as well as the decoded data.

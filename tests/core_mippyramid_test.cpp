@@ -1,4 +1,4 @@
-// Mip-mapped BTFs (issue 12 section 2): the atlas layout, worked out by hand from its definition
+// Mip-mapped BTFs: the atlas layout, worked out by hand from its definition
 // (core/MipPyramid.h: level 0 at the origin, levels >= 1 of ceil-halved sizes stacked from the
 // bottom in the column right of it), the box-filtered values against averages taken here from
 // the measured values, and a mip-mapped material's file and CPU lookup.

@@ -143,7 +143,7 @@ TEST(Environment, DownsamplingKeepsPower) {
 }
 
 TEST(Environment, WhiteEnvironmentIsTheSumOverMeasuredLights) {
-    // Issue 15: a constant white environment without occlusion gives sum_i dOmega_i BTF(x, v, l_i)
+    // a constant white environment without occlusion gives sum_i dOmega_i BTF(x, v, l_i)
     // (dOmega_i = g_i of the white map), and that equals the integral of the point-light
     // rendering over the hemisphere (pca is linear in the light weights). Both sides are sums
     // of ~10^3 float products of magnitude |term|: the tolerance is 1e-5 of the sum of |terms|.
@@ -436,12 +436,12 @@ TEST(IlluminationPca, ExactWithAllComponentsAndErrorFallsWithComponents) {
 }
 
 TEST(IlluminationPca, InterpolatesBetweenSamples) {
-    // The seed's defaults (30 rotations, 12 degrees apart, 5 components), at rotations halfway
-    // between samples, against the direct computation there. reconstruct() blends the two
-    // neighbouring samples' reconstructions R_a, R_b, so by the triangle inequality its error is
-    // at most the mean of their truncation errors |R_a - D_a|, |R_b - D_b| plus the error of
-    // blending the direct data themselves, |(D_a + D_b) / 2 - D|; the latter must beat taking
-    // the nearest sample (the data are smooth in the rotation).
+    // The paper's defaults of Sattler et al. 2003 (30 rotations, 12 degrees apart, 5 components),
+    // at rotations halfway between samples, against the direct computation there. reconstruct()
+    // blends the two neighbouring samples' reconstructions R_a, R_b, so by the triangle inequality
+    // its error is at most the mean of their truncation errors |R_a - D_a|, |R_b - D_b| plus the
+    // error of blending the direct data themselves, |(D_a + D_b) / 2 - D|; the latter must beat
+    // taking the nearest sample (the data are smooth in the rotation).
     const EnvironmentMap sky = smoothSky(16);
     const DirectionInterpolator lights(DirectionSet::bonn81());
     std::vector<std::vector<float>> direct;

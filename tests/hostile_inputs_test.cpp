@@ -1,4 +1,4 @@
-// Issue 16 section 2: inputs whose headers claim absurd sizes are refused before anything sized
+// inputs whose headers claim absurd sizes are refused before anything sized
 // from the claim is allocated. Every hostile file is written here byte by byte (or written small
 // and patched), and each refusal runs in a forked child whose peak RSS growth is measured.
 #include <sys/wait.h>

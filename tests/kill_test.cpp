@@ -1,5 +1,5 @@
 // SIGKILL at random moments while `btf fit -o`, `btf compare --out` and the plugin's fit-cache
-// write run, and two processes filling one cache entry at once (issue 16 section 3). After every
+// write run, and two processes filling one cache entry at once. After every
 // kill, what is under a final name must load completely (or not exist); temporaries sit only under
 // names no reader opens (NAME.tmp<pid>, NAME.old<pid>), and the next run removes those of dead
 // processes. The cache writer is this test executable itself, started again with a filter that

@@ -1,4 +1,4 @@
-// Every method on degenerate data (issue 12, section 5): a constant BTF, a rank-1 BTF (texel
+// Every method on degenerate data: a constant BTF, a rank-1 BTF (texel
 // albedo times one ABRDF) and duplicate texels (two distinct texels, each repeated). Such data
 // make the low-rank fits rank-deficient: components beyond the data's rank must come out unused
 // (zero), not as amplified rounding noise, and no method may produce NaN or Inf. Each bound below

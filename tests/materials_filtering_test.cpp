@@ -1,4 +1,4 @@
-// Material::evaluateFiltered's bilinear filter (issue 29 section 1): which methods filter their
+// Material::evaluateFiltered's bilinear filter: which methods filter their
 // parameters and which blend texel values (Material::TexelFilter); either way texel centres give
 // the texel itself, between them the blend of the four neighbours, with wrap-around; mip-mapped
 // materials blend two levels, each bilinearly and wrapped inside its rectangle of the atlas.

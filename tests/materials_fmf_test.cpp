@@ -37,7 +37,8 @@ std::string fitError(const MeasuredBtf& btf, const std::string& options) {
     return test::errorOf([&] { FmfMaterial::fit(btf, FitOptions::parse(options)); });
 }
 
-/** The ABRDF matrix of seed 003: rows (view, light, channel), columns texels, in double. */
+/** The ABRDF matrix of Schwartz et al. 2013: rows (view, light, channel), columns texels, in
+ * double. */
 Eigen::MatrixXd abrdfMatrix(const MeasuredBtf& btf) {
     const std::size_t images = btf.viewCount() * btf.lightCount();
     Eigen::MatrixXd a(Eigen::Index(images * 3), Eigen::Index(btf.texelCount()));

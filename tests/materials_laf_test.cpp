@@ -1,5 +1,5 @@
 // LAF (materials/laf): options, parameter recovery, robustness on the sample, file round trip,
-// memory accounting against seed 001 Table 2.
+// memory accounting against Meseth et al. 2003 Table 2.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -143,7 +143,7 @@ TEST(Laf, SampleFitIsFiniteBoundedAndBeatsLambert) {
 }
 
 TEST(Laf, LiteralSeedModelWithoutCosineIsAvailable) {
-    // cosine=0: seed 001 eq. 2 as printed. Fits its own data and round-trips the flag.
+    // cosine=0: Meseth et al. 2003 eq. 2 as printed. Fits its own data and round-trips the flag.
     osg::ref_ptr<LafMaterial> truth =
         LafMaterial::create(2, 2, 1, DirectionSet::bonn81(), DirectionSet::bonn81());
     FittedMaterial file = truth->toFittedMaterial();

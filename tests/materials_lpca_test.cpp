@@ -1,6 +1,6 @@
 // LPCA (materials/lpca): option errors, recovery of a model-generated BTF, optimality for one
 // cluster (a global PCA), monotone error in k and c, measured == interpolated at the samples,
-// save/load, memory of seed 001 Table 2, and the error on the built-in sample.
+// save/load, memory of Meseth et al. 2003 Table 2, and the error on the built-in sample.
 #include <gtest/gtest.h>
 
 #include <random>

@@ -284,8 +284,8 @@ TEST(Pca, SampleErrorIsFarBelowTheLambertBaseline) {
     RecordProperty("error_avg", std::to_string(pca.average));
     RecordProperty("lambert_error_avg", std::to_string(base.average));
     EXPECT_EQ(pca.nonFiniteValues, 0u);
-    // Seed 001 Table 1 has PCA 3-7x below the lobe models; against the plain lit texture we ask
-    // for at least 4x, and for the absolute level of the paper's PCA column (avg <= 0.0166).
+    // Meseth et al. 2003 Table 1 has PCA 3-7x below the lobe models; against the plain lit texture
+    // we ask for at least 4x, and for the absolute level of the paper's PCA column (avg <= 0.0166).
     EXPECT_LT(pca.average, base.average / 4);
     EXPECT_LT(pca.average, 0.0166);
 }

@@ -1,5 +1,6 @@
 // Method "ptm" (materials/ptm): option errors, exact recovery of a PTM, least-squares optimality,
-// luminance vs rgb on grey data, per-view blending, save/load, seed 002 Table 2 memory.
+// luminance vs rgb on grey data, per-view blending, save/load, Boßerhoff and Nicoll 2003 Table 2
+// memory.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -333,9 +334,9 @@ TEST(PtmFile, SaveLoadRoundTripIsExact) {
               dir.file("broken.exr") + ": parameter 'colour' must be rgb or luminance, got 'grey'");
 }
 
-// Seed 002 Table 2 (256x256, one view): PTM-RGB 6 MB, PTM-Lum 3 MB, i.e. 96 and 48 bytes per texel:
-// 18 coefficients in 6 RGBA float textures (24 floats) and 6 + 3 in 3 (12 floats). Ours stores the
-// same 18 and 9 values without the unused fourth channel, as half: 36 and 18 bytes.
+// Boßerhoff and Nicoll 2003 Table 2 (256x256, one view): PTM-RGB 6 MB, PTM-Lum 3 MB, i.e. 96 and 48
+// bytes per texel: 18 coefficients in 6 RGBA float textures (24 floats) and 6 + 3 in 3 (12 floats).
+// Ours stores the same 18 and 9 values without the unused fourth channel, as half: 36 and 18 bytes.
 TEST(PtmMemory, MatchesSeed002Table2ValueCounts) {
     const DirectionSet bonn = DirectionSet::bonn81();
     struct Case {

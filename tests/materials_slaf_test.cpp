@@ -1,5 +1,5 @@
 // SLAF (materials/slaf): options, parameter recovery, robustness on the sample, interpolation at
-// measured views, file round trip, memory accounting against seed 001 Table 2.
+// measured views, file round trip, memory accounting against Meseth et al. 2003 Table 2.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// A method owns all of itself (issue 25): its name appears as a string literal only in its own
+// A method owns all of itself: its name appears as a string literal only in its own
 // folder materials/<name>/, its shaders live there too, and what the rest of the library needs of
 // it (environment lighting, its roles) comes from its MethodInfo. The scanner is checked on a fake
 // tree first, so that a clean result on the real one means something.

@@ -154,7 +154,7 @@ osg::Texture* mapTexture(MaterialNode& node) {
 
 // Nodes drawing one map share its texture through one StateSet, which they push at cull: OSG's
 // list of a texture's parent StateSets is not guarded, and nodes are made and deleted on any
-// thread (issue 31), so the texture is bound in that StateSet alone.
+// thread, so the texture is bound in that StateSet alone.
 TEST(MaterialNodeCoordinateMap, NodesDrawingOneMapShareATextureWithOneParent) {
     Files files;
     osg::ref_ptr<MaterialNode> a = new MaterialNode, b = new MaterialNode;

@@ -1,4 +1,4 @@
-// A UBO2014 .btf opens as the `fmf` material of its stored factors (issue 11 section 2) wherever
+// A UBO2014 .btf opens as the `fmf` material of its stored factors wherever
 // a material is opened: openMaterial, MaterialNode, the osgDB plugins (osgdb_btf and the
 // .btfmaterial pseudo-loader, hence osgviewer and btfviewer). Inputs are the hand-written files
 // of tests/HandWrittenUbo2014.h, so the expected values come from the format's formulas. No

@@ -324,7 +324,7 @@ TEST(SceneMaterialNode, NodesNamingOneFileShareOneMaterialAndStateSet) {
               nullptr);
 }
 
-// The shared-material cache holds its materials with ref_ptrs (issue 31: observing them raced
+// The shared-material cache holds its materials with ref_ptrs (observing them raced
 // under ThreadSanitizer) but still lets a material go with the last node drawing it.
 TEST(SceneMaterialNode, SharedMaterialIsDeletedWithTheLastNodeDrawingIt) {
     TempDir dir;
@@ -364,7 +364,7 @@ TEST(SceneMaterialNode, DroppedSharedMaterialIsReleasedOnRequestOrByTheNextOpen)
 // OSG keeps a StateAttribute's parent StateSets in a plain vector, changed by every StateSet that
 // binds or drops it; nodes are made and deleted on any thread (a DatabasePager's), so the shared
 // terminator texture is bound once, in its own shared StateSet, which the nodes push at cull
-// (issue 31: with the texture in each node's StateSet, two threads changed that vector at once).
+// (with the texture in each node's StateSet, two threads changed that vector at once).
 TEST(SceneMaterialNode, NodesShareOneTerminatorStateSetWhoseTextureHasOneParent) {
     const osg::ref_ptr<Material> material = sampleMaterial();
     osg::ref_ptr<MaterialNode> a = new MaterialNode(material.get());

@@ -260,7 +260,7 @@ TEST(ScenePlugins, MipmapIsTheDefaultAndOffIsItsOwnCacheEntry) {
     ASSERT_NE(asMaterialNode(result), nullptr) << result.message();
     EXPECT_FALSE(asMaterialNode(result)->getMaterial()->mipLayout().mipMapped());
     EXPECT_EQ(filesIn(dir.file("cache")).size(), 2u);
-    // No option: mip-mapped, as `btf fit` (issue 29), the same entry as mipmap=on.
+    // No option: mip-mapped, as `btf fit`, the same entry as mipmap=on.
     result = readNode(zip, "method=lambert " + cache);
     ASSERT_NE(asMaterialNode(result), nullptr) << result.message();
     EXPECT_TRUE(asMaterialNode(result)->getMaterial()->mipLayout().mipMapped());

@@ -1,6 +1,6 @@
-// The smooth shadow terminator's CPU reference (scene/ShadowTerminator.h, seed 004 sec. 4.3) and
-// MaterialNode's terminator and shadow properties through .osgt / .osgb. No OpenGL here
-// (tests/gl/shadow_test.cpp compares the GPU with this reference).
+// The smooth shadow terminator's CPU reference (scene/ShadowTerminator.h, Sattler et al. 2003
+// sec. 4.3) and MaterialNode's terminator and shadow properties through .osgt / .osgb. No OpenGL
+// here (tests/gl/shadow_test.cpp compares the GPU with this reference).
 #include <cmath>
 #include <fstream>
 

@@ -1,6 +1,7 @@
-// Tests for streaming/TileCodec (seed 003 section 6): errors with exact messages, the DCT and the
-// payload format against independent references, round trips within the stated error bound, the
-// use of the prediction, compression ratios on Eigen-Texture-like content, and a fuzz loop.
+// Tests for streaming/TileCodec (Schwartz et al. 2013 section 6): errors with exact messages, the
+// DCT and the payload format against independent references, round trips within the stated error
+// bound, the use of the prediction, compression ratios on Eigen-Texture-like content, and a fuzz
+// loop.
 #include <zlib.h>
 
 #include <algorithm>
@@ -82,7 +83,7 @@ std::vector<half> smoothTile(std::mt19937& rng, double noise, int side = kSide) 
 }
 
 /** What the builder predicts from: the tile's 2x2 box means, upsampled by repetition (the
- *  "upsampled parent" of seed 003, here from the tile itself). */
+ *  "upsampled parent" of Schwartz et al. 2013, here from the tile itself). */
 std::vector<half> boxPrediction(const std::vector<half>& tile, int side = kSide) {
     std::vector<half> p(tile.size());
     for (int y = 0; y < side; y += 2)

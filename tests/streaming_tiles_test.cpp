@@ -40,7 +40,7 @@ TEST(TileLayout, LevelsAndTilesOfA400TexelMaterialAsWorkedOutByHand) {
     // 1, 2, 4 and 7 (400 / 64 = 6.25) tiles per side: 1 + 4 + 16 + 49 = 70 tiles per group.
     const TileLayout layout(400, 400, 3);
     EXPECT_EQ(layout.levels(), 4);
-    EXPECT_EQ(layout.tileBytes(), 41472u);  // 72 x 72 x 4 halfs (seed 003: 40.5 KB)
+    EXPECT_EQ(layout.tileBytes(), 41472u);  // 72 x 72 x 4 halfs (Schwartz et al. 2013: 40.5 KB)
     const int sides[] = {50, 100, 200, 400}, tiles[] = {1, 2, 4, 7};
     for (int l = 0; l < 4; ++l) {
         EXPECT_EQ(layout.levelWidth(l), sides[l]);
@@ -140,8 +140,8 @@ TEST(TileSetIndex, ReadsAHandWrittenIndex) {
     EXPECT_EQ(index.lights.size(), 2u);
     EXPECT_FLOAT_EQ(index.lights[1].theta, 45.0f);
     EXPECT_EQ(index.uPacketValues(), 24u);
-    // A U packet: 4 components x 3 colours x views x lights half floats. Seed 003's 151 x 151
-    // directions give its "packets of 534 KB" (547,224 bytes = 534.4 KiB); the Bonn 81 x 81,
+    // A U packet: 4 components x 3 colours x views x lights half floats. Schwartz et al. 2013's 151
+    // x 151 directions give its "packets of 534 KB" (547,224 bytes = 534.4 KiB); the Bonn 81 x 81,
     // 157,464 bytes.
     TileSetIndex ubo = index, bonn = index;
     ubo.views = ubo.lights = DirectionSet::ubo2014();
@@ -289,7 +289,7 @@ TEST(ImageSimilarity, RefusesMismatchedImagesAndMatchesTheFormulaOnConstantImage
 }
 
 TEST(TileBuilder, DctTilesOfTheSampleAreFourTimesSmallerAndRenderWithSsimAbove099) {
-    // The built-in sample's fmf fit, 3 levels of 16-texel tiles (seed 003: 6:1 "with no
+    // The built-in sample's fmf fit, 3 levels of 16-texel tiles (Schwartz et al. 2013: 6:1 "with no
     // perceivable artifacts"; the issue asks >= 4:1 at SSIM >= 0.99 against uncompressed tiles).
     const MeasuredBtf btf = test::smallSampleBtf(64);
     const osg::ref_ptr<FmfMaterial> fmf = FmfMaterial::fit(btf, FitOptions::parse("components=8"));

@@ -116,7 +116,7 @@ TEST(BtfTool, MipMappedFitIsTheDefaultAndEvaluatesItsBaseLevel) {
     r = btf("fit " + shellQuote(zip) + " -m lambert --no-mipmap -o " + shellQuote(fitted));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("(8x8 texels, 81x81 directions)"), std::string::npos) << r.output;
-    // No flag: mip-mapped (issue 29).
+    // No flag: mip-mapped.
     r = btf("fit " + shellQuote(zip) + " -m lambert -o " + shellQuote(fitted));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     // 8x8: levels of 4x4, 2x2 and 1x1 in a column of 4 beside the base.
@@ -172,7 +172,7 @@ TEST(BtfTool, EvalWithAnEnvironment) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("cmp")));
 }
 
-// A user runs the tool from the build tree with no OSG_LIBRARY_PATH (issue 30 section 5): an EXR
+// A user runs the tool from the build tree with no OSG_LIBRARY_PATH: an EXR
 // environment is read by this project's osgdb_btfexr, which OSG's own folders do not hold, so the
 // tool has to find its plugins itself (useOwnPlugins, scene/OwnPlugins.h). Before, this failed
 // with "white.exr: no osgDB plugin could read it as an image".

@@ -1,4 +1,4 @@
-// The `btf` tool on UBO2014 files, which it uses as stored (issue 11 section 2): `btf info` from
+// The `btf` tool on UBO2014 files, which it uses as stored: `btf info` from
 // the header and factors, `--stats` streamed through the factors; on hand-written files
 // (tests/HandWrittenUbo2014.h), so the expected figures come from the format's formulas.
 #include <algorithm>
@@ -150,7 +150,7 @@ TEST(BtfToolUbo2014, InfoNeedsNoMemoryForTheDecodedData) {
         << r.output;
 }
 
-// Issue 11 section 3: fits read a UBO2014 file's factors block by block, so a memory limit
+// fits read a UBO2014 file's factors block by block, so a memory limit
 // below the decoded size refuses nothing; the reported error is on a stated subsample.
 TEST(BtfToolUbo2014, FitNeedsNoMemoryForTheDecodedData) {
     TempDir dir;

@@ -1,4 +1,4 @@
-// Writing factorisations as UBO2014 .btf files (issue 11 section 1: `btf fit -m fmf -o out.btf`),
+// Writing factorisations as UBO2014 .btf files (`btf fit -m fmf -o out.btf`),
 // checked with a byte-level parser written here from docs/formats.md section 2, not
 // with osgBTF's reader: the file must be what the format's reference readers expect.
 #include <unistd.h>

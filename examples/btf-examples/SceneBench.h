@@ -1,5 +1,5 @@
 // btf-examples --bench-fps: frames per second of the example scenes, headless, per method and
-// light count (seed 001 Table 3 reports fps).
+// light count (Meseth et al. 2003 Table 3 reports fps).
 #pragma once
 
 #include <osg/Group>

@@ -182,7 +182,8 @@ void run(Options options) {
         writeNodeAtomically(*scene, (dir / spec.file).string());
         std::cout << "wrote " << (dir / spec.file).string() << "\n";
     }
-    // 3. The shadowed cloth (seed 004: cast shadows and the smooth terminator) with the pca fit
+    // 3. The shadowed cloth (Sattler et al. 2003: cast shadows and the smooth terminator) with the
+    // pca fit
     //    when there is one, and the procedural sky it is lit like (for environment lighting).
     const auto shadowed = std::find_if(items.begin(), items.end(), [](const SceneItem& item) {
         return item.label == kPcaMethodName;
@@ -195,7 +196,8 @@ void run(Options options) {
               << ")\n";
     writeFloatImage(createSkyEnvironment(), (dir / "sky.hdr").string());
     std::cout << "wrote " << (dir / "sky.hdr").string() << " (procedural sky, CC0)\n";
-    // 4. The same cloth lit by that sky, self-shadowed (seed 004 section 5), in any viewer.
+    // 4. The same cloth lit by that sky, self-shadowed (Sattler et al. 2003 section 5), in any
+    // viewer.
     writeNodeAtomically(
         *createEnvironmentLitClothScene(clothMaterial, "sky.hdr", 4.0f, readOptions.get()),
         (dir / "cloth-sky.osgt").string());

@@ -1,7 +1,7 @@
-// btfviewer --env: lights every MaterialNode by an HDR environment (seed 004 section 5, see
-// scene/README.md) through an osgBTF::EnvironmentLitGroup put above the scene: methods with folded
-// environment lighting (pca, fmf, lpca) get per-vertex data with Embree visibility of the whole
-// scene, the others 8 median-cut representative lights. A new rotation or material is
+// btfviewer --env: lights every MaterialNode by an HDR environment (Sattler et al. 2003 section 5,
+// see scene/README.md) through an osgBTF::EnvironmentLitGroup put above the scene: methods with
+// folded environment lighting (pca, fmf, lpca) get per-vertex data with Embree visibility of the
+// whole scene, the others 8 median-cut representative lights. A new rotation or material is
 // recomputed by the group on a worker thread (the old lighting stays on screen until the new one
 // is installed); exposure and the camera are real time. This class adds the keys and the HUD.
 #pragma once

@@ -552,7 +552,7 @@ int run(osg::ArgumentParser& arguments) {
         "--env: illumination PCA (Sattler et al. 2003, 5.3): compute A rotations up front (A times "
         "the "
         "work), then rebuild any rotation at once from 5 components (default 0: each rotation "
-        "computed exactly; the seed uses 30)");
+        "computed exactly; Sattler et al. 2003 use 30)");
     usage->addCommandLineOption(
         "--stream LOCATION",
         "A BSVTF tile set (`btf tiles`; a folder or an http:// URL of one) streamed into the "

@@ -11,13 +11,13 @@ out vec3 btfEyePosition;
 out vec3 btfEyeNormal;
 out vec4 btfEyeTangent;
 
-// Smooth shadow terminator (seed 004 sec. 4.3, scene/ShadowTerminator.h), per light:
+// Smooth shadow terminator (Sattler et al. 2003 sec. 4.3, scene/ShadowTerminator.h), per light:
 // u = (1 + cos(alpha + angle(n, l))) / 2, looked up by btf_main.glsl in a blurred step texture.
-// Per vertex, as in the seed, not per fragment: the boundary u = 0.5 then lies on each edge where
-// the angles at its two vertices put it (the seed's figure 9), so it runs straight across a
-// coarse mesh instead of following the faceted silhouette, and it moves continuously with the
-// light. A per-fragment u would instead follow the interpolated normal that the fragment stage
-// already cuts at n.l = 0, and costs a cos and an acos per fragment and light.
+// Per vertex, as in the paper, not per fragment: the boundary u = 0.5 then lies on each edge where
+// the angles at its two vertices put it (Sattler et al. 2003, figure 9), so it runs straight
+// across a coarse mesh instead of following the faceted silhouette, and it moves continuously
+// with the light. A per-fragment u would instead follow the interpolated normal that the fragment
+// stage already cuts at n.l = 0, and costs a cos and an acos per fragment and light.
 const int osgBTF_maxLights = 8;
 uniform int osgBTF_lightCount = 0;
 uniform vec4 osgBTF_lightPosition[osgBTF_maxLights];

@@ -12,7 +12,8 @@ in vec3 btfEnvBarycentric;
 
 uniform ivec2 osgBTF_size;
 uniform vec4 osgBTF_fixedView = vec4(0.0);
-// Exposure f of seed 004's T_j = f sum_k gamma*_kj B_kj: a uniform, so changing it is real-time.
+// Exposure f of T_j = f sum_k gamma*_kj B_kj (Sattler et al. 2003): a uniform, so changing it is
+// real-time.
 uniform float osgBTF_envExposure = 1.0;
 // Folded data, RGB float texels addressed linearly: vertex v's slot s is texel
 // v * osgBTF_envStride + s, at column a % width, row a / width.
@@ -29,8 +30,8 @@ vec3 btfEnvFetch(int vertex, int slot) {
     return texelFetch(osgBTF_envData, ivec2(a % w, a / w), 0).rgb;
 }
 
-/** Slot `slot` of the folded data, blended across the triangle (the seed's per-vertex data,
- *  interpolated as Gouraud shading would). */
+/** Slot `slot` of the folded data, blended across the triangle (the per-vertex data of Sattler et
+ *  al. 2003, interpolated as Gouraud shading would). */
 vec3 btfEnvData(int slot) {
     return btfEnvBarycentric.x * btfEnvFetch(btfEnvVertices.x, slot) +
            btfEnvBarycentric.y * btfEnvFetch(btfEnvVertices.y, slot) +

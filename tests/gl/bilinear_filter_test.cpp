@@ -1,4 +1,4 @@
-// Bilinear filtering with wrap-around (issue 29 section 1) for every method, both ways
+// Bilinear filtering with wrap-around for every method, both ways
 // (Material::TexelFilter): the methods whose value is linear in their per-texel parameters filter
 // those (lambert, pca, ptm, fmf), the others have btf_main.glsl blend four evaluations (laf, slaf,
 // rf, lpca, lpca-revised, ptm's luminance variant). A magnified view (4 x 4 texels over 64 x 64

@@ -1,4 +1,4 @@
-// Exact direction interpolation (issue 12 section 1) in every method that blends measured
+// Exact direction interpolation in every method that blends measured
 // directions (pca, rf, slaf, lpca): the GPU equals the CPU on a perspective, curved, tiled
 // surface; along a dense path of view directions neither changes faster than the data between
 // neighbouring measured directions allows (no steps at table cells or triangle borders); the

@@ -340,7 +340,7 @@ TEST(EnvironmentGpu, MinifiedMipMappedLightingBlendsTwoLevelsBilinearly) {
 }
 
 TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
-    // Issue 15: constant white environment, no occlusion: the GPU image equals sum_i dOmega_i
+    // constant white environment, no occlusion: the GPU image equals sum_i dOmega_i
     // BTF(x, v, l_i), i.e. the CPU's integral of the point-light rendering over the hemisphere.
     const EnvironmentMap white = uniformMap(64, 1.0f);
     const std::vector<EnvironmentSample> samples = visibleEnvironment(white, SurfaceFrame{});
@@ -368,7 +368,7 @@ TEST(EnvironmentGpu, WhiteEnvironmentEqualsTheIntegralOfPointLights) {
 }
 
 TEST(EnvironmentGpu, OneBrightTexelDrawsThePointLightImage) {
-    // Issue 15: one bright texel centred on the measured direction (45, 0) (a 108 x 54 map
+    // one bright texel centred on the measured direction (45, 0) (a 108 x 54 map
     // turned by half a column) gives the image of a point light there of intensity L Omega: the
     // CPU point-light evaluation, which the pca GL tests match on the GPU.
     const int index = pca().lights().find(45.0f, 0.0f);

@@ -1,4 +1,4 @@
-// Zero OpenGL errors (issue 30 section 1): every example scene btf-examples writes, as read back
+// Zero OpenGL errors: every example scene btf-examples writes, as read back
 // through osgDB, alone and lit by an environment as `btfviewer --env` lights it; every registered
 // method on its sphere scene (plain, lit by an environment, under a ShadowMap, through a
 // coordinate map, mip-mapped, without texture storage, in the texture objects OSG recycles from

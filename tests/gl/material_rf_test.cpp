@@ -1,6 +1,6 @@
 // Method "rf": the fragment shader (materials/rf/rf.frag) equals RfMaterial::evaluate, at measured
 // (view, light) pairs and between them (view interpolation through the baked table), for the
-// default model and seed 002's variants.
+// default model and Boßerhoff and Nicoll 2003's variants.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -43,9 +43,10 @@ TEST(RfGpu, MatchesCpuAtMeasuredAndUnmeasuredDirections) {
               << " (view, light) pairs\n";
 }
 
-// Seed 002's variants (diffuse=0, colour=rgb and both): one shader with uniforms selecting the
-// terms. Models with random lobes (no fit needed to exercise the shader's arithmetic): per view
-// and lobe channel a broad and a glossy lobe, the rgb channels with different axes and exponents.
+// Boßerhoff and Nicoll 2003's variants (diffuse=0, colour=rgb and both): one shader with uniforms
+// selecting the terms. Models with random lobes (no fit needed to exercise the shader's
+// arithmetic): per view and lobe channel a broad and a glossy lobe, the rgb channels with different
+// axes and exponents.
 TEST(RfGpu, VariantsMatchCpu) {
     const DirectionSet bonn = DirectionSet::bonn81();
     const RfMaterial::Variant variants[] = {{false, false}, {true, true}, {false, true}};

@@ -1,4 +1,4 @@
-// Mip-mapped BTFs on the GPU (issue 12 section 2): a plane on which 8 texels fall in a pixel,
+// Mip-mapped BTFs on the GPU: a plane on which 8 texels fall in a pixel,
 // seen from a grazing measured view. Each pixel covers an aligned 8x8 block of the tiled sample,
 // so the box-filtered reference is the mean of those 64 measured values, computed here from the
 // sample itself. The render must equal the CPU lookup (Material::evaluateFiltered at lod 3) and

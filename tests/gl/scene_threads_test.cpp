@@ -2,7 +2,7 @@
 // two headless contexts, so two cull threads traverse the same MaterialNodes (their per-camera
 // light states) and two draw threads apply the shared material StateSets at once, while the main
 // thread swaps materials and adds and removes MaterialNodes between frames, as an application's
-// update does (issue 16 section 3). The last frames (no more changes) must match what the same
+// update does. The last frames (no more changes) must match what the same
 // viewer draws single-threaded. Built twice (EGL and OSMesa) like every GL test.
 #include <algorithm>
 #include <cmath>

@@ -1,9 +1,9 @@
-// Seed 004 sec. 4.3 on the GPU: the smooth shadow terminator (GPU factor == CPU reference, no jump
-// along a path of light angles, off and alpha = 0 reproduce the image without it) and cast shadows
-// through osgShadow::ShadowedScene + ShadowMap (a box over the patch: the shadowed light is gone
-// exactly where the box hides it, and nothing else changes), the same under SoftShadowMap and
-// ViewDependentShadowMap, and unshadowed with one notice under other techniques. Built twice (EGL
-// and OSMesa).
+// Sattler et al. 2003 sec. 4.3 on the GPU: the smooth shadow terminator (GPU factor == CPU
+// reference, no jump along a path of light angles, off and alpha = 0 reproduce the image without
+// it) and cast shadows through osgShadow::ShadowedScene + ShadowMap (a box over the patch: the
+// shadowed light is gone exactly where the box hides it, and nothing else changes), the same under
+// SoftShadowMap and ViewDependentShadowMap, and unshadowed with one notice under other techniques.
+// Built twice (EGL and OSMesa).
 #include <algorithm>
 #include <cmath>
 #include <sstream>

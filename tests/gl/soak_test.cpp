@@ -1,4 +1,4 @@
-// The soak of bench/soak.cpp, short (issue 16 section 4): 800 frames at 64x64 pixels, every
+// The soak of bench/soak.cpp, short: 800 frames at 64x64 pixels, every
 // node's material switched every 10 frames and the scene read again through osgDB every 50;
 // after 300 frames of warm-up the GL objects alive in the context must not grow at all and the
 // RSS by no more than a tolerance well below what one leaked scene per reload would add.

@@ -98,7 +98,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         std::string extension = std::filesystem::path(options->output).extension().string();
         for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
         const bool btfOutput = extension == ".btf";
-        // Mip-mapped unless asked otherwise (issue 29: every method's file grows by at most
+        // Mip-mapped unless asked otherwise (every method's file grows by at most
         // 1.41x on the built-in sample, tools/README.md), or the format cannot hold the levels.
         const bool mipmap = options->mipmap || (!options->noMipmap && !btfOutput);
         if (btfOutput && options->mipmap)

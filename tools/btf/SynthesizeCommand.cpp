@@ -1,6 +1,6 @@
 // btf synthesize IN -o map.exr: k-coherence synthesis of a large surface from a measured sample
-// (seed 002 sections 4-5) into a coordinate map; btf make-tileable IN -o OUT.zip: seed 004's
-// linear edge blending so a sample tiles without a seam.
+// (Boßerhoff and Nicoll 2003 sections 4-5) into a coordinate map; btf make-tileable IN -o OUT.zip:
+// Sattler et al. 2003's linear edge blending so a sample tiles without a seam.
 #include <chrono>
 #include <filesystem>
 #include <iomanip>

@@ -1,5 +1,6 @@
-// btf tiles INPUT -o DIR: the BSVTF tile set of an fmf material (seed 003 sections 5-7), for
-// streaming from a folder or a static HTTP server (streaming/TileSet.h describes the files).
+// btf tiles INPUT -o DIR: the BSVTF tile set of an fmf material (Schwartz et al. 2013 sections
+// 5-7), for streaming from a folder or a static HTTP server (streaming/TileSet.h describes the
+// files).
 #include <cctype>
 #include <filesystem>
 #include <iomanip>
