@@ -1,4 +1,4 @@
-// osgBTF: HDR environment lighting of BTF materials (seed 004 section 5), the CPU side.
+// osgBTF: HDR environment lighting of BTF materials (Sattler et al. 2003 section 5), the CPU side.
 //
 // A measured BTF value already contains the cosine term, so an environment L(d) lights a surface
 // point with
@@ -17,9 +17,9 @@
 // such method does so in its own folder (MethodInfo::environment, materials/EnvironmentState.h).
 //
 // The sum runs over the texels of the lat-long map (each with its exact solid angle), not over a
-// local hemicube as in the seed: a texel's radiance then reaches the measured directions with the
-// weights of its own centre, so one bright texel at a measured direction acts exactly as a point
-// light of intensity L Omega there. Texels that straddle the horizon are split into
+// local hemicube as in Sattler et al. 2003: a texel's radiance then reaches the measured directions
+// with the weights of its own centre, so one bright texel at a measured direction acts exactly as a
+// point light of intensity L Omega there. Texels that straddle the horizon are split into
 // horizonSplit(width) parts per side (parts about 0.7 degrees wide), so the weights of a white
 // environment sum to 2 pi (within 1e-3, tested for maps 16 to 256 texels wide).
 #pragma once

@@ -1,4 +1,4 @@
-// osgBTF: GPU state for environment lighting of linear methods (seed 004 section 5.2).
+// osgBTF: GPU state for environment lighting of linear methods (Sattler et al. 2003 section 5.2).
 //
 // Per vertex, the environment folded into the method's light basis (foldEnvironment) is far too
 // large for vertex attributes or varyings (pca: views x (c + 1) RGB = 81 x 17 x 3 floats), so it

@@ -1,4 +1,4 @@
-// osgBTF: illumination PCA for rotating environments (seed 004 section 5.3).
+// osgBTF: illumination PCA for rotating environments (Sattler et al. 2003 section 5.3).
 //
 // Per-vertex environment data (the projected g or the folded gamma* of every vertex, one long
 // vector U) depend on the environment's rotation about the up axis. They are precomputed for A

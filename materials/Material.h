@@ -27,8 +27,9 @@
 
 namespace osgBTF {
 
-/** Storage per texel as seed 001 Table 2 counts it: values and bytes, derived from the model's
- *  actual arrays (per-texel arrays count fully; shared tables are divided by the texel count). */
+/** Storage per texel as Meseth et al. 2003 Table 2 counts it: values and bytes, derived from the
+ * model's actual arrays (per-texel arrays count fully; shared tables are divided by the texel
+ * count). */
 struct MemoryFootprint {
     double valuesPerTexel = 0;
     double bytesPerTexel = 0;
@@ -191,10 +192,10 @@ private:
     mutable osg::ref_ptr<osg::StateSet> _sharedStateSet;
 };
 
-/** Environment lighting folded per vertex (materials/EnvironmentState.h, seed 004 section 5.2),
- *  for a method whose point-light rendering is linear in the light interpolation weights: the
- *  environment projected onto the measured lights (g) folds into the method's own light basis.
- *  Its shader is "environment/<name>.frag" (materials/<name>/<name>_environment.frag). The
+/** Environment lighting folded per vertex (materials/EnvironmentState.h, Sattler et al. 2003
+ * section 5.2), for a method whose point-light rendering is linear in the light interpolation
+ * weights: the environment projected onto the measured lights (g) folds into the method's own light
+ * basis. Its shader is "environment/<name>.frag" (materials/<name>/<name>_environment.frag). The
  *  functions get materials of the method's own class. */
 struct EnvironmentHooks {
     /** Whether this material folds (empty: every material of the method does); e.g. fmf only

@@ -1,6 +1,6 @@
 // osgBTF: numeric helpers that several methods' fitters and models share and that belong to no one
-// model: the storage roundings (half float, 8-bit fixed point), seed 001's per-texel error, the
-// memory count of a fitted file and a two-variable non-negative least squares.
+// model: the storage roundings (half float, 8-bit fixed point), Meseth et al. 2003's per-texel
+// error, the memory count of a fitted file and a two-variable non-negative least squares.
 #pragma once
 
 #include <cmath>
@@ -20,7 +20,7 @@ inline float quantizeUNorm8(double x) {
     return float(std::round(c * 255.0)) / 255.0f;
 }
 
-/** Seed 001's per-texel error: mean over pairs of |measured - model| (RGB length). */
+/** Meseth et al. 2003's per-texel error: mean over pairs of |measured - model| (RGB length). */
 double texelError(const std::vector<double>& rgb, const std::vector<float>& model);
 
 /** Values and bytes per texel of a fitted material's textures, by their storage kinds. */

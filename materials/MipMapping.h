@@ -1,4 +1,4 @@
-// osgBTF: fitting any method as a mip-mapped material (core/MipPyramid.h, issue 12 section 2).
+// osgBTF: fitting any method as a mip-mapped material (core/MipPyramid.h).
 #pragma once
 
 #include "core/BtfSource.h"

@@ -8,7 +8,8 @@
 
 namespace osgBTF {
 
-/** Operations of one fragment, split like seed 001 Table 3 into a fixed part and a part per light.
+/** Operations of one fragment, split like Meseth et al. 2003 Table 3 into a fixed part and a part
+ * per light.
  *
  *  Counting rule (harness/README.md): the shader source as written, loops unrolled to the
  *  material's parameters (lobes, components) and every data-dependent branch taken (all three
@@ -30,7 +31,7 @@ struct ShaderCost {
     // shaders/common/btf_main.glsl, once per fragment: normal 1, Gram-Schmidt tangent 3,
     // degenerate test 2, normalize 1, bitangent 4, eye direction 4, local view 3 dots, fixed-view
     // test 1, texel selection 5 (the nearest texel; the filtered blends add blendingTexels' own
-// count), view.z test 1.
+    // count), view.z test 1.
     static constexpr int kFrameAlu = 25;
     // The light loop body around btfEvaluate: direction select + normalize 4, 3 dots, horizon
     // test 1, colour multiply-add 2.

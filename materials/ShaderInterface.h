@@ -48,9 +48,9 @@ constexpr const char* kCoordinateMapLevels = "osgBTF_coordinateMapLevels";
  *  types share a unit. */
 constexpr int kCoordinateMapUnit = 15;
 
-/** Smooth shadow terminator (seed 004 sec. 4.3; scene/ShadowTerminator.h): btf.vert computes
- *  u = (1 + cos(alpha + angle(n, l))) / 2 per vertex and light, btf_main.glsl multiplies each
- *  light's term by the blurred step texture at u. Off unless kTerminator is true (MaterialNode
+/** Smooth shadow terminator (Sattler et al. 2003 sec. 4.3; scene/ShadowTerminator.h): btf.vert
+ * computes u = (1 + cos(alpha + angle(n, l))) / 2 per vertex and light, btf_main.glsl multiplies
+ * each light's term by the blurred step texture at u. Off unless kTerminator is true (MaterialNode
  *  sets it; a material's own StateSet, as `btf eval` and the GPU checks use it, leaves it off). */
 constexpr const char* kTerminator = "osgBTF_terminator";                ///< bool
 constexpr const char* kTerminatorAlpha = "osgBTF_terminatorAlpha";      ///< float, radians

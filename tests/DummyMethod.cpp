@@ -9,7 +9,7 @@ namespace osgBTFTest {
 using namespace osgBTF;
 
 osg::ref_ptr<DummyMaterial> DummyMaterial::fit(const BtfSource& btf, const FitOptions& options) {
-    const OptionValues o = validateOptions("dummy", options);
+    const OptionValues o = validateOptions(kMethod, options);
     osg::ref_ptr<DummyMaterial> m = new DummyMaterial;
     m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());
     m->value.assign(btf.texelCount() * 3, 0.0f);
@@ -59,10 +59,6 @@ osg::ref_ptr<osg::StateSet> DummyMaterial::createStateSet() const {
     return stateSet;
 }
 
-void DummyMaterial::assignFrom(const Material& other) {
-    value = assignCommon<DummyMaterial>(other).value;
-}
-
 const char* const kDummyShader = R"(#version 330 compatibility
 // Method "dummy" (tests/DummyMethod.cpp): value(x) * l_z.
 #pragma include "common/btf_main.glsl"
@@ -92,18 +88,15 @@ const DummyMaterial& dummy(const Material& material) {
     return static_cast<const DummyMaterial&>(material);
 }
 
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<DummyMaterial>([] {
     MethodInfo m;
-    m.name = "dummy";
     m.description = "test-only lit texture defined in the test binary";
     m.options = {OptionSpec::number("gain", 1, 0, 4, "factor on the first measured value")};
+    // Set directly (no registerFitterClass): a method outside the library has no libosgBTFFit
+    // part whose loading would register it.
     m.fit = [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
         return DummyMaterial::fit(btf, o);
     };
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return DummyMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new DummyMaterial; };
     m.shaderCost = [](const Material&) { return ShaderCost::ofEvaluate(1, 1, "ALU 11, TEX 1"); };
     m.fragmentShader = kDummyShader;
     // Folded environment lighting: the point-light value is linear in the light's weights, so
@@ -123,7 +116,8 @@ const bool registered = registerMethod([] {
     };
     environment.foldedStride = [](const Material&) { return std::size_t(3); };
     m.environment = environment;
-    addShaderSource("environment/dummy.frag", kDummyEnvironmentShader);
+    addShaderSource(std::string("environment/") + DummyMaterial::kMethod + ".frag",
+                    kDummyEnvironmentShader);
     m.order = 1000;
     return m;
 }());

@@ -9,35 +9,38 @@
 
 #include <vector>
 
-#include "materials/Material.h"
+#include "materials/MethodMaterial.h"
 
 namespace osgBTFTest {
+
+/** DummyMaterial's members (materials/MethodMaterial.h). */
+struct DummyData {
+    std::vector<float> value;  ///< RGB per texel
+};
 
 /** rho(x) * gain * l_z: a lit texture with one option, enough to exercise everything. Its
  *  environment lighting folds (MethodInfo::environment): sum_i g_i rho(x) l_i,z = rho(x) times
  *  one RGB value per vertex, sum_i g_i l_i,z. */
-class DummyMaterial : public osgBTF::Material {
+class DummyMaterial : public osgBTF::MethodMaterial<DummyMaterial, DummyData> {
 public:
+    static constexpr const char* kMethod = "dummy";
+
     DummyMaterial() = default;
     DummyMaterial(const DummyMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
-        : osgBTF::Material(other, copyop), value(other.value) {}
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTFTest, DummyMaterial)
 
         static osg::ref_ptr<DummyMaterial> fit(const osgBTF::BtfSource& btf,
                                                const osgBTF::FitOptions& options);
     static osg::ref_ptr<DummyMaterial> fromFile(const osgBTF::FittedMaterial& file);
 
-    std::string methodName() const override { return "dummy"; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     osgBTF::MemoryFootprint memory() const override;
     osgBTF::FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
-    void assignFrom(const osgBTF::Material& other) override;
 
     /** The texel's colour rho(x) (no light term). */
     glm::vec3 texel(int x, int y) const;
-
-    std::vector<float> value;  ///< RGB per texel
 };
 
 /** The dummy's point-light fragment shader, as registered (MethodInfo::fragmentShader). */

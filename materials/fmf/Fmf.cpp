@@ -57,21 +57,6 @@ void roundToHalf(FactorMatrix& m, const std::string& source, const char* name) {
 
 }  // namespace
 
-FmfMaterial::FmfMaterial(const FmfMaterial& other, const osg::CopyOp& copyop)
-    : Material(other, copyop),
-      _factors(other._factors),
-      _storage(other._storage),
-      _viewLookup(other._viewLookup),
-      _lightLookup(other._lightLookup) {}
-
-void FmfMaterial::assignFrom(const Material& other) {
-    const FmfMaterial& o = assignCommon<FmfMaterial>(other);
-    _factors = o._factors;
-    _storage = o._storage;
-    _viewLookup = o._viewLookup;
-    _lightLookup = o._lightLookup;
-}
-
 int FmfMaterial::groups(int channel) const {
     return groupsOf(_factors.components(channel));
 }
@@ -181,10 +166,10 @@ glm::vec3 FmfMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::
 
 glm::vec3 FmfMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
                                       const glm::vec3& light) const {
-    // Seed 003 interpolates U, the factor rows, and the sums are linear in them: blending the 9
-    // rows and decoding (colour model / exp) once is cheaper than decoding 9 values, and exact at
-    // measured directions, where one combination has weight 1. The cosine division uses the
-    // query light's own z, so it is exact there too.
+    // Schwartz et al. 2013 interpolates U, the factor rows, and the sums are linear in them:
+    // blending the 9 rows and decoding (colour model / exp) once is cheaper than decoding 9 values,
+    // and exact at measured directions, where one combination has weight 1. The cosine division
+    // uses the query light's own z, so it is exact there too.
     std::array<std::size_t, 9> images;
     std::array<float, 9> weights;
     const int count = directionCombinations(view, light, images, weights);
@@ -460,9 +445,8 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<FmfMaterial>([] {
     MethodInfo m;
-    m.name = kFmfMethodName;
     m.description =
         "full-matrix factorisation (Schwartz et al. 2013; UBO2014 FMF/DFMF files): "
         "rank-C SVD of the (view, light, colour) x texel matrix, 3x3 view/light blending of U; "
@@ -473,10 +457,6 @@ const bool registered = registerMethod([] {
                                      "100)"),
                  OptionSpec::choice("storage", "half", {"half", "float"},
                                     "precision of U and SxV on the GPU and in the file")};
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return FmfMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new FmfMaterial; };
     // Per-texel SxV rows times per-direction U rows; the colour decoding and exp come after the
     // sums (FmfMaterial::finishLinear).
     m.filtersParameters = true;
@@ -500,7 +480,7 @@ const bool registered = registerMethod([] {
             shared ? "ALU 87g+60+L, TEX 28g+T (g = components / 4" + lookups
                    : "ALU 30g+60+L, TEX 10g+T (g = sum of the channels' components / 4" + lookups);
     };
-    // Seed 003 is the latest of the papers: last in the paper order.
+    // Schwartz et al. 2013 is the latest of the papers: last in the paper order.
     // Linear in the light weights for the plain model: an environment folds into U per view once
     // per vertex (FmfEnvironment.cpp, fmf_environment.frag).
     EnvironmentHooks environment;
@@ -533,6 +513,6 @@ const bool registered = registerMethod([] {
 
 // The tables every texel shares; the other textures are per texel (remapMaterial).
 [[maybe_unused]] const bool sharedTexturesDeclared =
-    declareSharedTextures("fmf", {"u", "singularValues"});
+    declareSharedTextures(FmfMaterial::kMethod, {"u", "singularValues"});
 
 }  // namespace osgBTF

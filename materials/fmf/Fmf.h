@@ -1,16 +1,17 @@
-// osgBTF method "fmf": the full-matrix factorisation B = U * SxV^T (seed 003 section 3; the
-// UBO2014 ".btf" files store exactly this, see core/FactoredBtf.h and formats.md section 2).
+// osgBTF method "fmf": the full-matrix factorisation B = U * SxV^T (Schwartz et al. 2013 section 3;
+// the UBO2014 ".btf" files store exactly this, see core/FactoredBtf.h and formats.md section 2).
 //
 //   BTF(x, v, l) ~ decode( sum_{v' in N(v), l' in N(l)} w_v' w_l' U[(v', l'), c] . SxV[x] ) / cos
 //
 // U holds the Eigen-ABRDFs (one row per measured (view, light[, channel])), SxV the
 // Eigen-Textures with the singular values folded in (one row per texel). N(v), N(l) are the (up
 // to) 3 measured directions of the Delaunay interpolation and w their barycentric weights, so 9
-// (view, light) combinations of U rows are blended (seed 003 blends U, not decoded values), dotted
-// with the texel's SxV row, THEN the colour model (DFMF) or exp (FMF with dynamic-range reduction)
-// is applied once, THEN the division by the query light's cos(theta) when the data include it.
-// The material holds a FactoredBtf and renders every variant it supports (DFMF with per-channel
-// ranks and colour models 0/1/3/4/11, FMF with or without DRR, the cosine flag) as stored.
+// (view, light) combinations of U rows are blended (Schwartz et al. 2013 blends U, not decoded
+// values), dotted with the texel's SxV row, THEN the colour model (DFMF) or exp (FMF with
+// dynamic-range reduction) is applied once, THEN the division by the query light's cos(theta) when
+// the data include it. The material holds a FactoredBtf and renders every variant it supports (DFMF
+// with per-channel ranks and colour models 0/1/3/4/11, FMF with or without DRR, the cosine flag) as
+// stored.
 //
 // GPU layout (both RGBA, half or float as the storage option says; components in groups of 4):
 //   U:   2D array texture, layer = measured view, texel (group g, light * 3 + channel): components
@@ -23,7 +24,7 @@
 
 #include "core/FactoredBtf.h"
 #include "materials/DirectionLookup.h"
-#include "materials/Material.h"
+#include "materials/MethodMaterial.h"
 
 namespace osgBTF {
 
@@ -32,12 +33,21 @@ inline constexpr char kFmfMethodName[] = "fmf";
 /** Parameter "model" of a file whose factors are FactorModel::Fmf ("dfmf": Dfmf). */
 inline constexpr char kFmfPlainModel[] = "fmf";
 
-class FmfMaterial : public Material {
+/** FmfMaterial's members (materials/MethodMaterial.h). */
+struct FmfData {
+protected:
+    FactoredBtf _factors;
+    MaterialTexture::PixelKind _storage = MaterialTexture::Half;
+    DirectionLookup _viewLookup, _lightLookup;
+};
+
+class FmfMaterial : public MethodMaterial<FmfMaterial, FmfData> {
 public:
+    static constexpr const char* kMethod = kFmfMethodName;
+
     FmfMaterial() = default;
-    FmfMaterial(const FmfMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
-    /** Copies `other` (same method) into this material; see Material::assignFrom. */
-    void assignFrom(const Material& other) override;
+    FmfMaterial(const FmfMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, FmfMaterial)
 
         /** Renders `factors` as they are (no refit, no decode of the measured data). Half storage
@@ -58,15 +68,14 @@ public:
     const FactoredBtf& factors() const { return _factors; }
     MaterialTexture::PixelKind storage() const { return _storage; }
 
-    std::string methodName() const override { return kFmfMethodName; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
-    /** Seed 001 Table 2 counts per-texel storage: SxV fully, U (shared by all texels) divided by
-     *  the texel count; uBytes is U's whole size on the GPU. */
+    /** Meseth et al. 2003 Table 2 counts per-texel storage: SxV fully, U (shared by all texels)
+     * divided by the texel count; uBytes is U's whole size on the GPU. */
     struct MemoryBreakdown {
         double perTexelValues = 0, perTexelBytes = 0;  ///< SxV
         double sharedValues = 0, sharedBytes = 0;      ///< U / texel count
@@ -107,10 +116,6 @@ private:
     /** The three factor sums of texel row `row` for U rows blended over the combinations. */
     void factorSums(std::size_t row, const std::size_t* images, const float* weights, int count,
                     float sums[3]) const;
-
-    FactoredBtf _factors;
-    MaterialTexture::PixelKind _storage = MaterialTexture::Half;
-    DirectionLookup _viewLookup, _lightLookup;
 };
 
 /** Whether fmf's factors render linearly in the light weights (model Fmf without dynamic-range

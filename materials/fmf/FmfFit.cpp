@@ -15,7 +15,7 @@ namespace osgBTF {
 
 osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
-    const OptionValues o = validateOptions("fmf", options);
+    const OptionValues o = validateOptions(kMethod, options);
     if (btf.empty()) throw Error("fmf: the BTF is empty");
     const int components = o.integer("components");
     const MaterialTexture::PixelKind storage =
@@ -58,7 +58,7 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const BtfSource& btf, const FitOption
 
     FactoredBtf factors;
     factors.model = FactorModel::Fmf;
-    factors.source = btf.source.empty() ? std::string("fmf") : btf.source;
+    factors.source = btf.source.empty() ? std::string(kMethod) : btf.source;
     factors.views = btf.views();
     factors.lights = btf.lights();
     factors.width = btf.width();
@@ -93,10 +93,7 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const BtfSource& btf, const FitOption
 
 namespace {
 // The fit hook of the method registered in Fmf.cpp (libosgBTF).
-const bool fitterRegistered =
-    registerFitter("fmf", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return FmfMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<FmfMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

@@ -1,5 +1,5 @@
 #version 330 compatibility
-// Method "fmf" (materials/fmf/Fmf.h): B = U * SxV^T (seed 003 section 3), evaluated by
+// Method "fmf" (materials/fmf/Fmf.h): B = U * SxV^T (Schwartz et al. 2013 section 3), evaluated by
 // common/fmf_eval.glsl with the Eigen-Textures in one texture array.
 #pragma include "common/btf_main.glsl"
 #pragma include "common/directions.glsl"

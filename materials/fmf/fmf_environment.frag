@@ -1,8 +1,8 @@
 #version 330 compatibility
-// Environment lighting of method "fmf" (seed 003's B = U SxV^T, seed 004 section 5.2): per
-// measured view j the environment is folded into U, u*_jq = sum_i g_i U[(j, i, c), q] per
-// channel c, so a fragment dots the blended u* of its nearest views with its texel's SxV row:
-// 3 vertices x 3 views x K fetches. The same loops as evaluateFoldedFmf
+// Environment lighting of method "fmf" (Schwartz et al. 2013's B = U SxV^T, Sattler et al. 2003
+// section 5.2): per measured view j the environment is folded into U, u*_jq = sum_i g_i U[(j, i,
+// c), q] per channel c, so a fragment dots the blended u* of its nearest views with its texel's SxV
+// row: 3 vertices x 3 views x K fetches. The same loops as evaluateFoldedFmf
 // (materials/EnvironmentLighting.h); only plain fmf (no log values, no dfmf) is folded.
 #pragma include "common/environment.glsl"
 #pragma include "common/directions.glsl"

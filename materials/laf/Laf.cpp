@@ -9,13 +9,6 @@ namespace osgBTF {
 
 // ---- model -----------------------------------------------------------------------------------
 
-LafMaterial::LafMaterial(const LafMaterial& other, const osg::CopyOp& copyop)
-    : LobeMaterial(other, copyop) {}
-
-void LafMaterial::assignFrom(const Material& other) {
-    assignLobes(assignCommon<LafMaterial>(other));
-}
-
 osg::ref_ptr<LafMaterial> LafMaterial::create(int width, int height, int lobeCount,
                                               const DirectionSet& views,
                                               const DirectionSet& lights) {
@@ -57,14 +50,13 @@ osg::ref_ptr<LafMaterial> LafMaterial::fromFile(const FittedMaterial& file) {
 osg::ref_ptr<osg::StateSet> LafMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
-    addLobeState(*stateSet, "laf");
+    addLobeState(*stateSet, kMethod);
     return stateSet;
 }
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<LafMaterial>([] {
     MethodInfo m;
-    m.name = "laf";
     m.description =
         "Lafortune lobes per texel (McAllister): rho_d + rho_s * sum_k (C . v*l)^n; RGB albedos, "
         "luminance lobes; 14 values / 22 bytes per texel at 2 lobes";
@@ -74,10 +66,6 @@ const bool registered = registerMethod([] {
         OptionSpec::flag("cosine", true,
                          "1: the bracket times l_z, the BRDF model times the foreshortening the "
                          "data contain; 0: Meseth et al. 2003, eq. 2, literally, no l_z")};
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return LafMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new LafMaterial; };
     m.shaderCost = [](const Material& material) {
         // v*l 1; per lobe: row index 2, dot, test, pow, add; bracket 5. Fetches: lobes + rhoD,
         // rhoS.

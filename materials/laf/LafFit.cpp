@@ -8,7 +8,7 @@ namespace osgBTF {
 // ---- fitter: LobeMaterial's, with T fixed at 1 -----------------------------------------------
 
 osg::ref_ptr<LafMaterial> LafMaterial::fit(const BtfSource& btf, const FitOptions& options) {
-    const OptionValues o = validateOptions("laf", options);
+    const OptionValues o = validateOptions(kMethod, options);
     if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
         throw Error("laf: cannot fit an empty BTF");
     osg::ref_ptr<LafMaterial> m =
@@ -20,10 +20,7 @@ osg::ref_ptr<LafMaterial> LafMaterial::fit(const BtfSource& btf, const FitOption
 
 namespace {
 // The fit hook of the method registered in Laf.cpp (libosgBTF).
-const bool fitterRegistered =
-    registerFitter("laf", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return LafMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<LafMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

@@ -12,22 +12,6 @@ namespace osgBTF {
 
 // ---- storage ---------------------------------------------------------------------------------
 
-LobeMaterial::LobeMaterial(const LobeMaterial& other, const osg::CopyOp& copyop)
-    : Material(other, copyop),
-      rhoD(other.rhoD),
-      rhoS(other.rhoS),
-      lobes(other.lobes),
-      _lobes(other._lobes),
-      _cosine(other._cosine) {}
-
-void LobeMaterial::assignLobes(const LobeMaterial& other) {
-    rhoD = other.rhoD;
-    rhoS = other.rhoS;
-    lobes = other.lobes;
-    _lobes = other._lobes;
-    _cosine = other._cosine;
-}
-
 void LobeMaterial::initLobes(int lobeCount) {
     _lobes = lobeCount;
     _cosine = true;

@@ -19,24 +19,38 @@
 
 namespace osgBTF {
 
-class LobeMaterial : public Material {
-public:
-    int lobeCount() const { return _lobes; }
-    /** True when the bracket is multiplied by l_z (option cosine=1, the default). */
-    bool cosine() const { return _cosine; }
-
+/** LobeMaterial's members, copied and assigned by the compiler (materials/MethodMaterial.h). */
+struct LobeData {
     /** RGB per texel, rows bottom-up, multiples of 1/255 in [0, 1] (8-bit storage). */
     std::vector<float> rhoD, rhoS;
     /** [lobe][y][x][Cx, Cy, Cz, n], half-representable values. */
     std::vector<float> lobes;
 
 protected:
+    int _lobes = 0;
+    bool _cosine = true;
+};
+
+/** The Base of LafMaterial's and SlafMaterial's MethodMaterial. */
+class LobeMaterial : public Material, public LobeData {
+public:
+    int lobeCount() const { return _lobes; }
+    /** True when the bracket is multiplied by l_z (option cosine=1, the default). */
+    bool cosine() const { return _cosine; }
+
+protected:
     LobeMaterial() = default;
-    LobeMaterial(const LobeMaterial& other, const osg::CopyOp& copyop);
+    LobeMaterial(const LobeMaterial& other, const osg::CopyOp& copyop)
+        : Material(other, copyop), LobeData(other) {}
     ~LobeMaterial() override = default;
 
-    /** assignFrom's lobe part (the caller has run assignCommon). */
-    void assignLobes(const LobeMaterial& other);
+    /** Material's, plus the lobe data: MethodMaterial::assignFrom calls this one. */
+    template <typename T>
+    const T& assignCommon(const Material& other) {
+        const T& same = Material::assignCommon<T>(other);
+        static_cast<LobeData&>(*this) = same;
+        return same;
+    }
     /** Zero colours, zero lobes (n = 1), cosine on, for the current size. */
     void initLobes(int lobeCount);
 
@@ -61,9 +75,6 @@ protected:
      *  the lobes, and stored there as [view][y][x][rgb] (SLAF). Sets the fit info seconds,
      *  iterations, fallbacks and lobes. */
     void fitLobes(const BtfSource& btf, int iterations, int rounds, std::vector<float>* scale);
-
-    int _lobes = 0;
-    bool _cosine = true;
 };
 
 }  // namespace osgBTF

@@ -186,8 +186,8 @@ void LobeMaterial::fitLobes(const BtfSource& btf, int iterations, int rounds,
                         ((float(rd[c]) + float(rs[c]) * float(sum[j])) * float(outside[j]));
             const double error = texelError(rgb, model);
 
-            // Divergence guard (seed 001 4.4): never worse than the best lit texture the model
-            // holds: rho_s = 0 and, with a table, rho_d = 1 and T the best colour per view,
+            // Divergence guard (Meseth et al. 2003 4.4): never worse than the best lit texture the
+            // model holds: rho_s = 0 and, with a table, rho_d = 1 and T the best colour per view,
             // without one, rho_d the best colour (with cosine=0: mean colours instead).
             std::vector<double> fallbackT;
             float mean[3] = {1.0f, 1.0f, 1.0f};

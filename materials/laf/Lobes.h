@@ -1,11 +1,12 @@
 // osgBTF: Lafortune lobes and their per-texel fit, shared by the LAF and SLAF methods.
 //
-// A lobe is s(v, l) = max(Cx vx lx + Cy vy ly + Cz vz lz, 0)^n (seed 001 eq. 3; the text
+// A lobe is s(v, l) = max(Cx vx lx + Cy vy ly + Cz vz lz, 0)^n (Meseth et al. 2003 eq. 3; the text
 // extraction garbles the exponent's placement, we follow Lafortune et al. 1997 where n applies to
 // the whole dot product). The clamp at 0 keeps the power defined for every direction pair (a
 // negative base has no real power), on the CPU and in the shader alike.
 //
-// Fitting (the part seed 001 calls slow and fragile, section 4.4): per texel, the luminance
+// Fitting (the part Meseth et al. 2003 calls slow and fragile, section 4.4): per texel, the
+// luminance
 //   Y(v, l) ~ t(v) * (a + sum_i s_i(v, l))           (t = 1 for LAF, SLAF's view scale otherwise)
 // is fitted with Ceres' Levenberg-Marquardt over a + 4 k lobe parameters, bounded so every lobe
 // stays valid (n in [kMinExponent, kMaxExponent], |C| <= kMaxCoefficient, a >= 0). The specular

@@ -5,14 +5,6 @@
 
 namespace osgBTF {
 
-LambertMaterial::LambertMaterial(const LambertMaterial& other, const osg::CopyOp& copyop)
-    : Material(other, copyop), albedo(other.albedo) {}
-
-void LambertMaterial::assignFrom(const Material& other) {
-    const LambertMaterial& o = assignCommon<LambertMaterial>(other);
-    albedo = o.albedo;
-}
-
 glm::vec3 LambertMaterial::evaluate(int x, int y, const glm::vec3&, const glm::vec3& light) const {
     const std::size_t t = (std::size_t(y) * _width + x) * 3;
     return glm::vec3(albedo[t], albedo[t + 1], albedo[t + 2]) * light.z;
@@ -51,14 +43,9 @@ osg::ref_ptr<osg::StateSet> LambertMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<LambertMaterial>([] {
     MethodInfo m;
-    m.name = "lambert";
     m.description = "plain lit texture: rho(x) * cos(theta_l), the baseline";
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return LambertMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new LambertMaterial; };
     // One albedo fetch, times l_z.
     m.shaderCost = [](const Material&) { return ShaderCost::ofEvaluate(1, 1, "ALU 11, TEX 1"); };
     m.filtersParameters = true;  // the value is the albedo times l_z

@@ -9,30 +9,33 @@
 
 #include <vector>
 
-#include "materials/Material.h"
+#include "materials/MethodMaterial.h"
 
 namespace osgBTF {
 
-class LambertMaterial : public Material {
+/** LambertMaterial's members (materials/MethodMaterial.h). */
+struct LambertData {
+    /** RGB per texel, rows bottom-up. */
+    std::vector<float> albedo;
+};
+
+class LambertMaterial : public MethodMaterial<LambertMaterial, LambertData> {
 public:
+    static constexpr const char* kMethod = "lambert";
+
     LambertMaterial() = default;
     LambertMaterial(const LambertMaterial& other,
-                    const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
-    /** Copies `other` (same method) into this material; see Material::assignFrom. */
-    void assignFrom(const Material& other) override;
+                    const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, LambertMaterial)
 
         static osg::ref_ptr<LambertMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<LambertMaterial> fromFile(const FittedMaterial& file);
 
-    std::string methodName() const override { return "lambert"; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     MemoryFootprint memory() const override;
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
-
-    /** RGB per texel, rows bottom-up. */
-    std::vector<float> albedo;
 
 protected:
     ~LambertMaterial() override = default;

@@ -9,7 +9,7 @@ namespace osgBTF {
 
 osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const BtfSource& btf,
                                                    const FitOptions& options) {
-    validateOptions("lambert", options);  // it has none: anything given is an error
+    validateOptions(kMethod, options);  // it has none: anything given is an error
     osg::ref_ptr<LambertMaterial> m = new LambertMaterial;
     m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());
     m->albedo.assign(btf.texelCount() * 3, 0.0f);
@@ -42,10 +42,7 @@ osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const BtfSource& btf,
 
 namespace {
 // The fit hook of the method registered in Lambert.cpp (libosgBTF).
-const bool fitterRegistered = registerFitter(
-    "lambert", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return LambertMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<LambertMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

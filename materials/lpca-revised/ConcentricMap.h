@@ -1,4 +1,4 @@
-// osgBTF: the elevated concentric map (seed 000 section 6.1): Shirley & Chiu's concentric
+// osgBTF: the elevated concentric map (Schneider 2004 section 6.1): Shirley & Chiu's concentric
 // square-to-disc map followed by the area-preserving elevation of the disc onto the hemisphere,
 // and its exact inverse. Square coordinates (s, t) in [0, 1]^2, directions in the local frame
 // (+Z the normal).
@@ -7,7 +7,7 @@
 //                    rho = a, phi = (pi/4) (b/a)  (the other three regions rotate it)
 //   elevation:       x = rho sqrt(2 - rho^2) cos phi, y = rho sqrt(2 - rho^2) sin phi,
 //                    z = 1 - rho^2
-// The seed's text extraction shows region 1 only; the other regions are Shirley & Chiu's
+// The paper's text extraction shows region 1 only; the other regions are Shirley & Chiu's
 // (A Low Distortion Map Between Disk and Square, 1997). Inverting the elevation needs no
 // trigonometry: rho^2 = 1 - z and rho sqrt(2 - rho^2) = sqrt(1 - z^2), so the disc point is
 // (x, y) / sqrt(1 + z). The GLSL copy is in lpca-revised.frag.

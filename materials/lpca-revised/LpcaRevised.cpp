@@ -14,32 +14,6 @@
 
 namespace osgBTF {
 
-LpcaRevisedMaterial::LpcaRevisedMaterial(const LpcaRevisedMaterial& other,
-                                         const osg::CopyOp& copyop)
-    : Material(other, copyop),
-      clusterOf(other.clusterOf),
-      weights(other.weights),
-      grid(other.grid),
-      _clusters(other._clusters),
-      _components(other._components),
-      _resolution(other._resolution),
-      _eightBit(other._eightBit),
-      _viewParams(other._viewParams),
-      _lightParams(other._lightParams) {}
-
-void LpcaRevisedMaterial::assignFrom(const Material& other) {
-    const LpcaRevisedMaterial& o = assignCommon<LpcaRevisedMaterial>(other);
-    clusterOf = o.clusterOf;
-    weights = o.weights;
-    grid = o.grid;
-    _clusters = o._clusters;
-    _components = o._components;
-    _resolution = o._resolution;
-    _eightBit = o._eightBit;
-    _viewParams = o._viewParams;
-    _lightParams = o._lightParams;
-}
-
 void LpcaRevisedMaterial::finishSetup() {
     if (_clusters < 1 || _clusters > 256 || _components < 1 || _resolution < 2)
         throw Error("lpca-revised: invalid model shape");
@@ -198,9 +172,8 @@ osg::ref_ptr<osg::StateSet> LpcaRevisedMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<LpcaRevisedMaterial>([] {
     MethodInfo m;
-    m.name = "lpca-revised";
     m.description =
         "revised local PCA (Schneider 2004): LPCA Eigen-BRDFs resampled over the elevated "
         "concentric map into one filtered 3D texture, 2 fetches + 1 lerp per component";
@@ -211,10 +184,6 @@ const bool registered = registerMethod([] {
     m.options.push_back(OptionSpec::choice("storage", "half", {"half", "unorm8"},
                                            "grid precision (unorm8: the scales are folded into "
                                            "the weights)"));
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return LpcaRevisedMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new LpcaRevisedMaterial; };
     m.shaderCost = [](const Material& material) {
         // Cluster 2; two concentric maps 17 each; grid coordinates 22; per component: row 2, two
         // filtered 3D fetches with their scaling 2, weight address 2 and fetch, mix, multiply-add
@@ -235,6 +204,6 @@ const bool registered = registerMethod([] {
 
 // The tables every texel shares; the other textures are per texel (remapMaterial).
 [[maybe_unused]] const bool sharedTexturesDeclared =
-    declareSharedTextures("lpca-revised", {"grid"});
+    declareSharedTextures(LpcaRevisedMaterial::kMethod, {"grid"});
 
 }  // namespace osgBTF

@@ -1,4 +1,4 @@
-// osgBTF method "lpca-revised": LPCA rendered as in seed 000 section 6 (Schneider). The LPCA
+// osgBTF method "lpca-revised": LPCA rendered as in Schneider 2004 section 6 (Schneider). The LPCA
 // model's Eigen-BRDFs are resampled over the elevated concentric map (ConcentricMap.h) onto a
 // regular grid of n samples per parameter (s_v, t_v, s_l, t_l), texel centres at (j + 0.5) / n,
 // each sample interpolated in the measured data with the exact Delaunay weights of its view and
@@ -7,17 +7,18 @@
 //   x = cluster * n + s_v,  y = component * n + t_v,  z = t_l * n + s_l   (texel units)
 //
 // so the hardware interpolates (s_v, t_v, s_l) and the shader interpolates t_l by hand: per
-// component two 3D fetches and one lerp (the seed's z1, z2, w). Coordinates are clamped to half a
-// texel inside their n x n x n block, so filtering never mixes clusters, components or t_l slabs.
+// component two 3D fetches and one lerp (Schneider 2004's z1, z2, w). Coordinates are clamped to
+// half a texel inside their n x n x n block, so filtering never mixes clusters, components or t_l
+// slabs.
 //
 //   BTF(x, v, l) ~ sum_{i<c} alpha_i(x) [(1 - w) S(s_v, t_v, z1) + w S(s_v, t_v, z2)]
 //
-// The seed's two cube maps (direction -> (s_v, t_v) and -> (z1, z2, w)) are computed in the
+// Schneider 2004's two cube maps (direction -> (s_v, t_v) and -> (z1, z2, w)) are computed in the
 // shader instead: Omega^-1 is a handful of ALU operations and an atan, it is exact (a cube map
 // quantises the direction to its resolution), and the CPU evaluator then computes the same
 // numbers, so GPU == CPU holds to float rounding.
 //
-// Storage "half" (default): grid values half. Storage "unorm8" (the seed's GeForce FX 3D
+// Storage "half" (default): grid values half. Storage "unorm8" (Schneider 2004's GeForce FX 3D
 // textures): every Eigen-BRDF grid is quantised to 8 bits as q = (E / s + 1) / 2 with its own
 // scale s = max |E|; E = 2 s q - s is folded into the texel's weights: alpha'_i = 2 s_i alpha_i
 // and one extra per-texel offset b = -sum_i s_i alpha_i, so the shader sums alpha'_i q_i + b.
@@ -28,17 +29,32 @@
 
 #include <glm/vec2.hpp>
 
+#include "materials/MethodMaterial.h"
 #include "materials/lpca/Lpca.h"
 
 namespace osgBTF {
 
-class LpcaRevisedMaterial : public Material {
+/** LpcaRevisedMaterial's members (materials/MethodMaterial.h). */
+struct LpcaRevisedData {
+    std::vector<std::uint8_t> clusterOf;  ///< per texel
+    std::vector<float> weights;           ///< per texel weightsPerTexel() values (half)
+    /** The 3D texture, [z][y][x][rgb]; half values, or multiples of 1/255 for unorm8. */
+    std::vector<float> grid;
+
+protected:
+    int _clusters = 0, _components = 0, _resolution = 0;
+    bool _eightBit = false;
+    std::vector<glm::vec2> _viewParams, _lightParams;  ///< Omega^-1 of the measured directions
+};
+
+class LpcaRevisedMaterial : public MethodMaterial<LpcaRevisedMaterial, LpcaRevisedData> {
 public:
+    static constexpr const char* kMethod = "lpca-revised";
+
     LpcaRevisedMaterial() = default;
     LpcaRevisedMaterial(const LpcaRevisedMaterial& other,
-                        const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
-    /** Copies `other` (same method) into this material; see Material::assignFrom. */
-    void assignFrom(const Material& other) override;
+                        const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, LpcaRevisedMaterial)
 
         /** Fits LPCA (options clusters, components, iterations, training, seed as "lpca") and
@@ -51,7 +67,6 @@ public:
                                                       bool eightBit);
     static osg::ref_ptr<LpcaRevisedMaterial> fromFile(const FittedMaterial& file);
 
-    std::string methodName() const override { return "lpca-revised"; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
@@ -69,11 +84,6 @@ public:
     int gridHeight() const { return _components * _resolution; }
     int gridDepth() const { return _resolution * _resolution; }
 
-    std::vector<std::uint8_t> clusterOf;  ///< per texel
-    std::vector<float> weights;           ///< per texel weightsPerTexel() values (half)
-    /** The 3D texture, [z][y][x][rgb]; half values, or multiples of 1/255 for unorm8. */
-    std::vector<float> grid;
-
 protected:
     ~LpcaRevisedMaterial() override = default;
 
@@ -82,10 +92,6 @@ private:
     /** Hardware-style trilinear filtering of the grid at texel-unit coordinates. */
     glm::vec3 trilinear(float x, float y, float z) const;
     glm::vec3 evaluateAt(std::size_t texel, const glm::vec2& sv, const glm::vec2& sl) const;
-
-    int _clusters = 0, _components = 0, _resolution = 0;
-    bool _eightBit = false;
-    std::vector<glm::vec2> _viewParams, _lightParams;  ///< Omega^-1 of the measured directions
 };
 
 }  // namespace osgBTF

@@ -25,7 +25,7 @@ constexpr int kMax3DTextureSize = 2048;
 
 osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fit(const BtfSource& btf,
                                                            const FitOptions& options) {
-    const OptionValues o = validateOptions("lpca-revised", options);
+    const OptionValues o = validateOptions(kMethod, options);
     const int resolution = o.integer("resolution");
     const LpcaSettings settings = LpcaSettings::fromValues(o);
     // The 3D texture holds k x n by c x n by n^2 texels: the bound on n depends on k and c.
@@ -142,10 +142,7 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromLpca(const LpcaMateri
 
 namespace {
 // The fit hook of the method registered in LpcaRevised.cpp (libosgBTF).
-const bool fitterRegistered = registerFitter(
-    "lpca-revised", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return LpcaRevisedMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<LpcaRevisedMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

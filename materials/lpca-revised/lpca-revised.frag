@@ -1,9 +1,9 @@
 #version 330 compatibility
-// Method "lpca-revised" (materials/lpca-revised/LpcaRevised.h): seed 000 section 6. The
+// Method "lpca-revised" (materials/lpca-revised/LpcaRevised.h): Schneider 2004 section 6. The
 // Eigen-BRDFs are resampled over the elevated concentric map into one LINEAR-filtered 3D texture
 // (x = cluster * n + s_v, y = component * n + t_v, z = t_l * n + s_l, texel units); per component
 // two fetches and one lerp over t_l. The direction -> (s, t) maps are computed here instead of the
-// seed's cube maps (exact, and the CPU evaluator does the same: LpcaRevisedMaterial::evaluate).
+// paper's cube maps (exact, and the CPU evaluator does the same: LpcaRevisedMaterial::evaluate).
 #pragma include "common/btf_main.glsl"
 
 uniform sampler2D lpcaRevisedCluster;       // 8-bit: cluster index / 255

@@ -12,27 +12,6 @@
 
 namespace osgBTF {
 
-LpcaMaterial::LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop)
-    : Material(other, copyop),
-      clusterOf(other.clusterOf),
-      weights(other.weights),
-      eigenBrdfs(other.eigenBrdfs),
-      _clusters(other._clusters),
-      _components(other._components),
-      _viewLookup(other._viewLookup),
-      _lightLookup(other._lightLookup) {}
-
-void LpcaMaterial::assignFrom(const Material& other) {
-    const LpcaMaterial& o = assignCommon<LpcaMaterial>(other);
-    clusterOf = o.clusterOf;
-    weights = o.weights;
-    eigenBrdfs = o.eigenBrdfs;
-    _clusters = o._clusters;
-    _components = o._components;
-    _viewLookup = o._viewLookup;
-    _lightLookup = o._lightLookup;
-}
-
 osg::ref_ptr<LpcaMaterial> LpcaMaterial::ofShape(int width, int height, const DirectionSet& views,
                                                  const DirectionSet& lights, int clusters,
                                                  int components) {
@@ -94,8 +73,8 @@ void LpcaMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
 }
 
 MemoryFootprint LpcaMaterial::memory() const {
-    // Seed 001 Table 2 counts: per texel the cluster index (8-bit) and c weights (half); per
-    // cluster c Eigen-BRDFs of V*L*3 half values, shared by all texels.
+    // Meseth et al. 2003 Table 2 counts: per texel the cluster index (8-bit) and c weights (half);
+    // per cluster c Eigen-BRDFs of V*L*3 half values, shared by all texels.
     const double texels = double(texelCount());
     const double perTexelValues = double(clusterOf.size() + weights.size()) / texels;
     const double sharedValues = double(eigenBrdfs.size()) / texels;
@@ -263,17 +242,12 @@ osg::ref_ptr<osg::StateSet> LpcaMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<LpcaMaterial>([] {
     MethodInfo m;
-    m.name = "lpca";
     m.description =
         "local PCA (Mueller 2003): per texel a cluster index and c weights of its cluster's "
         "Eigen-BRDFs, 3x3 view/light interpolation";
     m.options = LpcaSettings::optionTable();
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return LpcaMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new LpcaMaterial; };
     m.shaderCost = [](const Material& material) {
         // Cluster fetch and decode 2; two lookups; per component: alpha address 2 and fetch,
         // 9 x (weight product, row index 2, multiply-add 2, one fetch), weighted add 2.
@@ -311,6 +285,7 @@ const bool registered = registerMethod([] {
 }  // namespace
 
 // The tables every texel shares; the other textures are per texel (remapMaterial).
-[[maybe_unused]] const bool sharedTexturesDeclared = declareSharedTextures("lpca", {"eigenBrdfs"});
+[[maybe_unused]] const bool sharedTexturesDeclared =
+    declareSharedTextures(LpcaMaterial::kMethod, {"eigenBrdfs"});
 
 }  // namespace osgBTF

@@ -1,5 +1,5 @@
 // osgBTF method "lpca": clustered local PCA of the texels' apparent BRDFs (Müller et al. 2003;
-// seed 000 sections 3-5, seed 001 section 3.5 equation 7).
+// Schneider 2004 sections 3-5, Meseth et al. 2003 section 3.5 equation 7).
 //
 //   BTF(x, v, l) ~ sum_{v' in N(v), l' in N(l)} w_v(v') w_l(l') sum_{i<c} alpha_i(x) E_{i,k(x)}(v',
 //   l')
@@ -8,20 +8,20 @@
 // of k clusters; a cluster is a c-dimensional subspace spanned by its Eigen-BRDFs E_{i,k}
 // (orthonormal vectors over all measured (view, light, rgb)); a texel stores its cluster index
 // k(x) and its c weights alpha_i(x) (the projections onto the Eigen-BRDFs). The cluster mean is
-// folded into the subspace (see README.md: seed 001 Table 2's 85.9 values per texel count exactly
-// c Eigen-BRDFs per cluster, no separate mean), so each cluster is the best rank-c *linear*
+// folded into the subspace (see README.md: Meseth et al. 2003 Table 2's 85.9 values per texel count
+// exactly c Eigen-BRDFs per cluster, no separate mean), so each cluster is the best rank-c *linear*
 // subspace of its members, which also contains the best mean + (c-1) components fit.
 // N(v), N(l): the 3 measured directions of the baked Delaunay table and their weights.
 //
-// Storage (seed 001 Table 2 at Bonn 81x81, 256x256, k = 32, c = 8: 85.9 values, 170.8 bytes):
-// cluster index 8-bit, weights half, Eigen-BRDFs half.
+// Storage (Meseth et al. 2003 Table 2 at Bonn 81x81, 256x256, k = 32, c = 8: 85.9 values, 170.8
+// bytes): cluster index 8-bit, weights half, Eigen-BRDFs half.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "materials/DirectionLookup.h"
-#include "materials/Material.h"
+#include "materials/MethodMaterial.h"
 
 namespace osgBTF {
 
@@ -41,12 +41,27 @@ struct LpcaSettings {
     static LpcaSettings fromOptions(const FitOptions& options);
 };
 
-class LpcaMaterial : public Material {
+/** LpcaMaterial's members (materials/MethodMaterial.h). */
+struct LpcaData {
+    /** Per texel (rows bottom-up): cluster index, 0 .. clusters-1. */
+    std::vector<std::uint8_t> clusterOf;
+    /** Per texel: c weights, [texel][component]; half values. */
+    std::vector<float> weights;
+    /** Per cluster: c Eigen-BRDFs, [cluster][component][view][light][rgb]; half values. */
+    std::vector<float> eigenBrdfs;
+
+protected:
+    int _clusters = 0, _components = 0;
+    DirectionLookup _viewLookup, _lightLookup;
+};
+
+class LpcaMaterial : public MethodMaterial<LpcaMaterial, LpcaData> {
 public:
+    static constexpr const char* kMethod = "lpca";
+
     LpcaMaterial() = default;
-    LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
-    /** Copies `other` (same method) into this material; see Material::assignFrom. */
-    void assignFrom(const Material& other) override;
+    LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, LpcaMaterial)
 
         /** Fits the model (LpcaFit.cpp). Options: see LpcaSettings. Fills fitInfo with "seconds",
@@ -62,7 +77,6 @@ public:
                                               const DirectionSet& lights, int clusters,
                                               int components);
 
-    std::string methodName() const override { return "lpca"; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
@@ -80,13 +94,6 @@ public:
         return eigenBrdfs.data() + (std::size_t(k) * _components + i) * eigenBrdfSize();
     }
 
-    /** Per texel (rows bottom-up): cluster index, 0 .. clusters-1. */
-    std::vector<std::uint8_t> clusterOf;
-    /** Per texel: c weights, [texel][component]; half values. */
-    std::vector<float> weights;
-    /** Per cluster: c Eigen-BRDFs, [cluster][component][view][light][rgb]; half values. */
-    std::vector<float> eigenBrdfs;
-
     /** Call after changing the arrays' shape by hand: checks sizes, rebuilds the direction
      *  lookups. */
     void finishSetup(int clusters, int components);
@@ -96,8 +103,6 @@ protected:
 
 private:
     friend struct LpcaFitter;
-    int _clusters = 0, _components = 0;
-    DirectionLookup _viewLookup, _lightLookup;
 };
 
 /** A Texture2DArray for `texture` even when its depth is 1 (createFloatTexture makes a Texture2D

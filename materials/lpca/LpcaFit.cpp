@@ -1,6 +1,6 @@
 // LPCA fit: generalised Lloyd iteration of local PCA (Kambhatla & Leen 1997, as Müller et al.
-// 2003 use it), trained on a random subsample of the texels as seed 001 section 4.4 says it can
-// be ("does not require the full dataset for training"), then every texel is assigned to the
+// 2003 use it), trained on a random subsample of the texels as Meseth et al. 2003 section 4.4 says
+// it can be ("does not require the full dataset for training"), then every texel is assigned to the
 // cluster that reconstructs it best and projected onto that cluster's Eigen-BRDFs.
 //
 // Each cluster is the best rank-c linear subspace of its members (mean folded in, README.md):
@@ -251,7 +251,7 @@ LpcaSettings LpcaSettings::fromValues(const OptionValues& values) {
 }
 
 LpcaSettings LpcaSettings::fromOptions(const FitOptions& options) {
-    return fromValues(validateOptions("lpca", options));
+    return fromValues(validateOptions(LpcaMaterial::kMethod, options));
 }
 
 struct LpcaFitter {
@@ -469,10 +469,7 @@ osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const BtfSource& btf, const LpcaSetti
 
 namespace {
 // The fit hook of the method registered in Lpca.cpp (libosgBTF).
-const bool fitterRegistered =
-    registerFitter("lpca", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return LpcaMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<LpcaMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

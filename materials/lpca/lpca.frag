@@ -1,6 +1,6 @@
 #version 330 compatibility
-// Method "lpca" (materials/lpca/Lpca.h): clustered local PCA, the original rendering of seed 000
-// section 5. Per component the Eigen-BRDF is interpolated by hand over the 3 nearest measured
+// Method "lpca" (materials/lpca/Lpca.h): clustered local PCA, the original rendering of Schneider
+// 2004 section 5. Per component the Eigen-BRDF is interpolated by hand over the 3 nearest measured
 // views x 3 nearest lights (the exact Delaunay weights), then weighted by the texel's alpha_i.
 // LpcaMaterial::evaluate is the same arithmetic on the CPU.
 #pragma include "common/btf_main.glsl"

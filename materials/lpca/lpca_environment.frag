@@ -1,11 +1,11 @@
 #version 330 compatibility
-// Environment lighting of method "lpca" (seed 004 section 5.2 for clustered PCA): the per-vertex
-// data are the projected environment g itself (one RGB value per measured light), because folding
-// it into every cluster's Eigen-BRDFs per vertex would be clusters x components x views values
-// and a triangle spans texels of many clusters. The fragment blends g across the triangle (equal
-// to blending folded data: folding is linear) and folds it into its own cluster's Eigen-BRDFs for
-// its nearest views: lights x (3 + 3 x components) fetches. Same sums as evaluateFoldedLpca
-// (materials/EnvironmentLighting.h), in light-outer order.
+// Environment lighting of method "lpca" (Sattler et al. 2003 section 5.2 for clustered PCA): the
+// per-vertex data are the projected environment g itself (one RGB value per measured light),
+// because folding it into every cluster's Eigen-BRDFs per vertex would be clusters x components x
+// views values and a triangle spans texels of many clusters. The fragment blends g across the
+// triangle (equal to blending folded data: folding is linear) and folds it into its own cluster's
+// Eigen-BRDFs for its nearest views: lights x (3 + 3 x components) fetches. Same sums as
+// evaluateFoldedLpca (materials/EnvironmentLighting.h), in light-outer order.
 #pragma include "common/environment.glsl"
 #pragma include "common/directions.glsl"
 

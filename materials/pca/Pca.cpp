@@ -43,25 +43,6 @@ double bytesPerValue(MaterialTexture::PixelKind kind) {
 
 }  // namespace
 
-PcaMaterial::PcaMaterial(const PcaMaterial& other, const osg::CopyOp& copyop)
-    : Material(other, copyop),
-      eigenTextures(other.eigenTextures),
-      weights(other.weights),
-      _components(other._components),
-      _tileColumns(other._tileColumns),
-      _viewLookup(other._viewLookup),
-      _lightLookup(other._lightLookup) {}
-
-void PcaMaterial::assignFrom(const Material& other) {
-    const PcaMaterial& o = assignCommon<PcaMaterial>(other);
-    eigenTextures = o.eigenTextures;
-    weights = o.weights;
-    _components = o._components;
-    _tileColumns = o._tileColumns;
-    _viewLookup = o._viewLookup;
-    _lightLookup = o._lightLookup;
-}
-
 void PcaMaterial::setShape(int width, int height, const DirectionSet& views,
                            const DirectionSet& lights, int components,
                            MaterialTexture::PixelKind storage) {
@@ -221,9 +202,8 @@ osg::ref_ptr<osg::StateSet> PcaMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<PcaMaterial>([] {
     MethodInfo m;
-    m.name = kPcaMethodName;
     m.description =
         "per-view Eigen-Textures (Sattler 2003): rank-c PCA of each view's light images, "
         "3x3 view/light interpolation; 3888 values / 3888 bytes per texel at 81 views, 16 "
@@ -234,10 +214,6 @@ const bool registered = registerMethod([] {
         OptionSpec::choice("storage", "unorm8", {"unorm8", "half", "float"},
                            "Eigen-Texture precision: unorm8 is 1 byte per value, as Meseth et "
                            "al. 2003, Table 2, counts")};
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return PcaMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new PcaMaterial; };
     // Per-texel Eigen-Texture values times per-direction weights; pca.frag blends the four
     // texels itself (tiled components).
     m.filtersParameters = true;
@@ -275,6 +251,7 @@ const bool registered = registerMethod([] {
 }  // namespace
 
 // The tables every texel shares; the other textures are per texel (remapMaterial).
-[[maybe_unused]] const bool sharedTexturesDeclared = declareSharedTextures("pca", {"weights"});
+[[maybe_unused]] const bool sharedTexturesDeclared =
+    declareSharedTextures(PcaMaterial::kMethod, {"weights"});
 
 }  // namespace osgBTF

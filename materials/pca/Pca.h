@@ -1,5 +1,5 @@
-// osgBTF method "pca": per-view Eigen-Textures (Sattler, Sarlette, Klein 2003; seed 004 section 4,
-// seed 001 section 3.4, equation 6).
+// osgBTF method "pca": per-view Eigen-Textures (Sattler, Sarlette, Klein 2003; Sattler et al. 2003
+// section 4, Meseth et al. 2003 section 3.4, equation 6).
 //
 //   BTF(x, v, l) ~ sum_{v' in N(v), l' in N(l)} w_v' w_l' * sum_{k<c} alpha_k(v', l') E_{k,v'}(x)
 //
@@ -7,18 +7,18 @@
 // RGB image per column). Its best rank-c approximation (truncated SVD, Eckart-Young) gives c
 // Eigen-Textures E_{k,v} (RGB images, the left singular vectors) and weights alpha_k(v, l). Seed
 // 004 eq. 1 writes the reconstruction without a mean image (the text mentions an "affine
-// subspace", but eq. 1 and seed 001 eq. 6 have none, and the 3888 values of seed 001 Table 2 =
-// 81 x 16 x 3 leave no room for one): we follow the equations, a linear rank-c subspace.
-// N(v), N(l) are the (up to) 3 measured directions of the Delaunay interpolation and w their
-// exact barycentric weights (materials/DirectionLookup.h, the same on CPU and GPU).
+// subspace", but eq. 1 and Meseth et al. 2003 eq. 6 have none, and the 3888 values of Meseth et al.
+// 2003 Table 2 = 81 x 16 x 3 leave no room for one): we follow the equations, a linear rank-c
+// subspace. N(v), N(l) are the (up to) 3 measured directions of the Delaunay interpolation and w
+// their exact barycentric weights (materials/DirectionLookup.h, the same on CPU and GPU).
 //
-// Storage (option storage): Eigen-Textures as unorm8 (the default, as seed 001 Table 2 counts:
-// 1 byte per value), half or float. For unorm8 every Eigen-Texture channel is mapped to [0, 1] by
-// its own offset and range, E = offset + range * q, and both are folded into the weights table:
-// the stored RGB weight of component k is alpha_k * range_k, and one extra RGB "bias" entry per
-// (view, light) holds sum_k alpha_k * offset_k. After quantisation the weights alpha are refitted
-// by least squares against the quantised Eigen-Textures, so they are the best for what is stored.
-// The weights table is float (it is tiny and shared by all texels).
+// Storage (option storage): Eigen-Textures as unorm8 (the default, as Meseth et al. 2003 Table 2
+// counts: 1 byte per value), half or float. For unorm8 every Eigen-Texture channel is mapped to [0,
+// 1] by its own offset and range, E = offset + range * q, and both are folded into the weights
+// table: the stored RGB weight of component k is alpha_k * range_k, and one extra RGB "bias" entry
+// per (view, light) holds sum_k alpha_k * offset_k. After quantisation the weights alpha are
+// refitted by least squares against the quantised Eigen-Textures, so they are the best for what is
+// stored. The weights table is float (it is tiny and shared by all texels).
 //
 // GPU layout: Eigen-Textures in one 2D array texture, one layer per view, the c components tiled
 // in a grid of tileColumns x tileRows (width * tileColumns <= 16384) inside the layer; weights in
@@ -28,19 +28,34 @@
 #include <vector>
 
 #include "materials/DirectionLookup.h"
-#include "materials/Material.h"
+#include "materials/MethodMaterial.h"
 
 namespace osgBTF {
 
 /** The method's registry name, for code outside this folder that singles pca out. */
 inline constexpr char kPcaMethodName[] = "pca";
 
-class PcaMaterial : public Material {
+/** PcaMaterial's members (materials/MethodMaterial.h). */
+struct PcaData {
+    /** Stored Eigen-Textures: q in [0, 1] for unorm8 (held as bytes, 0..255), E itself for half
+     *  and float. RGB. */
+    MaterialTexture eigenTextures;
+    /** Float RGB weights: (components + 1) x lights per view layer; slot `components` = bias. */
+    MaterialTexture weights;
+
+protected:
+    int _components = 0;
+    int _tileColumns = 1;
+    DirectionLookup _viewLookup, _lightLookup;
+};
+
+class PcaMaterial : public MethodMaterial<PcaMaterial, PcaData> {
 public:
+    static constexpr const char* kMethod = kPcaMethodName;
+
     PcaMaterial() = default;
-    PcaMaterial(const PcaMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
-    /** Copies `other` (same method) into this material; see Material::assignFrom. */
-    void assignFrom(const Material& other) override;
+    PcaMaterial(const PcaMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, PcaMaterial)
 
         /** Options: components (default 16), storage (unorm8 | half | float, default unorm8).
@@ -55,7 +70,6 @@ public:
     void setShape(int width, int height, const DirectionSet& views, const DirectionSet& lights,
                   int components, MaterialTexture::PixelKind storage);
 
-    std::string methodName() const override { return kPcaMethodName; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
@@ -63,7 +77,8 @@ public:
     FittedMaterial releaseFittedMaterial() override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
-    /** Seed 001 Table 2 counts per-texel storage; the weights table is shared by all texels. */
+    /** Meseth et al. 2003 Table 2 counts per-texel storage; the weights table is shared by all
+     * texels. */
     struct MemoryBreakdown {
         double perTexelValues = 0, perTexelBytes = 0;  ///< Eigen-Textures
         double sharedValues = 0, sharedBytes = 0;      ///< weights table / texel count
@@ -99,21 +114,11 @@ public:
         return ((view * _lights.size() + light) * std::size_t(_components + 1) + k) * 3;
     }
 
-    /** Stored Eigen-Textures: q in [0, 1] for unorm8 (held as bytes, 0..255), E itself for half
-     *  and float. RGB. */
-    MaterialTexture eigenTextures;
-    /** Float RGB weights: (components + 1) x lights per view layer; slot `components` = bias. */
-    MaterialTexture weights;
-
 protected:
     ~PcaMaterial() override = default;
 
 private:
     void prepareLookups();
-
-    int _components = 0;
-    int _tileColumns = 1;
-    DirectionLookup _viewLookup, _lightLookup;
 };
 
 /** PCA environment folding for one vertex (g: the environment projected onto the measured light

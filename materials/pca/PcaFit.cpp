@@ -65,7 +65,7 @@ void quantise(const float* e, std::size_t rows, MaterialTexture::PixelKind kind,
 
 osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
-    const OptionValues o = validateOptions("pca", options);
+    const OptionValues o = validateOptions(kMethod, options);
     if (btf.empty()) throw Error("pca: the BTF is empty");
     const int components = o.integer("components");
     const MaterialTexture::PixelKind storage = storageKind(o.choice("storage"));
@@ -166,10 +166,7 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const BtfSource& btf, const FitOption
 
 namespace {
 // The fit hook of the method registered in Pca.cpp (libosgBTF).
-const bool fitterRegistered =
-    registerFitter("pca", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return PcaMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<PcaMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

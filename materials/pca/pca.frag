@@ -1,6 +1,6 @@
 #version 330 compatibility
-// Method "pca" (materials/pca/Pca.h): per-view Eigen-Textures, seed 001 eq. 6. The same loops as
-// PcaMaterial::evaluate/combination on the CPU, so both agree to float rounding.
+// Method "pca" (materials/pca/Pca.h): per-view Eigen-Textures, Meseth et al. 2003 eq. 6. The same
+// loops as PcaMaterial::evaluate/combination on the CPU, so both agree to float rounding.
 #pragma include "common/btf_main.glsl"
 #pragma include "common/directions.glsl"
 

@@ -1,8 +1,8 @@
 #version 330 compatibility
-// Environment lighting of method "pca" (seed 004 section 5.2): per measured view j the folded
-// weights gamma*_kj = sum_i g_i alpha_k(j, i) replace the light interpolation, so a fragment
-// costs what one point light costs. Slots per view: the components, then the unorm8 bias. The
-// same loops as evaluateFoldedPca (materials/EnvironmentLighting.h).
+// Environment lighting of method "pca" (Sattler et al. 2003 section 5.2): per measured view j the
+// folded weights gamma*_kj = sum_i g_i alpha_k(j, i) replace the light interpolation, so a fragment
+// costs what one point light costs. Slots per view: the components, then the unorm8 bias. The same
+// loops as evaluateFoldedPca (materials/EnvironmentLighting.h).
 #pragma include "common/environment.glsl"
 #pragma include "common/directions.glsl"
 

@@ -35,27 +35,6 @@ float PtmMaterial::toStorage(double value, MaterialTexture::PixelKind kind) {
     return kind == MaterialTexture::Float ? float(value) : roundHalf(value);
 }
 
-PtmMaterial::PtmMaterial(const PtmMaterial& other, const osg::CopyOp& copyop)
-    : Material(other, copyop),
-      coefficients(other.coefficients),
-      colour(other.colour),
-      _shape(other._shape),
-      _slots(other._slots),
-      _frontView(other._frontView),
-      _viewLookup(other._viewLookup),
-      _lightVectors(other._lightVectors) {}
-
-void PtmMaterial::assignFrom(const Material& other) {
-    const PtmMaterial& o = assignCommon<PtmMaterial>(other);
-    coefficients = o.coefficients;
-    colour = o.colour;
-    _shape = o._shape;
-    _slots = o._slots;
-    _frontView = o._frontView;
-    _viewLookup = o._viewLookup;
-    _lightVectors = o._lightVectors;
-}
-
 void PtmMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
                            Shape shape, std::size_t frontView) {
     if (width <= 0 || height <= 0)
@@ -191,7 +170,7 @@ void PtmMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
 
 MemoryFootprint PtmMaterial::memory() const {
     // Per-texel arrays only; the view table (views=all) is derived from the direction set, not
-    // fitted data, and seed 002 Table 2 has nothing shared to count.
+    // fitted data, and Boßerhoff and Nicoll 2003 Table 2 has nothing shared to count.
     const double values = double(coefficients.size() + colour.size());
     const double bytes = values * bytesPerValue(_shape.storage);
     return {values / double(texelCount()), bytes / double(texelCount()), std::uint64_t(bytes)};
@@ -283,9 +262,8 @@ osg::ref_ptr<osg::StateSet> PtmMaterial::createStateSet() const {
 // ---- registration ------------------------------------------------------------------------------
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<PtmMaterial>([] {
     MethodInfo m;
-    m.name = "ptm";
     m.description =
         "polynomial texture maps (Malzbender 2001, as Boßerhoff and Nicoll 2003 use them): per "
         "texel a biquadratic in the "
@@ -302,10 +280,6 @@ const bool registered = registerMethod([] {
                            "over the 3 Delaunay-neighbour views"),
         OptionSpec::choice("storage", "half", {"half", "float"},
                            "precision of the coefficients and the colour")};
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return PtmMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new PtmMaterial; };
     // A polynomial in the light whose coefficients are per texel (luminance materials excepted:
     // PtmMaterial::linearInParameters).
     m.filtersParameters = true;

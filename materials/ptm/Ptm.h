@@ -1,5 +1,5 @@
-// osgBTF method "ptm": Polynomial Texture Maps (Malzbender, Gelb, Wolters 2001) as seed 002 section
-// 3.1 uses them for BTFs (Boßerhoff, Nicoll).
+// osgBTF method "ptm": Polynomial Texture Maps (Malzbender, Gelb, Wolters 2001) as Boßerhoff and
+// Nicoll 2003 section 3.1 uses them for BTFs (Boßerhoff, Nicoll).
 //
 //   P(x, l) = a0(x) lx^2 + a1(x) ly^2 + a2(x) lx ly + a3(x) lx + a4(x) ly + a5(x)
 //
@@ -10,7 +10,7 @@
 //              per-texel RGB base colour: value = colour(x) * P(x, l), 6 + 3 values per texel.
 // and two view models (option views):
 //   front      one PTM fitted on the measured view nearest the normal and used for every view
-//              (the seed's setting: "a fixed front-view");
+//              (the paper's setting: "a fixed front-view");
 //   all        one PTM per measured view, blended over the (up to) 3 Delaunay-neighbour views with
 //              the exact weights of materials/DirectionLookup.h, as rf and pca blend.
 // The rendered value is max(0, sum_j w_j P_{v_j}(x, l)) per channel: measured values are never
@@ -22,7 +22,7 @@
 //
 // Fit: the lights' design matrix A (rows (lx^2, ly^2, lx ly, lx, ly, 1)) is the same for every
 // texel and view, so its pseudo-inverse A+ (Eigen JacobiSVD, singular values below the rank
-// threshold clamped to zero, as the seed clamps "small eigenvalues") is computed once; each view's
+// threshold clamped to zero, as the paper clamps "small eigenvalues") is computed once; each view's
 // coefficients are one product A+ Y with Y the view's images (one column per texel and channel).
 // Luminance: the least-squares fit is linear in the data, so the luminance PTM is the same
 // combination of the three channel PTMs; after rounding it to storage, the base colour is the
@@ -42,17 +42,12 @@
 #include <vector>
 
 #include "materials/DirectionLookup.h"
-#include "materials/Material.h"
+#include "materials/MethodMaterial.h"
 
 namespace osgBTF {
 
-class PtmMaterial : public Material {
-public:
-    /** Terms of the biquadratic. */
-    static constexpr int kTerms = 6;
-    /** Rec. 709 luminance weights of R, G, B (they sum to 1). */
-    static constexpr std::array<double, 3> kLuminance{0.2126, 0.7152, 0.0722};
-
+/** PtmMaterial's members (materials/MethodMaterial.h). */
+struct PtmData {
     /** The shape of a model: what the options choose. */
     struct Shape {
         bool luminance = false;  ///< colour=luminance (else rgb)
@@ -60,10 +55,31 @@ public:
         MaterialTexture::PixelKind storage = MaterialTexture::Half;
     };
 
+    /** [slot * layersPerSlot() + layer][y][x][3], rows bottom-up (the texture's layout). */
+    std::vector<float> coefficients;
+    /** Luminance only: [slot][y][x][rgb]; empty for rgb. */
+    std::vector<float> colour;
+
+protected:
+    Shape _shape;
+    int _slots = 0;
+    std::size_t _frontView = 0;
+    DirectionLookup _viewLookup;           ///< views=all only
+    std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
+};
+
+class PtmMaterial : public MethodMaterial<PtmMaterial, PtmData> {
+public:
+    static constexpr const char* kMethod = "ptm";
+
+    /** Terms of the biquadratic. */
+    static constexpr int kTerms = 6;
+    /** Rec. 709 luminance weights of R, G, B (they sum to 1). */
+    static constexpr std::array<double, 3> kLuminance{0.2126, 0.7152, 0.0722};
+
     PtmMaterial() = default;
-    PtmMaterial(const PtmMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
-    /** Copies `other` (same method) into this material; see Material::assignFrom. */
-    void assignFrom(const Material& other) override;
+    PtmMaterial(const PtmMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, PtmMaterial)
 
         /** Fits the model (see the file comment). Options: colour, views, storage. Throws Error
@@ -78,7 +94,6 @@ public:
                                             DirectionSet lights, Shape shape,
                                             std::size_t frontView = 0);
 
-    std::string methodName() const override { return "ptm"; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
@@ -108,11 +123,6 @@ public:
     /** A value at the storage precision (half or float), as the fitter stores it. */
     static float toStorage(double value, MaterialTexture::PixelKind kind);
 
-    /** [slot * layersPerSlot() + layer][y][x][3], rows bottom-up (the texture's layout). */
-    std::vector<float> coefficients;
-    /** Luminance only: [slot][y][x][rgb]; empty for rgb. */
-    std::vector<float> colour;
-
 protected:
     ~PtmMaterial() override = default;
     /** Luminance materials multiply two per-texel parameters (colour and luminance). */
@@ -126,12 +136,6 @@ protected:
 private:
     void setShape(int width, int height, DirectionSet views, DirectionSet lights, Shape shape,
                   std::size_t frontView);
-
-    Shape _shape;
-    int _slots = 0;
-    std::size_t _frontView = 0;
-    DirectionLookup _viewLookup;           ///< views=all only
-    std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
 };
 
 }  // namespace osgBTF

@@ -40,7 +40,7 @@ Design makeDesign(const DirectionSet& lights) {
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
     const Eigen::VectorXd& s = svd.singularValues();
     // Singular values at the level of rounding are no information about the data: clamped to zero
-    // (the seed's "clamp small eigenvalues"), so fewer than 6 lights, or lights on one line, give
+    // (the paper's "clamp small eigenvalues"), so fewer than 6 lights, or lights on one line, give
     // the minimum-norm polynomial instead of amplified noise. Eigen's own rank threshold.
     const double threshold =
         s.size() > 0 ? s(0) * double(std::max<Eigen::Index>(n, PtmMaterial::kTerms)) * DBL_EPSILON
@@ -91,14 +91,14 @@ void storeTexel(PtmMaterial& m, const Design& design, std::size_t texel, int slo
 
 osg::ref_ptr<PtmMaterial> PtmMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
-    const OptionValues o = validateOptions("ptm", options);
+    const OptionValues o = validateOptions(kMethod, options);
     if (btf.empty()) throw Error("ptm: the BTF is empty");
     Shape shape;
     shape.luminance = o.choice("colour") == "luminance";
     shape.perView = o.choice("views") == "all";
     shape.storage = o.choice("storage") == "float" ? MaterialTexture::Float : MaterialTexture::Half;
 
-    // The measured view nearest the normal (the seed's front view).
+    // The measured view nearest the normal (the paper's front view).
     std::size_t front = 0;
     for (std::size_t v = 1; v < btf.viewCount(); ++v)
         if (btf.views().vector(v).z > btf.views().vector(front).z) front = v;
@@ -182,10 +182,7 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fit(const BtfSource& btf, const FitOption
 
 namespace {
 // The fit hook of the method registered in Ptm.cpp (libosgBTF).
-const bool fitterRegistered =
-    registerFitter("ptm", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return PtmMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<PtmMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

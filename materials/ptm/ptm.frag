@@ -1,5 +1,6 @@
 #version 330 compatibility
-// Method "ptm" (materials/ptm/Ptm.h): polynomial texture maps, seed 002 section 3.1,
+// Method "ptm" (materials/ptm/Ptm.h): polynomial texture maps, Boßerhoff and Nicoll 2003 section
+// 3.1,
 //   P(x, l) = a0 lx^2 + a1 ly^2 + a2 lx ly + a3 lx + a4 ly + a5,
 // per channel (rgb) or on the luminance times a base colour; one PTM for every view (front) or
 // one per measured view blended over the 3 views around the view direction with the exact

@@ -63,27 +63,6 @@ constexpr int kMaxLayers = 2048;  // GL_MAX_ARRAY_TEXTURE_LAYERS guaranteed by G
 
 }  // namespace
 
-RfMaterial::RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop)
-    : Material(other, copyop),
-      rhoD(other.rhoD),
-      rhoV(other.rhoV),
-      lobes(other.lobes),
-      _lobes(other._lobes),
-      _variant(other._variant),
-      _viewLookup(other._viewLookup),
-      _lightVectors(other._lightVectors) {}
-
-void RfMaterial::assignFrom(const Material& other) {
-    const RfMaterial& o = assignCommon<RfMaterial>(other);
-    rhoD = o.rhoD;
-    rhoV = o.rhoV;
-    lobes = o.lobes;
-    _lobes = o._lobes;
-    _variant = o._variant;
-    _viewLookup = o._viewLookup;
-    _lightVectors = o._lightVectors;
-}
-
 void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
                           int lobeCount, Variant variant) {
     if (width <= 0 || height <= 0)
@@ -138,7 +117,7 @@ void RfMaterial::roundToStorage() {
 // ---- options ---------------------------------------------------------------------------------
 
 RfMaterial::Settings RfMaterial::settingsFrom(const FitOptions& options) {
-    const OptionValues o = validateOptions("rf", options);
+    const OptionValues o = validateOptions(kMethod, options);
     Settings s;
     s.lobes = o.integer("lobes");
     s.iterations = o.integer("iterations");
@@ -200,7 +179,7 @@ void RfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
 
 MemoryFootprint RfMaterial::memory() const {
     // Per-texel arrays only: the baked view table is derived from the direction set, not fitted
-    // data (seed 001 Table 2 does not count it either).
+    // data (Meseth et al. 2003 Table 2 does not count it either).
     MemoryFootprint footprint;
     for (const StoredArray& a : storedArrays(_views.size(), _lobes, _variant)) {
         const std::vector<float>& data = this->*a.member;
@@ -297,10 +276,9 @@ osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
 // ---- registration ----------------------------------------------------------------------------
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<RfMaterial>([] {
     const RfMaterial::Settings defaults;
     MethodInfo m;
-    m.name = "rf";
     m.description =
         "reflectance fields (Meseth 2003): per measured view, rho_d + rho_v(v) RGB x k light "
         "lobes (a l_x + b l_y + c l_z)^n, views blended with interpolation weights; diffuse=0 "
@@ -328,10 +306,6 @@ const bool registered = registerMethod([] {
                            "Boßerhoff and Nicoll 2003 with its base colour); rgb: k lobes per view "
                            "and colour channel (their RGB model; 3x the lobe layers: Bonn's 81 "
                            "views take up to 8, UBO2014's 151 up to 4)")};
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return RfMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new RfMaterial; };
     m.shaderCost = [](const Material& material) {
         // View lookup, rhoD (fetched from a black 1x1 texture without the diffuse term); per
         // blended view (3): weight test, rhoV fetch, per lobe: layer index 2, 3-term dot 5,

@@ -1,4 +1,5 @@
-// osgBTF method "rf": reflectance fields (Meseth, Müller, Klein 2003; seed 001 section 3.3).
+// osgBTF method "rf": reflectance fields (Meseth, Müller, Klein 2003; Meseth et al. 2003
+// section 3.3).
 //
 // For every measured view v the texel's reflectance field (fixed view, varying light) is a
 // diffuse term plus an RGB albedo times k Lafortune-like lobes in the light direction only:
@@ -13,17 +14,19 @@
 //
 // rho_d, rho_v RGB; the lobes are scalar (luminance), so colour varies only through rho_v.
 //
-// Seed 002's per-view Lafortune BTF (section 3.2) is this model with two options (README.md):
-// diffuse=0 drops rho_d (its lobes have no diffuse term), and colour=rgb gives every colour
-// channel its own k lobes (its RGB model, 2 lobes per channel), rho_v then a per-channel scale:
+// Boßerhoff and Nicoll 2003's per-view Lafortune BTF (section 3.2) is this model with two options
+// (README.md): diffuse=0 drops rho_d (its lobes have no diffuse term), and colour=rgb gives every
+// colour channel its own k lobes (its RGB model, 2 lobes per channel), rho_v then a per-channel
+// scale:
 //
 //   RF_v(x, l)_c = [rho_d(x)_c +] rho_v(x, v)_c * sum_i max(0, (a, b, c)_vci(x) . l)^n_vci(x)
 //
-// With the view fixed, the seed's Lafortune lobe [C_x u_x v_x + C_y u_y v_y + C_z u_z v_z]^n is
+// With the view fixed, the Lafortune lobe of Boßerhoff and Nicoll 2003 [C_x u_x v_x + C_y u_y v_y +
+// C_z u_z v_z]^n is
 // ((C_x v_x, C_y v_y, C_z v_z) . u)^n: exactly this lobe in the light direction.
-// seed 001's equation (5) writes the lobe as a dot product without the exponent in the garbled
-// text extraction; the exponent n is Meseth's definition ("similar to the Lafortune lobes") and
-// the value count of Table 2 (4 values per lobe) confirms it. max(0, .) keeps a lobe's base
+// Meseth et al. 2003's equation (5) writes the lobe as a dot product without the exponent in the
+// garbled text extraction; the exponent n is Meseth's definition ("similar to the Lafortune lobes")
+// and the value count of Table 2 (4 values per lobe) confirms it. max(0, .) keeps a lobe's base
 // non-negative so any real exponent is defined (the shader does the same).
 //
 // Storage (values / bytes per texel with V views and k lobes; Table 2 with V = 81, k = 2):
@@ -44,17 +47,37 @@
 #include <vector>
 
 #include "materials/DirectionLookup.h"
-#include "materials/Material.h"
+#include "materials/MethodMaterial.h"
 
 namespace osgBTF {
 
-class RfMaterial : public Material {
-public:
+/** RfMaterial's members (materials/MethodMaterial.h). */
+struct RfData {
     /** The model's terms beyond the lobe count (options "diffuse" and "colour"). */
     struct Variant {
-        bool diffuse = true;  ///< has rho_d (seed 001); false: lobes only (seed 002)
+        bool diffuse = true;  ///< has rho_d (Meseth et al. 2003); false: lobes only (Boßerhoff and
+                              ///< Nicoll 2003)
         bool rgb = false;     ///< k lobes per colour channel instead of k luminance lobes
     };
+
+    /** rho_d: [y][x][rgb], rows bottom-up; multiples of 1/255. Empty without the diffuse term. */
+    std::vector<float> rhoD;
+    /** rho_v: [view][y][x][rgb]. */
+    std::vector<float> rhoV;
+    /** Lobes: [(view * lobeChannels() + channel) * lobeCount() + lobe][y][x][a, b, c, n]. */
+    std::vector<float> lobes;
+
+protected:
+    int _lobes = 0;
+    Variant _variant;
+    DirectionLookup _viewLookup;
+    std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
+};
+
+class RfMaterial : public MethodMaterial<RfMaterial, RfData> {
+public:
+    static constexpr const char* kMethod = "rf";
+
     /** Fit settings; see settingsFrom() for the option names. */
     struct Settings {
         int lobes = 2;            ///< lobes per view (and channel with rgb), 1..8
@@ -69,9 +92,8 @@ public:
     static constexpr int kMaxLobes = 8;
 
     RfMaterial() = default;
-    RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
-    /** Copies `other` (same method) into this material; see Material::assignFrom. */
-    void assignFrom(const Material& other) override;
+    RfMaterial(const RfMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, RfMaterial)
 
         /** Reads and validates "lobes", "iterations", "starts", "max-exponent", "diffuse",
@@ -91,7 +113,6 @@ public:
     static osg::ref_ptr<RfMaterial> create(int width, int height, DirectionSet views,
                                            DirectionSet lights, int lobes);
 
-    std::string methodName() const override { return "rf"; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     MemoryFootprint memory() const override;
@@ -117,13 +138,6 @@ public:
      *  as the fitter does; call it after setting values by hand. */
     void roundToStorage();
 
-    /** rho_d: [y][x][rgb], rows bottom-up; multiples of 1/255. Empty without the diffuse term. */
-    std::vector<float> rhoD;
-    /** rho_v: [view][y][x][rgb]. */
-    std::vector<float> rhoV;
-    /** Lobes: [(view * lobeChannels() + channel) * lobeCount() + lobe][y][x][a, b, c, n]. */
-    std::vector<float> lobes;
-
 protected:
     ~RfMaterial() override = default;
 
@@ -131,11 +145,6 @@ private:
     /** Sizes the arrays and builds the view interpolation. */
     void setShape(int width, int height, DirectionSet views, DirectionSet lights, int lobes,
                   Variant variant);
-
-    int _lobes = 0;
-    Variant _variant;
-    DirectionLookup _viewLookup;
-    std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
 };
 
 }  // namespace osgBTF

@@ -198,7 +198,7 @@ private:
             maxY = std::max(maxY, y);
             energy += y * y;
         }
-        // Divergent fits (seed 001 4.4) show up as lobes whose peak, between the measured
+        // Divergent fits (Meseth et al. 2003 4.4) show up as lobes whose peak, between the measured
         // lights, is far above anything measured: refuse those.
         const double peakBound = 2.0 * maxY + 1e-3;
         _solver.options.function_tolerance = 1e-7 * energy + 1e-30;
@@ -463,10 +463,7 @@ osg::ref_ptr<RfMaterial> RfMaterial::fit(const BtfSource& btf, const FitOptions&
 
 namespace {
 // The fit hook of the method registered in Rf.cpp (libosgBTF).
-const bool fitterRegistered =
-    registerFitter("rf", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return RfMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<RfMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

@@ -2,9 +2,9 @@
 // Method "rf" (materials/rf/Rf.h): reflectance fields, one per measured view,
 //   RF_v(x, l) = rho_d(x) + rho_v(x, v) * sum_i max(0, (a, b, c)_vi(x) . l)^n_vi(x),
 // blended over the 3 measured views around the view direction with the exact Delaunay weights.
-// Seed 002's variants: without rho_d (rfDiffuse = 0) and with k lobes per colour channel
-// (rfLobeChannels = 3), rho_v then scaling each channel's own lobe sum.
-// Same float math and order as RfMaterial::evaluate, so GPU == CPU.
+// Boßerhoff and Nicoll 2003's variants: without rho_d (rfDiffuse = 0) and with k lobes per colour
+// channel (rfLobeChannels = 3), rho_v then scaling each channel's own lobe sum. Same float math and
+// order as RfMaterial::evaluate, so GPU == CPU.
 #pragma include "common/btf_main.glsl"
 #pragma include "common/directions.glsl"
 

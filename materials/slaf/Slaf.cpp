@@ -9,16 +9,6 @@ namespace osgBTF {
 
 // ---- model -----------------------------------------------------------------------------------
 
-SlafMaterial::SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop)
-    : LobeMaterial(other, copyop), scale(other.scale), _viewLookup(other._viewLookup) {}
-
-void SlafMaterial::assignFrom(const Material& other) {
-    const SlafMaterial& o = assignCommon<SlafMaterial>(other);
-    assignLobes(o);
-    scale = o.scale;
-    _viewLookup = o._viewLookup;
-}
-
 osg::ref_ptr<SlafMaterial> SlafMaterial::create(int width, int height, int lobeCount,
                                                 const DirectionSet& views,
                                                 const DirectionSet& lights) {
@@ -68,7 +58,7 @@ void SlafMaterial::evaluateMeasured(std::size_t t, float* abrdf) const {
 
 MemoryFootprint SlafMaterial::memory() const {
     // Counted from the textures as stored (the view table is shared and not counted, as in
-    // seed 001: it is 65 x 65 x 6 floats for any material size).
+    // Meseth et al. 2003: it is 65 x 65 x 6 floats for any material size).
     return footprintOf(toFittedMaterial(), texelCount());
 }
 
@@ -96,7 +86,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fromFile(const FittedMaterial& file) {
 osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
-    addLobeState(*stateSet, "slaf");
+    addLobeState(*stateSet, kMethod);
     // T as a 2D array, one layer per measured view (81 or 151 layers, well below GL's 2048).
     addTexture(*stateSet,
                createFloatTexture(
@@ -108,9 +98,8 @@ osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethod([] {
+const bool registered = registerMethodClass<SlafMaterial>([] {
     MethodInfo m;
-    m.name = "slaf";
     m.description =
         "scaled Lafortune lobes (Daubert): T(v) * (rho_d + rho_s * sum_k (C . v*l)^n), T an RGB "
         "table over the measured views; 257 values / 508 bytes per texel at 81 views, 2 lobes";
@@ -123,10 +112,6 @@ const bool registered = registerMethod([] {
         OptionSpec::flag(
             "cosine", true,
             "1: the bracket times l_z; 0: Meseth et al. 2003, eq. 4, literally (see laf)")};
-    m.load = [](const FittedMaterial& f) -> osg::ref_ptr<Material> {
-        return SlafMaterial::fromFile(f);
-    };
-    m.createInstance = []() -> osg::Object* { return new SlafMaterial; };
     m.shaderCost = [](const Material& material) {
         // View lookup; T: 3 multiply-adds and 3 fetches; v*l 1; lobes as LAF; bracket 5; T* 1.
         const SlafMaterial& m = static_cast<const SlafMaterial&>(material);

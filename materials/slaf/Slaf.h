@@ -1,35 +1,48 @@
-// osgBTF method "slaf": scaled Lafortune lobes (Daubert et al. 2001; seed 001 section 3.2).
+// osgBTF method "slaf": scaled Lafortune lobes (Daubert et al. 2001; Meseth et al. 2003
+// section 3.2).
 //
 //   BTF(x, v, l) ~ T(x, v) * (rho_d(x) + rho_s(x) * sum_{i<k} max(C_i . (v * l), 0)^n_i) * l_z
 //
 // (l_z with option cosine=1, the default, as for LAF: materials/laf/Laf.h explains why.)
-// The LAF term (materials/laf/Laf.h: RGB albedos, scalar luminance lobes, as seed 001 limits SLAF
-// to luminance lobes with a specular albedo) scaled per texel by an RGB table T over the measured
-// view directions, which captures view-dependent masking and parallax that lobes cannot. Between
-// measured views T is blended with the direction interpolation of core/DirectionInterpolation.h
-// (exact Delaunay weights, materials/DirectionLookup.h, the same on CPU and GPU). Values include
-// the cosine term.
+// The LAF term (materials/laf/Laf.h: RGB albedos, scalar luminance lobes, as Meseth et al. 2003
+// limits SLAF to luminance lobes with a specular albedo) scaled per texel by an RGB table T over
+// the measured view directions, which captures view-dependent masking and parallax that lobes
+// cannot. Between measured views T is blended with the direction interpolation of
+// core/DirectionInterpolation.h (exact Delaunay weights, materials/DirectionLookup.h, the same on
+// CPU and GPU). Values include the cosine term.
 //
 // The bracket, its storage and the fitter are LobeMaterial's (materials/laf/LobeMaterial.h),
 // shared with LAF, which is this model with T fixed at 1.
 //
-// Storage (seed 001 Table 2: 257 values, 508 bytes per texel at 81 views, k = 2): rho_d, rho_s
-// 8-bit (6 values, 6 bytes), lobes half (8 values, 16 bytes), T half (81 x 3 values, 486 bytes).
+// Storage (Meseth et al. 2003 Table 2: 257 values, 508 bytes per texel at 81 views, k = 2): rho_d,
+// rho_s 8-bit (6 values, 6 bytes), lobes half (8 values, 16 bytes), T half (81 x 3 values, 486
+// bytes).
 #pragma once
 
 #include <vector>
 
 #include "materials/DirectionLookup.h"
+#include "materials/MethodMaterial.h"
 #include "materials/laf/LobeMaterial.h"
 
 namespace osgBTF {
 
-class SlafMaterial : public LobeMaterial {
+/** SlafMaterial's members beyond LobeMaterial's (materials/MethodMaterial.h). */
+struct SlafData {
+    /** [view][y][x][rgb], half-representable values >= 0. */
+    std::vector<float> scale;
+
+protected:
+    DirectionLookup _viewLookup;
+};
+
+class SlafMaterial : public MethodMaterial<SlafMaterial, SlafData, LobeMaterial> {
 public:
+    static constexpr const char* kMethod = "slaf";
+
     SlafMaterial() = default;
-    SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
-    /** Copies `other` (same method) into this material; see Material::assignFrom. */
-    void assignFrom(const Material& other) override;
+    SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, SlafMaterial)
 
         /** Options: lobes (1..8, default 2), iterations (LM iterations per texel and round, 1..500,
@@ -42,7 +55,6 @@ public:
     static osg::ref_ptr<SlafMaterial> create(int width, int height, int lobes,
                                              const DirectionSet& views, const DirectionSet& lights);
 
-    std::string methodName() const override { return "slaf"; }
     const DirectionLookup& viewLookup() const { return _viewLookup; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
@@ -50,17 +62,12 @@ public:
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
-    /** [view][y][x][rgb], half-representable values >= 0. */
-    std::vector<float> scale;
-
 protected:
     ~SlafMaterial() override = default;
 
 private:
     /** Builds the view interpolation; called once the views are known. */
     void prepare();
-
-    DirectionLookup _viewLookup;
 };
 
 }  // namespace osgBTF

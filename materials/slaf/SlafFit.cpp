@@ -8,7 +8,7 @@ namespace osgBTF {
 // ---- fitter: LobeMaterial's, with the view table T fitted ------------------------------------
 
 osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const BtfSource& btf, const FitOptions& options) {
-    const OptionValues o = validateOptions("slaf", options);
+    const OptionValues o = validateOptions(kMethod, options);
     const int rounds = o.integer("rounds");
     if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
         throw Error("slaf: cannot fit an empty BTF");
@@ -23,10 +23,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const BtfSource& btf, const FitOpti
 
 namespace {
 // The fit hook of the method registered in Slaf.cpp (libosgBTF).
-const bool fitterRegistered =
-    registerFitter("slaf", [](const BtfSource& btf, const FitOptions& o) -> osg::ref_ptr<Material> {
-        return SlafMaterial::fit(btf, o);
-    });
+const bool fitterRegistered = registerFitterClass<SlafMaterial>();
 }  // namespace
 
 }  // namespace osgBTF
