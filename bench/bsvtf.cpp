@@ -1,4 +1,4 @@
-// Benchmark: BSVTF (seed 003 Tables 1-2 and Fig. 5) on synthetic fmf materials.
+// Benchmark: BSVTF (Schwartz et al. 2013 Tables 1-2 and Fig. 5) on synthetic fmf materials.
 // Usage: bench_bsvtf [--size 512] [--components 32] [--counts 1,5,25,100] [--width 640]
 //                    [--height 360] [--frames 3] [--cache 4032] [--quality 98]
 //                    [--requests-per-frame 8] [--work DIR]
@@ -6,13 +6,16 @@
 //   falling energy and rising frequency (component k: amplitude 1 / (k + 1), a few sinusoids of
 //   about k / 2 + 1 periods plus 5 % noise), U random: what a measured FMF looks like to the
 //   tile pyramid and the codec (the rendered colours mean nothing).
-//   1. Preprocessing (seed 003 Table 1): buildTileSet of one material: time, tiles, bytes.
-//   2. GPU memory and frame time (seed 003 Table 2) for each count N: N materials on a grid of
+//   1. Preprocessing (Schwartz et al. 2013 Table 1): buildTileSet of one material: time, tiles,
+//   bytes.
+//   2. GPU memory and frame time (Schwartz et al. 2013 Table 2) for each count N: N materials on a
+//   grid of
 //      quads filling a W x H view, as plain fmf (N texture sets: U + SxV in half) and as BSVTF
 //      (one cache, U and a LUT per material, converged for the static camera first). Memory is
 //      what the textures take; frame time is the median of `frames` timed frames (glFinish, the
 //      BSVTF frame includes its feedback pass and update).
-//   3. Progressive streaming (seed 003 Fig. 5): 25 materials (or the largest count below)
+//   3. Progressive streaming (Schwartz et al. 2013 Fig. 5): 25 materials (or the largest count
+//   below)
 //      streamed from their folder from scratch, one frame at a time, at most N new files requested
 //      per frame (a paced link: on localhost everything would arrive at once and the order
 //      would not show): bytes received and the SSIM of each frame against the converged frame.
@@ -203,7 +206,7 @@ int main(int argc, char** argv) {
             std::fflush(stdout);
         }
 
-        // Seed 003 Fig. 5: bytes received against SSIM to the converged frame.
+        // Schwartz et al. 2013 Fig. 5: bytes received against SSIM to the converged frame.
         int n = 1;
         for (int c : counts)
             if (c <= 25) n = std::max(n, c);

@@ -1,7 +1,7 @@
 #version 330 compatibility
-// BSVTF feedback pass (streaming/StreamingGroup.h, seed 003 section 3): which tile of which
-// level of which streamed material every pixel shows. Drawn with common/btf.vert over the whole
-// scene at a fraction of the screen's resolution into RGBA8: (tile x, tile y, level, material
+// BSVTF feedback pass (streaming/StreamingGroup.h, Schwartz et al. 2013 section 3): which tile of
+// which level of which streamed material every pixel shows. Drawn with common/btf.vert over the
+// whole scene at a fraction of the screen's resolution into RGBA8: (tile x, tile y, level, material
 // + 1) / 255; alpha 0 where no streamed material is (every other object, the background).
 in vec2 btfTexCoord;
 
@@ -22,8 +22,8 @@ void main() {
         return;
     }
     int L = bsvtfTile.z;
-    // Seed 003 eq. 1, l = L - log2(texels per pixel), rounded to the finer level; the small
-    // margin keeps exactly 2^k texels per pixel at L - k despite the derivatives' rounding.
+    // Schwartz et al. 2013 eq. 1, l = L - log2(texels per pixel), rounded to the finer level; the
+    // small margin keeps exactly 2^k texels per pixel at L - k despite the derivatives' rounding.
     int level = L;
     if (texelsPerPixel > 1.0) level = L - int(floor(log2(texelsPerPixel) + 0.01));
     level = clamp(level, 0, L);

@@ -1,8 +1,8 @@
-// osgBTF BSVTF: an fmf material streamed tile by tile (seed 003 sections 5-6). It renders at once,
-// from what has arrived (missing Eigen-Textures and U packets count as zero), and sharpens as the
-// TileStreamer that opened it brings tiles into the shared cache. Put it on a MaterialNode like
-// any material; the scene needs a StreamingGroup above it for the feedback pass and the updates
-// (streaming/StreamingGroup.h).
+// osgBTF BSVTF: an fmf material streamed tile by tile (Schwartz et al. 2013 sections 5-6). It
+// renders at once, from what has arrived (missing Eigen-Textures and U packets count as zero), and
+// sharpens as the TileStreamer that opened it brings tiles into the shared cache. Put it on a
+// MaterialNode like any material; the scene needs a StreamingGroup above it for the feedback pass
+// and the updates (streaming/StreamingGroup.h).
 #pragma once
 
 #include <osg/observer_ptr>
@@ -42,6 +42,17 @@ public:
      *  the packets still missing. Rebuilt when the stream changed. Throws Error when the
      *  streamer is gone. */
     osg::ref_ptr<FmfMaterial> snapshot() const;
+    /** The CPU reference of the render at texture coordinate (u, v) and level of detail `lod`
+     *  (log2 of finest texels per pixel, as GL computes it), from the tiles resident now. With
+     *  padding: per group the GL_LINEAR blend at the fragment's tile's deepest resident level
+     *  d, mixed with the one at d's parent level by lod - (L - d) clamped to [0, 1] (0 at level
+     *  0): trilinear where d is the finer of the two levels the lod falls between
+     *  (shaders/bsvtf.frag); evaluated as the snapshot's fmf material. Without padding:
+     *  evaluateFiltered, the four texels' values at their deepest levels. Equals
+     *  evaluateFiltered where lod <= 0 and every finest tile under the footprint is resident.
+     *  Material::evaluateFiltered is not virtual: call this one on the streamed material. */
+    glm::vec3 evaluateResidentFiltered(float u, float v, float lod, const glm::vec3& view,
+                                       const glm::vec3& light) const;
 
     TileStreamer* streamer() const { return _streamer.get(); }
     int streamIndex() const { return _index; }
@@ -55,7 +66,7 @@ protected:
      *  filter from: false, so btf_main.glsl blends the four texels' values instead. */
     bool linearInParameters() const override;
     /** The snapshot's: the CPU reference of the filtered render once every finest tile is
-     *  resident (elsewhere the GPU filters each fragment at its tile's resident level). */
+     *  resident and magnified (elsewhere, and minified: evaluateResidentFiltered). */
     glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,
                              const glm::vec3& light) const override;
     glm::vec3 finishLinear(const glm::vec3& linear, const glm::vec3& view,

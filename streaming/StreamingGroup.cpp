@@ -38,8 +38,8 @@ struct UpdateStreaming : osg::NodeCallback {
 
 }  // namespace
 
-/** Reads the feedback pass back without waiting for it (seed 003: the feedback is "read back
- *  asynchronously"): after the pass, glGetTexImage of its texture into one of two pixel-pack
+/** Reads the feedback pass back without waiting for it (Schwartz et al. 2013: the feedback is "read
+ * back asynchronously"): after the pass, glGetTexImage of its texture into one of two pixel-pack
  *  buffers, and a map of the other one, which the pass of the previous frame filled. The GPU
  *  copies while the frame goes on; the update sees feedback one frame old. Draw thread, the
  *  one graphics context a TileStreamer serves. */
@@ -175,7 +175,7 @@ void StreamingGroup::update() {
     }
     if (_votes.materialCount() != _streamer->materialCount()) _votes = _streamer->makeVotes();
     if (feedback) {
-        // Seed 003 eq. 9: every pixel votes for its tile (and so its ancestors).
+        // Schwartz et al. 2013 eq. 9: every pixel votes for its tile (and so its ancestors).
         _votes.clear();
         const unsigned char* p = feedback->data();
         const std::size_t pixels = std::size_t(feedback->s()) * std::size_t(feedback->t());

@@ -1,5 +1,5 @@
 // osgBTF BSVTF: `btf tiles` — the tile pyramid, weights, coded tiles and U packets of an fmf
-// material, written as the folder TileSet.h describes (seed 003 sections 5-7).
+// material, written as the folder TileSet.h describes (Schwartz et al. 2013 sections 5-7).
 #pragma once
 
 #include <cstdint>
@@ -18,8 +18,8 @@ struct TileBuildOptions {
     /** JPEG-like quality of the dct codec, 1..100. 98 by default: on the built-in sample's fmf
      *  fit (64 x 64, 8 components, 16-texel tiles) it keeps the rendered SSIM >= 0.99 against
      *  raw tiles at every tested view, the grazing one included (quality 90: 0.94 there), at
-     *  4.4:1 (tests/streaming_tiles_test.cpp). Seed 003 reports "up to 6:1 with no perceivable
-     *  artefacts" on larger, smoother materials. */
+     *  4.4:1 (tests/streaming_tiles_test.cpp). Schwartz et al. 2013 report "up to 6:1 with no
+     * perceivable artefacts" on larger, smoother materials. */
     int quality = 98;
 };
 

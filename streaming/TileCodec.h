@@ -1,4 +1,5 @@
-// osgBTF BSVTF (seed 003 section 6): the transmission codec of one tile of Eigen-Textures.
+// osgBTF BSVTF (Schwartz et al. 2013 section 6): the transmission codec of one tile of
+// Eigen-Textures.
 //
 // A tile is side x side RGBA half floats (side = T + 2P, 72 for the defaults; a multiple of 8),
 // channel-interleaved, rows from the bottom. It is coded as its difference to a prediction (the

@@ -1,6 +1,6 @@
-// osgBTF BSVTF streaming (seed 003 section 6): fetching the files of a tile set (TileSet.h:
-// index.bsvtf, u/G.half, tiles/G/L/X_Y.tile) from a local folder or from any static HTTP server,
-// in the order of the scheduler's priorities, without blocking the render thread.
+// osgBTF BSVTF streaming (Schwartz et al. 2013 section 6): fetching the files of a tile set
+// (TileSet.h: index.bsvtf, u/G.half, tiles/G/L/X_Y.tile) from a local folder or from any static
+// HTTP server, in the order of the scheduler's priorities, without blocking the render thread.
 //
 // Why plain files over plain HTTP: one file per tile lets any stock server (nginx, a CDN, S3)
 // stream a material; no custom protocol, no server code. libcurl's easy interface does the HTTP

@@ -1,12 +1,13 @@
-// osgBTF BSVTF (seed 003 sections 3 and 5): the tile pyramid of a factored BTF's Eigen-Textures.
+// osgBTF BSVTF (Schwartz et al. 2013 sections 3 and 5): the tile pyramid of a factored BTF's
+// Eigen-Textures.
 //
-// Every group of 4 Eigen-Texture components (one RGBA16F texel each, seed 003 section 7) is its
-// own virtual texture with its own level-of-detail quadtree, which is the paper's side-by-side
-// layout with no tile straddling two groups. Level L (the finest) is the texture itself; level
-// l < L has ceil(width / 2^(L-l)) x ceil(height / 2^(L-l)) texels (texel k of level l is the box
-// mean of texels 2k, 2k+1 of level l+1 that exist), and L is the smallest level count with both
-// sides of level 0 at most T, so level 0 is one tile (seed 003: max(M, N) / 2^L <= T). A texel
-// (x, y) of the finest level is texel (x >> (L-l), y >> (L-l)) of level l.
+// Every group of 4 Eigen-Texture components (one RGBA16F texel each, Schwartz et al. 2013 section
+// 7) is its own virtual texture with its own level-of-detail quadtree, which is the paper's
+// side-by-side layout with no tile straddling two groups. Level L (the finest) is the texture
+// itself; level l < L has ceil(width / 2^(L-l)) x ceil(height / 2^(L-l)) texels (texel k of level l
+// is the box mean of texels 2k, 2k+1 of level l+1 that exist), and L is the smallest level count
+// with both sides of level 0 at most T, so level 0 is one tile (Schwartz et al. 2013: max(M, N) /
+// 2^L <= T). A texel (x, y) of the finest level is texel (x >> (L-l), y >> (L-l)) of level l.
 //
 // Why ceil-halved levels instead of padding to a power of two (400 -> 512): the levels then are
 // exactly the box-filtered texture (no resampling, so a cache holding every finest tile renders
@@ -37,7 +38,7 @@ struct TileId {
 
 class TileLayout {
 public:
-    static constexpr int kDefaultTileSize = 64;  ///< T (seed 003 section 7)
+    static constexpr int kDefaultTileSize = 64;  ///< T (Schwartz et al. 2013 section 7)
     static constexpr int kDefaultPadding = 4;    ///< texels of padding on each side
     static constexpr int kChannels = 4;          ///< components per texel (RGBA16F)
 

@@ -19,19 +19,12 @@ std::string gridName(const TileLayout& l) {
            std::to_string(l.tileSize()) + "-texel tiles";
 }
 
-/** The tile of `level` (<= t.level) containing t. */
-TileId ancestorAt(const TileId& t, int level) {
-    const int shift = t.level - level;
-    return {t.group, level, t.x >> shift, t.y >> shift};
-}
-
-/** A candidate in one of the step's heaps: an add (key P) or an eviction (key: its cost c). */
+/** A candidate in one of the step's heaps: an add (key P) or a drop (key: its cost c). */
 struct Candidate {
     double key = 0;
     int material = 0;
     std::size_t index = 0;  // TileLayout::index of `tile`
     TileId tile;
-    bool swap = false;  // eviction: a swap inserting `tile`, else a drop of `tile`
 };
 
 /** Max-heap order for adds: highest P first, then lowest material and index (determinism). */
@@ -41,19 +34,12 @@ bool addAfter(const Candidate& a, const Candidate& b) {
     return a.index > b.index;
 }
 
-/** Min-heap order for evictions: lowest cost first, then lowest material and index, drops first. */
-bool evictionAfter(const Candidate& a, const Candidate& b) {
+/** Min-heap order for drops: lowest cost first, then lowest material and index. */
+bool dropAfter(const Candidate& a, const Candidate& b) {
     if (a.key != b.key) return a.key > b.key;
     if (a.material != b.material) return a.material > b.material;
-    if (a.index != b.index) return a.index > b.index;
-    return a.swap && !b.swap;
+    return a.index > b.index;
 }
-
-/** The tiles an eviction removes, cheapest first. */
-struct Victims {
-    TileId tiles[2];
-    int count = 0;
-};
 
 }  // namespace
 
@@ -116,10 +102,6 @@ std::size_t TileScheduler::Material::index(const TileId& t) const {
     return std::size_t(t.group) * layout.tilesPerGroup() + indexInGroup(t);
 }
 
-bool TileScheduler::Material::covered(std::size_t i) const {
-    return childCount[i] > 0 && solidChildren[i] == childCount[i];
-}
-
 double TileScheduler::Material::priority(const TileId& t,
                                          const std::vector<std::uint64_t>* counts) const {
     if (!counts) return 0;
@@ -128,51 +110,34 @@ double TileScheduler::Material::priority(const TileId& t,
 
 void TileScheduler::Material::setSlot(const TileId& t, int newSlot) {
     const std::size_t i = index(t);
-    // A tile is "solid" when resident or covered; a change propagates to the parents' counts of
-    // solid children as long as it changes the parent's own solidity.
-    const bool wasSolid = slot[i] >= 0 || covered(i);
-    const int belowDelta = (newSlot >= 0) - (slot[i] >= 0);
+    const int delta = (newSlot >= 0) - (slot[i] >= 0);
     slot[i] = newSlot;
-    const bool isSolid = slot[i] >= 0 || covered(i);
-    bool solidChanged = wasSolid != isSolid;
-    const int solidDelta = isSolid ? 1 : -1;
-    for (TileId a = t; a.level > 0;) {
-        a = TileLayout::parent(a);
-        const std::size_t p = index(a);
-        residentBelow[p] += belowDelta;
-        if (solidChanged) {
-            const bool parentWas = slot[p] >= 0 || covered(p);
-            solidChildren[p] = std::uint8_t(int(solidChildren[p]) + solidDelta);
-            solidChanged = parentWas != (slot[p] >= 0 || covered(p));
-        }
+    if (t.level > 0) {
+        std::uint8_t& count = residentChildren[index(TileLayout::parent(t))];
+        count = std::uint8_t(int(count) + delta);
     }
 }
 
 void TileScheduler::Material::updateLutAfterInsert(const TileId& t, int newSlot) {
-    // Only the finest tiles inside t change, and only those shown by a coarser tile so far.
+    // Only the finest tiles inside t change: they showed t's parent (resident, as every
+    // ancestor of a resident tile), and t was not resident, so nothing deeper was.
+    const LutEntry entry{t.level, newSlot, slot[index(TileLayout::parent(t))]};
     const int finest = layout.finestLevel(), shift = finest - t.level;
     const int fw = tilesX[std::size_t(finest)], fh = tilesY[std::size_t(finest)];
     std::vector<LutEntry>& table = lut[std::size_t(t.group)];
     for (int y = t.y << shift; y < std::min((t.y + 1) << shift, fh); ++y)
         for (int x = t.x << shift; x < std::min((t.x + 1) << shift, fw); ++x) {
             LutEntry& e = table[std::size_t(y) * std::size_t(fw) + std::size_t(x)];
-            if (e.level < t.level) e = {t.level, newSlot};
+            if (e.level < t.level) e = entry;
         }
     lutDirty = true;
 }
 
 void TileScheduler::Material::updateLutAfterRemove(const TileId& t) {
-    // The entries t showed fall back to its deepest resident ancestor; none can be missing after
-    // a whole step (a swap inserts its coarser tile right after removing the two victims).
-    LutEntry fallback;
-    for (TileId a = t; a.level > 0;) {
-        a = TileLayout::parent(a);
-        const int s = slot[index(a)];
-        if (s >= 0) {
-            fallback = {a.level, s};
-            break;
-        }
-    }
+    // Only leaves below level 0 leave: the entries t showed fall back to its parent.
+    const TileId parent = TileLayout::parent(t);
+    LutEntry fallback{parent.level, slot[index(parent)], -1};
+    if (parent.level > 0) fallback.parentSlot = slot[index(TileLayout::parent(parent))];
     const int finest = layout.finestLevel(), shift = finest - t.level;
     const int fw = tilesX[std::size_t(finest)], fh = tilesY[std::size_t(finest)];
     std::vector<LutEntry>& table = lut[std::size_t(t.group)];
@@ -192,8 +157,8 @@ struct TileScheduler::StepState {
     VoteCounts counts;
     const Availability* available = nullptr;  // null: everything is available
     std::vector<TileOperation> ops;
-    std::vector<Candidate> adds;       // heap, addAfter
-    std::vector<Candidate> evictions;  // heap, evictionAfter
+    std::vector<Candidate> adds;   // heap, addAfter
+    std::vector<Candidate> drops;  // heap, dropAfter
 
     StepState(TileScheduler& s, VoteCounts c) : scheduler(s), counts(std::move(c)) {}
 
@@ -204,107 +169,30 @@ struct TileScheduler::StepState {
     void pushAdd(int m, const TileId& t) {
         const double p = priority(m, t);
         if (p <= 0) return;
-        adds.push_back({p, m, mat(m).index(t), t, false});
+        adds.push_back({p, m, mat(m).index(t), t});
         std::push_heap(adds.begin(), adds.end(), addAfter);
     }
 
-    void pushEviction(const Candidate& c) {
-        evictions.push_back(c);
-        std::push_heap(evictions.begin(), evictions.end(), evictionAfter);
-    }
-
-    /** An add candidate: not resident, parent resident, some texel not covered by resident
-     *  descendants, not removed in this step. */
+    /** An add candidate: not resident, parent resident, not removed in this step. */
     bool addable(int m, const TileId& t) {
         Material& mt = mat(m);
         const std::size_t i = mt.index(t);
         return t.level > 0 && mt.slot[i] < 0 && !(mt.stepFlags[i] & kRemovedNow) &&
-               !mt.covered(i) && mt.isResident(TileLayout::parent(t));
+               mt.isResident(TileLayout::parent(t));
     }
 
-    /** A leaf that may be evicted in this step. */
-    bool evictable(const Material& mt, std::size_t i) const {
-        return mt.leaf(i) && !(mt.stepFlags[i] & kAddedNow);
+    /** A leaf below level 0 that was not added in this step. */
+    bool droppable(const Material& mt, const TileId& t, std::size_t i) const {
+        return t.level > 0 && mt.leaf(i) && !(mt.stepFlags[i] & kAddedNow);
     }
 
-    /** Recomputes an eviction's validity, cost and victims from the current state. */
-    bool evaluate(Candidate& c, Victims& v) {
-        Material& mt = mat(c.material);
-        const std::vector<std::uint64_t>* votes = counts[std::size_t(c.material)];
-        v.count = 0;
-        if (!c.swap) {
-            // Drop: a leaf under a resident parent; the parent shows its texels afterwards.
-            if (c.tile.level == 0 || !evictable(mt, c.index) ||
-                !mt.isResident(TileLayout::parent(c.tile)))
-                return false;
-            c.key = mt.priority(c.tile, votes);
-            v.tiles[v.count++] = c.tile;
-            return true;
-        }
-        // Swap: T' = c.tile not resident, at least two evictable leaf children; the two cheapest.
-        if (mt.slot[c.index] >= 0 || (mt.stepFlags[c.index] & kRemovedNow) ||
-            mt.childCount[c.index] == 0 || mt.residentBelow[c.index] < 2)
-            return false;
-        double cost[2] = {0, 0};
-        for (int dy = 0; dy < 2; ++dy)
-            for (int dx = 0; dx < 2; ++dx) {
-                const TileId ch{c.tile.group, c.tile.level + 1, 2 * c.tile.x + dx,
-                                2 * c.tile.y + dy};
-                if (!mt.contains(ch) || !evictable(mt, mt.index(ch))) continue;
-                const double w = mt.priority(ch, votes);
-                // Children come in index order, so '<' keeps the lower index first on ties.
-                if (v.count < 2) {
-                    v.tiles[v.count] = ch;
-                    cost[v.count++] = w;
-                    if (v.count == 2 && cost[1] < cost[0]) {
-                        std::swap(v.tiles[0], v.tiles[1]);
-                        std::swap(cost[0], cost[1]);
-                    }
-                } else if (w < cost[1]) {
-                    if (w < cost[0]) {
-                        v.tiles[1] = v.tiles[0];
-                        cost[1] = cost[0];
-                        v.tiles[0] = ch;
-                        cost[0] = w;
-                    } else {
-                        v.tiles[1] = ch;
-                        cost[1] = w;
-                    }
-                }
-            }
-        if (v.count < 2) return false;
-        c.key = cost[0] + cost[1];
-        return true;
-    }
-
-    /** Pushes the eviction a leaf takes part in: a drop when its parent is resident, else the
-     *  swap of its parent. */
-    void pushEvictionOfLeaf(int m, const TileId& leaf) {
+    /** Queues the drop of t if it is droppable now (its cost w v is fixed within the step). */
+    void pushDrop(int m, const TileId& t) {
         Material& mt = mat(m);
-        if (leaf.level == 0 || !evictable(mt, mt.index(leaf))) return;
-        const TileId parent = TileLayout::parent(leaf);
-        Candidate c;
-        c.material = m;
-        c.swap = !mt.isResident(parent);
-        c.tile = c.swap ? parent : leaf;
-        c.index = mt.index(c.tile);
-        Victims v;
-        if (evaluate(c, v)) pushEviction(c);
-    }
-
-    /** An eviction that would break the add of x or exceed the budget. */
-    bool conflicts(const Candidate& x, const Candidate& e, const Victims& v, int addsLeft) const {
-        if (e.swap && addsLeft < 2) return true;  // T' and x are two uploads
-        if (e.material != x.material) return false;
-        const TileId parent = TileLayout::parent(x.tile);
-        for (int k = 0; k < v.count; ++k)
-            if (v.tiles[k] == parent) return true;  // x needs its parent resident
-        // Inserting x itself, or a tile inside x (it could cover x, which then adds nothing).
-        // Cannot happen while the invariant in the header holds (x has no resident
-        // descendants, T' has resident children); checked because the cost of a mistake would
-        // be a tile added twice.
-        return e.swap && e.tile.group == x.tile.group && e.tile.level >= x.tile.level &&
-               ancestorAt(e.tile, x.tile.level) == x.tile;
+        const std::size_t i = mt.index(t);
+        if (!droppable(mt, t, i)) return;
+        drops.push_back({priority(m, t), m, i, t});
+        std::push_heap(drops.begin(), drops.end(), dropAfter);
     }
 
     /** The best add candidate that is still valid and available; false when none is left. */
@@ -321,62 +209,52 @@ struct TileScheduler::StepState {
         return false;
     }
 
-    /** The cheapest valid eviction compatible with adding x whose cost is below P* = x.key. */
-    bool findEviction(const Candidate& x, int addsLeft, Candidate& out) {
-        std::vector<Candidate> setAside;
-        bool found = false;
-        while (!evictions.empty() && evictions.front().key < x.key) {
-            std::pop_heap(evictions.begin(), evictions.end(), evictionAfter);
-            Candidate e = evictions.back();
-            evictions.pop_back();
-            const double stored = e.key;
-            Victims v;
-            if (!evaluate(e, v)) continue;
-            if (e.key != stored) {  // stale cost: back in at the current one
-                pushEviction(e);
+    /** The cheapest drop still valid whose cost is below P* = x.key, other than x's parent
+     *  (which x needs resident). */
+    bool findDrop(const Candidate& x, Candidate& out) {
+        bool found = false, parentSetAside = false;
+        Candidate parent;
+        const TileId xParent = TileLayout::parent(x.tile);
+        while (!drops.empty() && drops.front().key < x.key) {
+            std::pop_heap(drops.begin(), drops.end(), dropAfter);
+            const Candidate d = drops.back();
+            drops.pop_back();
+            // Stale entries: dropped already, or no longer a leaf (a child came in).
+            if (!droppable(mat(d.material), d.tile, d.index)) continue;
+            if (d.material == x.material && d.tile == xParent) {
+                parent = d;
+                parentSetAside = true;
                 continue;
             }
-            if (conflicts(x, e, v, addsLeft)) {
-                setAside.push_back(e);
-                continue;
-            }
-            if (e.swap && !isAvailable(e.material, e.tile)) continue;
-            out = e;
+            out = d;
             found = true;
             break;
         }
-        for (const Candidate& c : setAside) pushEviction(c);
+        if (parentSetAside) {
+            drops.push_back(parent);
+            std::push_heap(drops.begin(), drops.end(), dropAfter);
+        }
         return found;
     }
 
-    void insert(int m, const TileId& t, TileOperation::Reason reason) {
+    void insert(int m, const TileId& t) {
         Material& mt = mat(m);
         const int slot = scheduler._freeSlots.back();
         scheduler._freeSlots.pop_back();
         mt.setSlot(t, slot);
         mt.stepFlags[mt.index(t)] |= kAddedNow;
         mt.updateLutAfterInsert(t, slot);
-        ops.push_back({TileOperation::Kind::Add, reason, m, t, slot});
-        // The children: new add candidates, or (already resident) leaves now under a resident
-        // parent, i.e. drop candidates.
+        ops.push_back({TileOperation::Kind::Add, TileOperation::Reason::Refine, m, t, slot});
+        // Its children become add candidates (none is resident: their parent was not). Its
+        // parent is no longer a leaf; its queued drop, if any, is skipped when popped.
         for (int dy = 0; dy < 2; ++dy)
             for (int dx = 0; dx < 2; ++dx) {
                 const TileId ch{t.group, t.level + 1, 2 * t.x + dx, 2 * t.y + dy};
-                if (!mt.contains(ch)) continue;
-                if (mt.isResident(ch))
-                    pushEvictionOfLeaf(m, ch);
-                else if (addable(m, ch))
-                    pushAdd(m, ch);
+                if (mt.contains(ch) && addable(m, ch)) pushAdd(m, ch);
             }
-        // Post-condition (seed 003 5.1): ancestors now entirely covered no longer show.
-        for (TileId a = t; a.level > 0;) {
-            a = TileLayout::parent(a);
-            const std::size_t i = mt.index(a);
-            if (mt.slot[i] >= 0 && mt.covered(i)) remove(m, a, TileOperation::Reason::Covered);
-        }
     }
 
-    void remove(int m, const TileId& t, TileOperation::Reason reason) {
+    void drop(int m, const TileId& t) {
         Material& mt = mat(m);
         const std::size_t i = mt.index(t);
         const int slot = mt.slot[i];
@@ -384,22 +262,9 @@ struct TileScheduler::StepState {
         mt.stepFlags[i] |= kRemovedNow;
         mt.updateLutAfterRemove(t);
         scheduler._freeSlots.push_back(slot);
-        ops.push_back({TileOperation::Kind::Remove, reason, m, t, slot});
-    }
-
-    /** Performs an eviction found by findEviction; returns the Add operations it used. */
-    int evict(Candidate e) {
-        Victims v;
-        evaluate(e, v);  // valid: findEviction just checked it
-        for (int k = 0; k < v.count; ++k)
-            remove(e.material, v.tiles[k], TileOperation::Reason::Evicted);
-        if (e.swap) {
-            insert(e.material, e.tile, TileOperation::Reason::SwapIn);
-            return 1;
-        }
-        // The victim's parent may have become a leaf itself.
-        pushEvictionOfLeaf(e.material, TileLayout::parent(e.tile));
-        return 0;
+        ops.push_back({TileOperation::Kind::Remove, TileOperation::Reason::Evicted, m, t, slot});
+        // The parent may have become a leaf itself.
+        pushDrop(m, TileLayout::parent(t));
     }
 
     /** Every candidate from the current state: one scan over all tiles. */
@@ -415,24 +280,15 @@ struct TileScheduler::StepState {
                         for (int x = 0; x < mt.tilesX[std::size_t(l)]; ++x, ++i) {
                             const TileId t{g, l, x, y};
                             if (mt.slot[i] >= 0) {
-                                if (l > 0 && mt.residentBelow[i] == 0 &&
-                                    mt.isResident(TileLayout::parent(t)))
-                                    evictions.push_back({priority(m, t), m, i, t, false});
-                                continue;
-                            }
-                            if (addable(m, t)) {
+                                if (droppable(mt, t, i)) drops.push_back({priority(m, t), m, i, t});
+                            } else if (addable(m, t)) {
                                 const double p = priority(m, t);
-                                if (p > 0) adds.push_back({p, m, i, t, false});
-                            }
-                            if (mt.residentBelow[i] >= 2 && mt.childCount[i] > 0) {
-                                Candidate c{0, m, i, t, true};
-                                Victims v;
-                                if (evaluate(c, v)) evictions.push_back(c);
+                                if (p > 0) adds.push_back({p, m, i, t});
                             }
                         }
         }
         std::make_heap(adds.begin(), adds.end(), addAfter);
-        std::make_heap(evictions.begin(), evictions.end(), evictionAfter);
+        std::make_heap(drops.begin(), drops.end(), dropAfter);
     }
 };
 
@@ -476,8 +332,7 @@ int TileScheduler::addMaterial(const TileLayout& layout, std::vector<float> weig
     m.norms = std::move(norms);
     const std::size_t n = layout.tileCount();
     m.slot.assign(n, -1);
-    m.residentBelow.assign(n, 0);
-    m.solidChildren.assign(n, 0);
+    m.residentChildren.assign(n, 0);
     m.stepFlags.assign(n, 0);
     std::size_t offset = 0;
     for (int l = 0; l <= layout.finestLevel(); ++l) {
@@ -486,17 +341,12 @@ int TileScheduler::addMaterial(const TileLayout& layout, std::vector<float> weig
         m.tilesY.push_back(layout.tilesY(l));
         offset += std::size_t(m.tilesX.back()) * std::size_t(m.tilesY.back());
     }
-    m.childCount.assign(n, 0);
-    for (std::size_t i = 0; i < n; ++i) {
-        const TileId t = layout.tileAt(i);
-        if (t.level > 0) ++m.childCount[m.index(TileLayout::parent(t))];
-    }
     const std::size_t finestTiles = std::size_t(m.tilesX.back()) * std::size_t(m.tilesY.back());
     for (int g = 0; g < layout.groups(); ++g) {
         const int slot = _freeSlots.back();
         _freeSlots.pop_back();
         m.setSlot({g, 0, 0, 0}, slot);
-        m.lut.emplace_back(finestTiles, LutEntry{0, slot});
+        m.lut.emplace_back(finestTiles, LutEntry{0, slot, -1});
     }
     m.lutDirty = true;
     _materials.push_back(std::move(m));
@@ -553,13 +403,13 @@ std::vector<TileOperation> TileScheduler::step(const TileVotes& votes,
         Candidate x;
         if (!s.popAdd(x)) break;
         if (_freeSlots.empty()) {
-            // Full: evict only when that costs less than the add gains (c* < P*, seed 003 5.2);
-            // otherwise the cache already holds the best set it can.
-            Candidate e;
-            if (!s.findEviction(x, addsLeft, e)) break;
-            addsLeft -= s.evict(e);
+            // Full: drop only when that costs less than the add gains (c* < P*, Schwartz et al.
+            // 2013 5.2); otherwise the cache already holds the best set it can.
+            Candidate d;
+            if (!s.findDrop(x, d)) break;
+            s.drop(d.material, d.tile);
         }
-        s.insert(x.material, x.tile, TileOperation::Reason::Refine);
+        s.insert(x.material, x.tile);
         --addsLeft;
     }
     return std::move(s.ops);
@@ -619,11 +469,11 @@ std::vector<std::pair<int, TileId>> TileScheduler::wanted(const TileVotes& votes
         const Material& m = _materials[std::size_t(mi)];
         if (!counts[std::size_t(mi)]) continue;
         for (std::size_t i = 0; i < m.slot.size(); ++i) {
-            if (m.slot[i] >= 0 || m.covered(i)) continue;
+            if (m.slot[i] >= 0) continue;
             const TileId t = m.layout.tileAt(i);
             if (t.level == 0 || !m.isResident(TileLayout::parent(t))) continue;
             const double p = m.priority(t, counts[std::size_t(mi)]);
-            if (p > 0 && !(skip && skip(mi, t))) found.push_back({p, mi, i, t, false});
+            if (p > 0 && !(skip && skip(mi, t))) found.push_back({p, mi, i, t});
         }
     }
     // addAfter(a, b): a ranks below b, so the reverse order sorts best first.

@@ -1,39 +1,33 @@
-// osgBTF BSVTF (seed 003 sections 3, 5.1, 5.2): which tiles of which materials live in the shared
-// tile cache. Pure logic: no OpenGL, no I/O; the runtime uploads what the operations say and
-// re-uploads the lookup tables of the materials whose LUT changed.
+// osgBTF BSVTF (Schwartz et al. 2013 sections 3, 5.1, 5.2): which tiles of which materials live in
+// the shared tile cache. Pure logic: no OpenGL, no I/O; the runtime uploads what the operations say
+// and re-uploads the lookup tables of the materials whose LUT changed.
 //
-// Priorities (seed 003 section 5.2): a non-resident tile i of level l whose parent is resident has
-// P = w(i,l,l-1) v(i,l) (eq. 8, 9): its mean squared difference to the upsampled parent times the
-// feedback pixels it would serve. While slots are free the highest P is added. When the cache is
-// full, an eviction frees one slot if its cost c* (the error it brings back) is below the best
-// P*; otherwise the cache already holds the best set and the step ends.
+// Priorities (Schwartz et al. 2013 section 5.2): a non-resident tile i of level l whose parent is
+// resident has P = w(i,l,l-1) v(i,l) (eq. 8, 9): its mean squared difference to the upsampled
+// parent times the feedback pixels it would serve. While slots are free the highest P is added.
+// When the cache is full, a drop frees one slot if its cost c* (the error it brings back) is below
+// the best P*; otherwise the cache already holds the best set and the step ends.
 //
-// Evictions:
-//  * swap (seed 003 5.1): two resident leaf children of a non-resident tile T' are replaced by T'.
-//    The cost is eq. 10 restricted to l' = l - 1: c = w(c1) v(c1) + w(c2) v(c2). Why restricted:
-//    the cost is then exactly the priority the two removed tiles get back as add candidates, so
-//    with the approximate error E = sum of w v over tiles not covered by resident tiles of their
-//    level or finer, every swap followed by its add lowers E by at least P* - c* > 0 and the
-//    scheduler converges (fixed votes: the operations stop after finitely many steps).
-//  * drop (extension): a resident leaf whose parent is resident is removed, cost w v. A swap always
-//    inserts a tile, so without drops a leaf under a resident parent could never leave the cache:
-//    after the viewer moves on, its stale tiles (v = 0) would stay resident for good. A drop is a
-//    swap whose coarser tile is already resident; it keeps coverage and the same E argument.
-// Both only ever remove leaves (resident tiles without resident descendants), so every texel
-// stays covered.
+// Residency is closed under parents: a tile is resident only while its parent is, so the
+// resident tiles of a group form a tree under its level-0 tile, and a region shows its deepest
+// resident tile with every coarser one above it still in the cache. The shader needs that: a
+// minified fragment blends its deepest resident level with the next coarser one (trilinear,
+// shaders/bsvtf.frag), and the LUT gives both slots. Schwartz et al. 2013 5.1 instead removes a
+// tile once its children cover it and swaps two leaves for their missing parent; neither exists
+// here (no resident tile is ever covered, no non-resident tile has resident children). The price is
+// the slots of the interior tiles: a third of the finest ones in a large square pyramid, more in
+// small or elongated ones.
 //
-// Post-condition of every insert (seed 003 5.1: "any ancestor ... completely covered"): a resident
-// ancestor whose region is now entirely covered by resident descendants (all its children resident
-// or themselves covered) no longer shows on screen and is removed. The level-0 tiles are not
-// pinned: they are resident from addMaterial on and leave only when covered in this sense.
-//
-// Invariant: a non-resident tile with a resident descendant is covered. (Adds need a resident
-// parent, a swap's T' covers its victims, a drop's parent covers its victim, so a covered
-// region stays covered; a victim has no resident descendants.) Hence an add candidate has no
-// resident descendants and P is exactly the drop in E its add brings.
+// Evictions: only drops. A resident leaf (no resident child) below level 0 is removed at cost
+// c = w v, eq. 10 restricted to l' = l - 1: exactly the priority it gets back as an add candidate.
+// With the approximate error E = sum of w v over the non-resident tiles, every add lowers E by
+// its P and every drop raises it by its c, so each drop followed by its add lowers E by at least
+// P* - c* > 0 and the scheduler converges (fixed votes: the operations stop after finitely many
+// steps). Drops let stale tiles (v = 0) leave after the viewer moves on. The level-0 tiles are
+// never removed: every texel of every material is always shown by some resident tile.
 //
 // Within one step no tile is removed and then added again, and no tile added in the step is
-// evicted in it (a tile added and then covered by its children in the same step is removed).
+// removed in it (its upload would be wasted).
 #pragma once
 
 #include <cstddef>
@@ -46,8 +40,9 @@
 
 namespace osgBTF {
 
-/** Feedback votes v(i,l) of seed 003 eq. 9 for several materials. One count per tile position of
- *  one group: the votes apply to every group of a material (seed 003 5.2). */
+/** Feedback votes v(i,l) of Schwartz et al. 2013 eq. 9 for several materials. One count per tile
+ * position of one group: the votes apply to every group of a material (Schwartz et al. 2013 5.2).
+ */
 class TileVotes {
 public:
     TileVotes() = default;
@@ -80,10 +75,8 @@ private:
 struct TileOperation {
     enum class Kind { Add, Remove };
     enum class Reason {
-        Refine,   ///< Add: seed 003's add, the tile's parent is resident
-        SwapIn,   ///< Add: the coarser tile T' a swap inserts (preceded by its two Evicted)
-        Covered,  ///< Remove: fully covered by resident descendants (post-condition of an insert)
-        Evicted   ///< Remove: victim of a swap or drop, followed by the Add it makes room for
+        Refine,  ///< Add: Schwartz et al. 2013's add, the tile's parent is resident
+        Evicted  ///< Remove: a dropped leaf, followed by the Add it makes room for
     };
     Kind kind = Kind::Add;
     Reason reason = Reason::Refine;
@@ -92,12 +85,16 @@ struct TileOperation {
     int slot = -1;  ///< the cache slot the tile goes to (Add) or leaves (Remove)
 };
 
-/** LUT entry of one finest-level tile position (seed 003 section 3): the deepest resident tile
- *  containing it. */
+/** LUT entry of one finest-level tile position (Schwartz et al. 2013 section 3): the deepest
+ * resident tile containing it, and the slot of that tile's parent (resident with it), from which a
+ * minified fragment takes its coarser level. */
 struct LutEntry {
     int level = -1;
     int slot = -1;
-    bool operator==(const LutEntry& o) const { return level == o.level && slot == o.slot; }
+    int parentSlot = -1;  ///< -1 at level 0
+    bool operator==(const LutEntry& o) const {
+        return level == o.level && slot == o.slot && parentSlot == o.parentSlot;
+    }
     bool operator!=(const LutEntry& o) const { return !(*this == o); }
 };
 
@@ -110,8 +107,8 @@ public:
      *  tiles). Throws Error for capacity < 1. */
     explicit TileScheduler(int capacity);
 
-    /** weights[layout.index(t)] = w(i,l,l-1) of seed 003 eq. 8 (for level 0 the tile's mean
-     *  square); norms[layout.index(t)] = ||T||_F^2 / T^2 (groupPriority). Makes every group's
+    /** weights[layout.index(t)] = w(i,l,l-1) of Schwartz et al. 2013 eq. 8 (for level 0 the tile's
+     * mean square); norms[layout.index(t)] = ||T||_F^2 / T^2 (groupPriority). Makes every group's
      *  level-0 tile resident at once (their slots: slotOf). Throws Error when the sizes do not
      *  match layout.tileCount(), a value is negative or not finite, or the level-0 tiles do not
      *  fit in the free slots. Returns the material index. */
@@ -121,9 +118,9 @@ public:
     /** Empty votes for every material added so far. */
     TileVotes makeVotes() const;
 
-    /** One update (seed 003 5.1, 5.2): adds by priority while slots are free, then evictions
-     *  while cheaper than the best add; at most maxAdds Add operations (the upload budget; removes
-     *  are free). `available` empty means every tile is available. `votes` may hold fewer
+    /** One update (Schwartz et al. 2013 5.1, 5.2): adds by priority while slots are free, then
+     * drops while cheaper than the best add; at most maxAdds Add operations (the upload budget;
+     * removes are free). `available` empty means every tile is available. `votes` may hold fewer
      *  materials than the scheduler (the others have no votes). Slots: the lowest free one first,
      *  a freed one is the next handed out. Throws Error for maxAdds < 0, or votes of more
      *  materials or of another tile grid than the scheduler's. */
@@ -146,40 +143,36 @@ public:
 
     /** w(i,l,l-1) v(i,l) of a tile (0 for tiles outside the material). */
     double priority(int material, const TileId& tile, const TileVotes& votes) const;
-    /** The add candidates (non-resident, parent resident, not covered, P > 0) of highest P,
-     *  available or not: the fetcher requests those not yet decoded. At most maxCount, best
-     *  first. (A swap's T' is not listed: it is an ancestor of resident tiles, whose data the
-     *  runtime keeps anyway to decode them, seed 003 section 6.) */
+    /** The add candidates (non-resident, parent resident, P > 0) of highest P, available or
+     *  not: the fetcher requests those not yet decoded. At most maxCount, best first. */
     std::vector<std::pair<int, TileId>> wanted(const TileVotes& votes, std::size_t maxCount,
                                                const Availability& skip = {}) const;
     /** Sum over the group's resident tiles of v ||T||_F^2 / T^2: the priority of the group's U
-     *  packet (seed 003 section 6). */
+     *  packet (Schwartz et al. 2013 section 6). */
     double groupPriority(int material, int group, const TileVotes& votes) const;
 
 private:
     struct Material {
         TileLayout layout;
-        std::vector<float> weights, norms;        ///< per tile, TileLayout::index order
-        std::vector<int> slot;                    ///< per tile, -1 when not resident
-        std::vector<int> residentBelow;           ///< resident strict descendants per tile
-        std::vector<std::uint8_t> childCount;     ///< existing children (0 at the finest level)
-        std::vector<std::uint8_t> solidChildren;  ///< children resident or covered
-        std::vector<std::uint8_t> stepFlags;      ///< added / removed in the current step
-        std::vector<std::size_t> levelOffset;     ///< first within-group index of each level
-        std::vector<int> tilesX, tilesY;          ///< per level
-        std::vector<std::vector<LutEntry>> lut;   ///< per group, finest tiles row by row
+        std::vector<float> weights, norms;           ///< per tile, TileLayout::index order
+        std::vector<int> slot;                       ///< per tile, -1 when not resident
+        std::vector<std::uint8_t> residentChildren;  ///< per tile
+        std::vector<std::uint8_t> stepFlags;         ///< added / removed in the current step
+        std::vector<std::size_t> levelOffset;        ///< first within-group index of each level
+        std::vector<int> tilesX, tilesY;             ///< per level
+        std::vector<std::vector<LutEntry>> lut;      ///< per group, finest tiles row by row
         bool lutDirty = true;
 
         bool contains(const TileId& t) const;
         std::size_t indexInGroup(const TileId& t) const;
         std::size_t index(const TileId& t) const;
         bool isResident(const TileId& t) const { return slot[index(t)] >= 0; }
-        /** All existing children resident or covered: no texel of the tile shows (finest: no). */
-        bool covered(std::size_t index) const;
-        bool leaf(std::size_t index) const { return slot[index] >= 0 && residentBelow[index] == 0; }
-        /** w v, the add priority of seed 003 5.2 (counts null: no votes). */
+        bool leaf(std::size_t index) const {
+            return slot[index] >= 0 && residentChildren[index] == 0;
+        }
+        /** w v, the add priority of Schwartz et al. 2013 5.2 (counts null: no votes). */
         double priority(const TileId& t, const std::vector<std::uint64_t>* counts) const;
-        /** Sets the tile's slot (-1: not resident) and the counts of its ancestors. */
+        /** Sets the tile's slot (-1: not resident) and its parent's count of resident children. */
         void setSlot(const TileId& t, int slot);
         void updateLutAfterInsert(const TileId& t, int slot);
         void updateLutAfterRemove(const TileId& t);

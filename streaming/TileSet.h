@@ -1,5 +1,5 @@
-// osgBTF BSVTF: the files of a streamed FMF material (seed 003 sections 6-7), as `btf tiles`
-// writes them and the runtime reads them from a folder or a static HTTP server:
+// osgBTF BSVTF: the files of a streamed FMF material (Schwartz et al. 2013 sections 6-7), as `btf
+// tiles` writes them and the runtime reads them from a folder or a static HTTP server:
 //
 //   DIR/index.bsvtf               text: the layout, codec, material parameters, directions, and
 //                                 one line per U packet and per tile (bytes, CRC-32, weight, norm)
@@ -33,8 +33,8 @@ class FmfMaterial;
 
 struct TileRecord {
     std::uint32_t bytes = 0, crc = 0;
-    /** w(i, l, l-1) of seed 003 eq. 8: mean over the tile's texels of the squared difference to
-     *  the upsampled parent, summed over the 4 components (level 0: to zero). */
+    /** w(i, l, l-1) of Schwartz et al. 2013 eq. 8: mean over the tile's texels of the squared
+     * difference to the upsampled parent, summed over the 4 components (level 0: to zero). */
     float weight = 0.0f;
     /** ||T||_F^2 / T^2: mean squared value, summed over the 4 components (U packet priority). */
     float norm = 0.0f;

@@ -1,6 +1,7 @@
 #include "streaming/TileStreamer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -120,6 +121,12 @@ void TileStreamer::configure(int tileSize, int padding) {
     if (slotsPerRow < 1)
         throw Error("tile streamer: a cache of " + std::to_string(_options.cacheSize) +
                     " texels holds no tile of " + std::to_string(padded) + " texels");
+    // The LUT's fourth 16-bit channel numbers the parent's slot (writeLut).
+    if (slotsPerRow > 256)
+        throw Error("tile streamer: a cache of " + std::to_string(_options.cacheSize) +
+                    " texels holds " + std::to_string(slotsPerRow) + " x " +
+                    std::to_string(slotsPerRow) + " tiles of " + std::to_string(padded) +
+                    " texels; the lookup tables number at most 256 x 256");
     _options.tileSize = tileSize;
     _options.padding = padding;
     _padded = padded;
@@ -391,7 +398,10 @@ void TileStreamer::writeLut(int index) {
             texels[4 * e + 0] = std::uint16_t(lut[e].slot % _slotsPerRow);
             texels[4 * e + 1] = std::uint16_t(lut[e].slot / _slotsPerRow);
             texels[4 * e + 2] = std::uint16_t(lut[e].level);
-            texels[4 * e + 3] = 0;
+            // The parent's slot as one number: the LUT has four channels. At level 0 (no
+            // parent, never blended in) the tile's own, so that every entry names a valid slot.
+            texels[4 * e + 3] =
+                std::uint16_t(lut[e].parentSlot >= 0 ? lut[e].parentSlot : lut[e].slot);
         }
         image->dirty();
     }
@@ -399,9 +409,9 @@ void TileStreamer::writeLut(int index) {
 
 void TileStreamer::requestWanted(const TileVotes& votes) {
     // What each fetcher has not been asked for yet competes for this update's request budget,
-    // tiles by P = w v, U packets by seed 003's group priority (sum of v ||T||^2 over the group's
-    // resident tiles: a packet is worth nothing before its Eigen-Textures show). Requests still
-    // waiting only get their new priority.
+    // tiles by P = w v, U packets by Schwartz et al. 2013's group priority (sum of v ||T||^2 over
+    // the group's resident tiles: a packet is worth nothing before its Eigen-Textures show).
+    // Requests still waiting only get their new priority.
     struct Fresh {
         double priority;
         std::size_t stream, index;
@@ -560,6 +570,58 @@ osg::ref_ptr<FmfMaterial> TileStreamer::snapshot(int index) const {
     return stream.snapshot;
 }
 
+std::vector<float> TileStreamer::filteredEigenTextures(int index, float u, float v,
+                                                       float lod) const {
+    std::lock_guard<std::mutex> lock(_mutex);
+    const Stream& stream = *_streams.at(std::size_t(index));
+    const TileLayout& layout = stream.index.layout;
+    const int W = layout.width(), H = layout.height(), T = layout.tileSize(), P = layout.padding(),
+              side = layout.paddedTileSize(), L = layout.finestLevel();
+    if (P < 1) throw Error("tile streamer: tiles without padding are not filtered from the cache");
+    // surface_frame.glsl's btfLevelTexel(uv, 0): the finest texel that picks the LUT entry.
+    const float fu = u - std::floor(u), fv = v - std::floor(v);
+    const int x = std::clamp(int(std::floor(fu * float(W))), 0, W - 1);
+    const int y = std::clamp(int(std::floor(fv * float(H))), 0, H - 1);
+    // bsvtfSample: GL_LINEAR at the fragment's coordinate in `level`, inside the padded tile
+    // containing texel (x, y) of the finest level (its footprint never leaves the padding).
+    const auto sample = [&](int group, int level, float out[4]) {
+        const int shift = L - level;
+        const TileId t{group, level, (x >> shift) / T, (y >> shift) / T};
+        const std::size_t i = layout.index(t);
+        const float scale = float(1 << shift);
+        const float sx = fu * float(W) / scale - float(t.x * T) + float(P) - 0.5f;
+        const float sy = fv * float(H) / scale - float(t.y * T) + float(P) - 0.5f;
+        const int x0 = int(std::floor(sx)), y0 = int(std::floor(sy));
+        const float a = sx - float(x0), b = sy - float(y0);
+        for (int c = 0; c < 4; ++c) out[c] = 0.0f;
+        if (!stream.uploaded[i]) return;
+        if (x0 < 0 || y0 < 0 || x0 + 1 >= side || y0 + 1 >= side)
+            throw Error("tile streamer: a filtered lookup left its tile's padding");
+        const Imath::half* data = stream.decoded[i]->data();
+        const auto at = [&](int px, int py, int c) {
+            return float(
+                data[(std::size_t(py) * std::size_t(side) + std::size_t(px)) * 4 + std::size_t(c)]);
+        };
+        for (int c = 0; c < 4; ++c)
+            out[c] = (1 - a) * (1 - b) * at(x0, y0, c) + a * (1 - b) * at(x0 + 1, y0, c) +
+                     (1 - a) * b * at(x0, y0 + 1, c) + a * b * at(x0 + 1, y0 + 1, c);
+    };
+    std::vector<float> values(std::size_t(layout.groups()) * 4, 0.0f);
+    for (int g = 0; g < layout.groups(); ++g) {
+        const LutEntry e = _scheduler.lookup(index, g, x / T, y / T);
+        float* out = values.data() + std::size_t(g) * 4;
+        sample(g, e.level, out);
+        // The parent level's share: the level of detail beyond the deepest level, at most 1.
+        const float excess = lod - float(L - e.level);
+        const float coarser = e.level > 0 && excess > 0.0f ? std::min(excess, 1.0f) : 0.0f;
+        if (!(coarser > 0.0f)) continue;
+        float parent[4];
+        sample(g, e.level - 1, parent);
+        for (int c = 0; c < 4; ++c) out[c] = out[c] * (1.0f - coarser) + parent[c] * coarser;
+    }
+    return values;
+}
+
 osg::ref_ptr<osg::StateSet> TileStreamer::createStateSet(
     const StreamedFmfMaterial& material) const {
     const Stream& stream = *_streams.at(std::size_t(material.streamIndex()));
@@ -634,6 +696,43 @@ bool StreamedFmfMaterial::linearInParameters() const {
 glm::vec3 StreamedFmfMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
                                               const glm::vec3& light) const {
     return snapshot()->evaluateLinear(x, y, view, light);
+}
+
+glm::vec3 StreamedFmfMaterial::evaluateResidentFiltered(float u, float v, float lod,
+                                                        const glm::vec3& view,
+                                                        const glm::vec3& light) const {
+    // Without padding the shader blends the values of the four texels, each at its deepest
+    // level: Material's filter over the snapshot does the same.
+    if (!linearInParameters()) return evaluateFiltered(u, v, lod, view, light);
+    osg::ref_ptr<TileStreamer> streamer;
+    if (!_streamer.lock(streamer))
+        fail(_location, "the tile streamer of this streamed material no longer exists");
+    const std::vector<float> sxv = streamer->filteredEigenTextures(_index, u, v, lod);
+    const osg::ref_ptr<FmfMaterial> fmf = snapshot();
+    std::array<std::size_t, 9> images;
+    std::array<float, 9> weights;
+    const int count = fmf->directionCombinations(view, light, images, weights);
+    // FmfMaterial::factorSums with the filtered values in place of a texel's SxV row: the U rows
+    // blended per group of 4 components, then one dot product (fmf_eval.glsl's order).
+    const BtfFactor& f = fmf->factors().factors[0];
+    const int k = int(f.U.cols());
+    float sums[3];
+    for (int c = 0; c < 3; ++c) {
+        float sum = 0.0f;
+        for (int g = 0; g < k; g += 4) {
+            float blended[4] = {0, 0, 0, 0};
+            const int n = std::min(4, k - g);
+            for (int i = 0; i < count; ++i) {
+                const float* row = f.U.data() +
+                                   (images[std::size_t(i)] * 3 + std::size_t(c)) * std::size_t(k) +
+                                   std::size_t(g);
+                for (int j = 0; j < n; ++j) blended[j] += weights[std::size_t(i)] * row[j];
+            }
+            for (int j = 0; j < n; ++j) sum += blended[j] * sxv[std::size_t(g + j)];
+        }
+        sums[c] = sum;
+    }
+    return fmf->finishLinear(glm::vec3(sums[0], sums[1], sums[2]), view, light);
 }
 
 glm::vec3 StreamedFmfMaterial::finishLinear(const glm::vec3& linear, const glm::vec3& view,

@@ -1,16 +1,16 @@
-// osgBTF BSVTF runtime (seed 003 sections 3, 5, 6): one tile cache texture shared by every
-// streamed material, the scheduler that fills it, and the fetchers that bring the files.
+// osgBTF BSVTF runtime (Schwartz et al. 2013 sections 3, 5, 6): one tile cache texture shared by
+// every streamed material, the scheduler that fills it, and the fetchers that bring the files.
 //
 // Per update (StreamingGroup calls update() in the update traversal with the feedback's votes):
 //   1. fetched files in: U packets go straight into the material's U texture; tiles are checked
 //      (size, CRC) and decoded against their decoded parent (within a per-update budget) into
 //      RAM, where they stay while resident and in an LRU of the others;
-//   2. one scheduler step (streaming/TileScheduler.h): adds, swaps, removals; the added tiles'
-//      data are queued for upload (at most uploadsPerUpdate) and the changed LUTs rewritten;
+//   2. one scheduler step (streaming/TileScheduler.h): adds and drops; the added tiles' data are
+//      queued for upload (at most uploadsPerUpdate) and the changed LUTs rewritten;
 //   3. requests out: the scheduler's most wanted tiles whose data are not in RAM (their parents'
-//      first when those were dropped), and the U packets by seed 003's group priority (packet 0
-//      at once, the others once their group shows), highest priority first over all materials,
-//      each through its material's fetcher (a folder or HTTP, streaming/TileFetcher.h).
+//      first when those were dropped), and the U packets by Schwartz et al. 2013's group priority
+//      (packet 0 at once, the others once their group shows), highest priority first over all
+//      materials, each through its material's fetcher (a folder or HTTP, streaming/TileFetcher.h).
 // A fetch that fails (404, 500, timeout, a truncated or corrupted file) is reported once and
 // not retried; the material keeps rendering from what it has. The GL side: the cache texture
 // uploads the queued tiles when it is applied (one graphics context).
@@ -36,14 +36,15 @@ struct TileStreamerOptions {
      *  slots are (T + 2 P)^2 texels); tileSize 0: those of the first tile set opened. */
     int tileSize = 0;
     int padding = 0;
-    /** Texels per side of the RGBA16F cache (seed 003: 4032 = 56 slots of 72, 124 MiB). */
+    /** Texels per side of the RGBA16F cache (Schwartz et al. 2013: 4032 = 56 slots of 72, 124 MiB).
+     */
     int cacheSize = 4032;
     int uploadsPerUpdate = 32;  ///< tiles added to the cache per update (the upload budget)
     int decodesPerUpdate = 64;  ///< tiles decoded per update
     int requestsAhead = 64;     ///< wanted tiles considered per update, per material
     /** New files requested per update, highest priority first over every material (0: no
      *  limit). A limit paces the requests like a slow link would, so that what arrives first
-     *  is what matters most (seed 003 section 6). */
+     *  is what matters most (Schwartz et al. 2013 section 6). */
     int requestsPerUpdate = 0;
     int fetchThreads = 2;                           ///< per material
     std::size_t ramBytes = std::size_t(512) << 20;  ///< decoded tiles kept that are not resident
@@ -87,10 +88,15 @@ public:
 
     /** StreamedFmfMaterial's data, by material index (see there). */
     osg::ref_ptr<FmfMaterial> snapshot(int index) const;
+    /** What bsvtf.frag's fmfEigenTexture returns now for a filtered fragment (padding > 0) at
+     *  texture coordinate (u, v) and level of detail `lod` (log2 of finest texels per pixel):
+     *  four values per group, group by group, in the shader's float arithmetic, zeros for data
+     *  not uploaded. StreamedFmfMaterial::evaluateResidentFiltered's Eigen-Texture side. */
+    std::vector<float> filteredEigenTextures(int index, float u, float v, float lod) const;
     osg::ref_ptr<osg::StateSet> createStateSet(const StreamedFmfMaterial& material) const;
     std::uint64_t materialGpuBytes(int index) const;
     /** What the same material takes on the GPU as a plain fmf material: half U and SxV, the
-     *  textures FmfMaterial uploads (seed 003 Table 2's FMF column). */
+     *  textures FmfMaterial uploads (Schwartz et al. 2013 Table 2's FMF column). */
     std::uint64_t plainFmfGpuBytes(int index) const;
 
     struct Stream;  // TileStreamer.cpp

@@ -1,7 +1,8 @@
-// BSVTF tile scheduler (streaming/TileScheduler.h, seed 003 sections 5.1 and 5.2): refusals with
-// their messages, hand-worked steps on a 7-tile pyramid (adds, covered parents, a swap, a drop),
-// and randomized runs over several materials checked after every step against brute force:
-// coverage, no covered resident tile, slots, LUT, every add and eviction against the rules and
+// BSVTF tile scheduler (streaming/TileScheduler.h, Schwartz et al. 2013 sections 5.1 and 5.2):
+// refusals with their messages, hand-worked steps on a 7-tile pyramid (adds, drops, the LUT with
+// the parents' slots), and randomized runs over several materials checked after every step against
+// brute force: the ancestor chain (a tile resident only with its parent, level 0 always), slots,
+// LUT (deepest resident tile and its parent's slot), every add and drop against the rules and
 // priorities recomputed here from the raw feedback, the budget, and that a step only stops when
 // no allowed operation lowers the error. Then convergence, a cache big enough for everything, and
 // the scale of a 100-material scene.
@@ -38,7 +39,7 @@ std::string messageOf(const std::function<void()>& f) {
 }
 
 std::string describe(const TileOperation& op) {
-    static const char* reasons[] = {"Refine", "SwapIn", "Covered", "Evicted"};
+    static const char* reasons[] = {"Refine", "Evicted"};
     return std::string(op.kind == Kind::Add ? "Add " : "Remove ") + reasons[int(op.reason)] + " m" +
            std::to_string(op.material) + " g" + std::to_string(op.tile.group) + " l" +
            std::to_string(op.tile.level) + " (" + std::to_string(op.tile.x) + "," +
@@ -95,12 +96,6 @@ std::string op(Kind kind, Reason reason, const TileId& t, int slot) {
 std::string add(const TileId& t, int slot) {
     return op(Kind::Add, Reason::Refine, t, slot);
 }
-std::string swapIn(const TileId& t, int slot) {
-    return op(Kind::Add, Reason::SwapIn, t, slot);
-}
-std::string covered(const TileId& t, int slot) {
-    return op(Kind::Remove, Reason::Covered, t, slot);
-}
 std::string evicted(const TileId& t, int slot) {
     return op(Kind::Remove, Reason::Evicted, t, slot);
 }
@@ -108,26 +103,22 @@ std::string evicted(const TileId& t, int slot) {
 // ---- brute force over a scheduler's queries
 // ------------------------------------------------------
 
-/** Every existing child resident or itself fully covered (finest tiles never are). */
-bool fullyCovered(const TileScheduler& s, int m, const TileId& t) {
-    const std::vector<TileId> children = s.layout(m).children(t);
-    if (children.empty()) return false;
-    for (const TileId& c : children)
-        if (!s.resident(m, c) && !fullyCovered(s, m, c)) return false;
-    return true;
-}
-
 bool hasResidentDescendant(const TileScheduler& s, int m, const TileId& t) {
     for (const TileId& c : s.layout(m).children(t))
         if (s.resident(m, c) || hasResidentDescendant(s, m, c)) return true;
     return false;
 }
 
+/** The deepest resident tile over a finest tile, by walking every level, with the slot of the
+ *  tile one level up (whatever it holds: the check that it is resident is separate). */
 LutEntry deepestResident(const TileScheduler& s, int m, int g, int fx, int fy) {
     const int L = s.layout(m).finestLevel();
     for (int l = L; l >= 0; --l) {
         const TileId t{g, l, fx >> (L - l), fy >> (L - l)};
-        if (s.resident(m, t)) return {l, s.slotOf(m, t)};
+        if (!s.resident(m, t)) continue;
+        const int parentSlot =
+            l > 0 ? s.slotOf(m, {g, l - 1, fx >> (L - l + 1), fy >> (L - l + 1)}) : -1;
+        return {l, s.slotOf(m, t), parentSlot};
     }
     return {};
 }
@@ -215,20 +206,16 @@ void checkState(const World& w, const char* where) {
             const int slot = s.slotOf(m, t);
             EXPECT_TRUE(slot >= 0 && slot < s.capacity()) << slot;
             EXPECT_TRUE(slots.insert(slot).second) << "slot " << slot << " used twice";
-            const std::vector<TileId> children = layout.children(t);
-            const bool allChildren =
-                !children.empty() && std::all_of(children.begin(), children.end(),
-                                                 [&](const TileId& c) { return s.resident(m, c); });
-            EXPECT_FALSE(allChildren)
-                << "material " << m << " tile " << i << " is resident with all its children";
-            EXPECT_FALSE(fullyCovered(s, m, t))
-                << "material " << m << " tile " << i << " is resident but fully covered";
         }
-        // The header's invariant: a non-resident tile with a resident descendant is covered.
+        // The ancestor chain: every level-0 tile resident, every other tile only with its parent
+        // (so every ancestor of a resident tile is resident).
         for (std::size_t i = 0; i < layout.tileCount(); ++i) {
             const TileId t = layout.tileAt(i);
-            if (!s.resident(m, t) && hasResidentDescendant(s, m, t)) {
-                EXPECT_TRUE(fullyCovered(s, m, t)) << "material " << m << " tile " << i;
+            if (t.level == 0) {
+                EXPECT_TRUE(s.resident(m, t)) << "material " << m << " level-0 tile " << i;
+            } else if (s.resident(m, t)) {
+                EXPECT_TRUE(s.resident(m, TileLayout::parent(t)))
+                    << "material " << m << " tile " << i << " is resident without its parent";
             }
         }
         const int L = layout.finestLevel();
@@ -242,6 +229,11 @@ void checkState(const World& w, const char* where) {
                     const LutEntry got = s.lookup(m, g, fx, fy);
                     EXPECT_EQ(got.level, want.level) << m << " " << g << " " << fx << "," << fy;
                     EXPECT_EQ(got.slot, want.slot) << m << " " << g << " " << fx << "," << fy;
+                    EXPECT_EQ(got.parentSlot, want.parentSlot)
+                        << m << " " << g << " " << fx << "," << fy;
+                    if (want.level > 0) {
+                        EXPECT_GE(want.parentSlot, 0) << "the parent of a resident tile is not";
+                    }
                 }
     }
     EXPECT_EQ(s.used(), residentCount);
@@ -274,13 +266,6 @@ struct StepCheck {
         auto residentIn = [&](int m, const TileId& t) {
             return shadow[std::size_t(m)][world.layouts[std::size_t(m)].index(t)] >= 0;
         };
-        std::function<bool(int, const TileId&)> coveredIn = [&](int m, const TileId& t) {
-            const std::vector<TileId> ch = world.layouts[std::size_t(m)].children(t);
-            if (ch.empty()) return false;
-            for (const TileId& c : ch)
-                if (!residentIn(m, c) && !coveredIn(m, c)) return false;
-            return true;
-        };
         std::function<bool(int, const TileId&)> anyBelow = [&](int m, const TileId& t) {
             for (const TileId& c : world.layouts[std::size_t(m)].children(t))
                 if (residentIn(m, c) || anyBelow(m, c)) return true;
@@ -305,47 +290,20 @@ struct StepCheck {
                     for (int x : v) EXPECT_NE(x, o.slot) << "slot still in use";
                 EXPECT_EQ(removedNow.count(key), 0u) << "re-added in the step that removed it";
                 EXPECT_TRUE(available(o.material, o.tile)) << "data not available";
-                EXPECT_FALSE(coveredIn(o.material, o.tile)) << "adds a tile that cannot show";
-                if (o.reason == Reason::Refine) {
-                    ASSERT_GT(o.tile.level, 0);
-                    EXPECT_TRUE(residentIn(o.material, TileLayout::parent(o.tile)))
-                        << "add without a resident parent";
-                } else {
-                    ASSERT_EQ(o.reason, Reason::SwapIn);
-                    ASSERT_GE(k, 2u);
-                    for (std::size_t j = k - 2; j < k; ++j) {
-                        EXPECT_EQ(ops[j].kind, Kind::Remove);
-                        EXPECT_EQ(ops[j].reason, Reason::Evicted);
-                        EXPECT_EQ(ops[j].material, o.material);
-                        EXPECT_TRUE(ops[j].tile.level == o.tile.level + 1 &&
-                                    TileLayout::parent(ops[j].tile) == o.tile)
-                            << "a swap victim is not a child of the inserted tile";
-                    }
-                }
+                ASSERT_EQ(o.reason, Reason::Refine);
+                ASSERT_GT(o.tile.level, 0);
+                EXPECT_TRUE(residentIn(o.material, TileLayout::parent(o.tile)))
+                    << "add without a resident parent";
+                EXPECT_FALSE(anyBelow(o.material, o.tile)) << "a resident tile below a missing one";
                 slot = o.slot;
                 addedNow.insert(key);
             } else {
                 EXPECT_EQ(slot, o.slot) << "removes a tile that is not in that slot";
-                if (o.reason == Reason::Covered) {
-                    EXPECT_TRUE(coveredIn(o.material, o.tile)) << "removed while it shows";
-                } else {
-                    ASSERT_EQ(o.reason, Reason::Evicted);
-                    EXPECT_EQ(addedNow.count(key), 0u) << "evicted in the step that added it";
-                    EXPECT_FALSE(anyBelow(o.material, o.tile)) << "victim is not a leaf";
-                    EXPECT_GT(o.tile.level, 0);
-                    const bool firstOfGroup = k == 0 || ops[k - 1].kind != Kind::Remove ||
-                                              ops[k - 1].reason != Reason::Evicted;
-                    if (firstOfGroup) {
-                        EXPECT_EQ(used(), capacity) << "evicts with free slots";
-                    }
-                    const bool swapVictim =
-                        !firstOfGroup || (k + 1 < ops.size() && ops[k + 1].kind == Kind::Remove &&
-                                          ops[k + 1].reason == Reason::Evicted);
-                    if (!swapVictim) {
-                        EXPECT_TRUE(residentIn(o.material, TileLayout::parent(o.tile)))
-                            << "drop without a resident parent";
-                    }
-                }
+                ASSERT_EQ(o.reason, Reason::Evicted);
+                EXPECT_EQ(addedNow.count(key), 0u) << "dropped in the step that added it";
+                EXPECT_FALSE(anyBelow(o.material, o.tile)) << "victim is not a leaf";
+                EXPECT_GT(o.tile.level, 0);
+                EXPECT_EQ(used(), capacity) << "drops with free slots";
                 slot = -1;
                 removedNow.insert(key);
             }
@@ -353,36 +311,26 @@ struct StepCheck {
         EXPECT_LE(adds, maxAdds) << "over the upload budget";
     }
 
-    /** Every eviction pays for the add after it: c < P of that add (c* < P*). */
+    /** Every drop pays for the add right after it: c < P of that add (c* < P*), and it is not
+     *  that add's parent. */
     void checkEvictionCosts(const std::vector<TileOperation>& ops) const {
         for (std::size_t k = 0; k < ops.size(); ++k) {
-            if (ops[k].kind != Kind::Remove || ops[k].reason != Reason::Evicted) continue;
-            SCOPED_TRACE("eviction at operation " + std::to_string(k));
-            double cost = priority(ops[k].material, ops[k].tile);
-            std::size_t next = k + 1;
-            if (next < ops.size() && ops[next].kind == Kind::Remove &&
-                ops[next].reason == Reason::Evicted) {
-                const double second = priority(ops[next].material, ops[next].tile);
-                EXPECT_LE(cost, second) << "swap victims not cheapest first";
-                cost += second;
-                ++next;
-                ASSERT_LT(next, ops.size());
-                EXPECT_EQ(ops[next].reason, Reason::SwapIn);
-                ++next;
-            }
-            while (next < ops.size() && ops[next].kind == Kind::Remove &&
-                   ops[next].reason == Reason::Covered)
-                ++next;
-            ASSERT_LT(next, ops.size()) << "an eviction without the add it makes room for";
-            EXPECT_EQ(ops[next].kind, Kind::Add);
-            EXPECT_EQ(ops[next].reason, Reason::Refine);
-            EXPECT_LT(cost, priority(ops[next].material, ops[next].tile)) << "c* >= P*";
-            k = next;
+            if (ops[k].kind != Kind::Remove) continue;
+            SCOPED_TRACE("drop at operation " + std::to_string(k));
+            ASSERT_LT(k + 1, ops.size()) << "a drop without the add it makes room for";
+            const TileOperation& add = ops[k + 1];
+            EXPECT_EQ(add.kind, Kind::Add);
+            EXPECT_LT(priority(ops[k].material, ops[k].tile), priority(add.material, add.tile))
+                << "c* >= P*";
+            EXPECT_FALSE(add.material == ops[k].material &&
+                         TileLayout::parent(add.tile) == ops[k].tile)
+                << "dropped the parent of the tile it makes room for";
+            ++k;
         }
     }
 
     /** When a step ends under budget, no allowed operation was left that lowers the error: no
-     *  free slot with an available candidate, and, when full, no eviction cheaper than the best
+     *  free slot with an available candidate, and, when full, no drop cheaper than the best
      *  candidate that the rules allow (mirrors the rules, from the queries only). */
     void checkStoppedAtOptimum(const std::vector<TileOperation>& ops,
                                const std::set<std::pair<int, std::size_t>>& removedNow,
@@ -399,7 +347,7 @@ struct StepCheck {
             for (std::size_t i = 0; i < layout.tileCount(); ++i) {
                 const TileId t = layout.tileAt(i);
                 if (t.level == 0 || s.resident(m, t) || !s.resident(m, TileLayout::parent(t)) ||
-                    fullyCovered(s, m, t) || removedNow.count({m, i}) || !available(m, t))
+                    removedNow.count({m, i}) || !available(m, t))
                     continue;
                 const double p = priority(m, t);
                 if (p > bestP) {
@@ -411,41 +359,17 @@ struct StepCheck {
         }
         if (bestM < 0) return;
         ASSERT_EQ(s.used(), s.capacity()) << "stopped with a free slot and a candidate";
-        const int addsLeft = maxAdds - adds;
         const TileId bestParent = TileLayout::parent(best);
-        auto evictable = [&](int m, const TileId& t) {
-            const TileLayout& layout = world.layouts[std::size_t(m)];
-            return s.resident(m, t) && !hasResidentDescendant(s, m, t) &&
-                   !addedNow.count({m, layout.index(t)});
-        };
         for (int m = 0; m < int(world.layouts.size()); ++m) {
             const TileLayout& layout = world.layouts[std::size_t(m)];
             for (std::size_t i = 0; i < layout.tileCount(); ++i) {
                 const TileId t = layout.tileAt(i);
-                // Drop of t.
-                if (t.level > 0 && evictable(m, t) && s.resident(m, TileLayout::parent(t)) &&
-                    !(m == bestM && t == bestParent)) {
+                const bool droppable = t.level > 0 && s.resident(m, t) &&
+                                       !hasResidentDescendant(s, m, t) && !addedNow.count({m, i});
+                if (droppable && !(m == bestM && t == bestParent)) {
                     EXPECT_GE(priority(m, t), bestP)
                         << "a cheaper drop was left: m" << m << " " << i;
                 }
-                // Swap inserting t.
-                if (s.resident(m, t) || removedNow.count({m, i}) || addsLeft < 2) continue;
-                std::vector<std::pair<double, std::size_t>> leaves;
-                for (const TileId& c : layout.children(t))
-                    if (evictable(m, c)) leaves.emplace_back(priority(m, c), layout.index(c));
-                if (leaves.size() < 2) continue;
-                std::sort(leaves.begin(), leaves.end());
-                if (m == bestM) {
-                    const std::size_t p = layout.index(bestParent);
-                    if (leaves[0].second == p || leaves[1].second == p) continue;
-                    if (t.level >= best.level && t.group == best.group &&
-                        (t.x >> (t.level - best.level)) == best.x &&
-                        (t.y >> (t.level - best.level)) == best.y)
-                        continue;
-                }
-                if (!available(m, t)) continue;
-                EXPECT_GE(leaves[0].first + leaves[1].first, bestP)
-                    << "a cheaper swap was left: m" << m << " " << i;
             }
         }
     }
@@ -491,15 +415,15 @@ TileVotes votesOf(const World& w, const std::vector<Feedback>& feedback) {
     return v;
 }
 
-/** The approximate error E the scheduler lowers: w v summed over tiles that are neither resident
- *  nor fully covered by resident descendants. */
+/** The approximate error E the scheduler lowers: w v summed over the tiles that are not
+ *  resident. */
 double approximateError(const World& w, const std::vector<Feedback>& feedback) {
     double e = 0;
     for (int m = 0; m < int(w.layouts.size()); ++m) {
         const TileLayout& layout = w.layouts[std::size_t(m)];
         for (std::size_t i = 0; i < layout.tileCount(); ++i) {
             const TileId t = layout.tileAt(i);
-            if (w.scheduler.resident(m, t) || fullyCovered(w.scheduler, m, t)) continue;
+            if (w.scheduler.resident(m, t)) continue;
             e += double(w.weights[std::size_t(m)][i]) * double(bruteVotes(feedback, layout, m, t));
         }
     }
@@ -590,7 +514,7 @@ TEST(TileScheduler, VotesAccumulateIntoAncestors) {
     EXPECT_EQ(v.votes(0, R), 0u);
 }
 
-TEST(TileScheduler, HandWorkedAddsCoveredParentsAndSwap) {
+TEST(TileScheduler, HandWorkedAddsDropsAndLut) {
     TileScheduler s(4);
     std::vector<float> norms = {1, 2, 3, 4, 5, 6, 7};
     ASSERT_EQ(s.addMaterial(handLayout(), handWeights(), norms), 0);
@@ -598,68 +522,70 @@ TEST(TileScheduler, HandWorkedAddsCoveredParentsAndSwap) {
     // slot is the next one handed out (a stack).
     EXPECT_EQ(s.slotOf(0, R), 0);
     EXPECT_EQ(s.used(), 1);
+    EXPECT_EQ(s.lookup(0, 0, 2, 0), (LutEntry{0, 0, -1}));
     EXPECT_TRUE(s.lutDirty(0));
     s.clearLutDirty(0);
 
     // Step 1, votes a0 10, a1 10: v(A) = 20, v(B) = 0. Candidates: A with P = 5 * 20 = 100
     // (B has P = 0). Add A -> slot 1; its children become candidates a0 (3 * 10 = 30) and a1
-    // (2 * 10 = 20). Add a0 -> 2, add a1 -> 3: A's children are all resident, A is covered and
-    // leaves (slot 1 free again). R still shows where B is.
+    // (2 * 10 = 20). Add a0 -> 2, add a1 -> 3. A stays: its children need it resident, and
+    // the shader blends it in where a fragment's footprint is larger than a texel of a0, a1.
     TileVotes v1 = handVotes(s, 10, 10, 0, 0);
     EXPECT_EQ(describe(s.step(v1, allAvailable, 8)),
-              (std::vector<std::string>{add(A, 1), add(a0, 2), add(a1, 3), covered(A, 1)}));
+              (std::vector<std::string>{add(A, 1), add(a0, 2), add(a1, 3)}));
     EXPECT_TRUE(s.lutDirty(0));
-    EXPECT_EQ(s.used(), 3);
+    EXPECT_EQ(s.used(), 4);
+    EXPECT_TRUE(s.resident(0, A));
+    // LUT: the deepest resident tile and its parent's slot.
+    EXPECT_EQ(s.lookup(0, 0, 0, 0), (LutEntry{2, 2, 1}));
+    EXPECT_EQ(s.lookup(0, 0, 1, 0), (LutEntry{2, 3, 1}));
+    EXPECT_EQ(s.lookup(0, 0, 2, 0), (LutEntry{0, 0, -1}));
+    EXPECT_EQ(s.lookup(0, 0, 3, 0), (LutEntry{0, 0, -1}));
     EXPECT_TRUE(s.step(v1, allAvailable, 8).empty());  // nothing with P > 0 left
 
-    // Step 2, votes a0 1, a1 1, b0 20, b1 20: v(B) = 40; P(B) = 160, then b0 120, b1 20;
-    // eviction: swap inserting A (a0, a1 are resident leaves under the non-resident A), cost
-    // c = 3 * 1 + 2 * 1 = 5. Add B -> slot 1: R's children A (covered) and B (resident) cover it,
-    // R leaves (slot 0). Add b0 -> 0. Now full; the best add b1 has P* = 20 > c* = 5: swap
-    // (victims cheapest first: a1 (2) then a0 (3), slots 3 and 2 free, A takes 2), then add b1
-    // -> 3, which covers B: B leaves.
+    // Step 2, votes a0 1, a1 1, b0 20, b1 20: P(B) = 4 * 40 = 160, then b0 120, b1 20. Full.
+    // Drops: the leaves a0 (c = 3) and a1 (c = 2); A is not a leaf, R is level 0. Drop a1 (slot
+    // 3) for B; drop a0 (slot 2) for b0 (120). A is now a leaf, c = 5 * 2 = 10 < P(b1) = 20:
+    // drop A (slot 1) for b1. No candidate is left (a0 and a1 lost their parent).
     TileVotes v2 = handVotes(s, 1, 1, 20, 20);
     EXPECT_EQ(describe(s.step(v2, allAvailable, 8)),
-              (std::vector<std::string>{add(B, 1), covered(R, 0), add(b0, 0), evicted(a1, 3),
-                                        evicted(a0, 2), swapIn(A, 2), add(b1, 3), covered(B, 1)}));
-    EXPECT_EQ(s.used(), 3);
-    EXPECT_FALSE(s.resident(0, R));
-    // LUT: finest tiles 0 and 1 show A, 2 and 3 show b0 and b1.
-    EXPECT_EQ(s.lookup(0, 0, 0, 0), (LutEntry{1, 2}));
-    EXPECT_EQ(s.lookup(0, 0, 1, 0), (LutEntry{1, 2}));
-    EXPECT_EQ(s.lookup(0, 0, 2, 0), (LutEntry{2, 0}));
-    EXPECT_EQ(s.lookup(0, 0, 3, 0), (LutEntry{2, 3}));
+              (std::vector<std::string>{evicted(a1, 3), add(B, 3), evicted(a0, 2), add(b0, 2),
+                                        evicted(A, 1), add(b1, 1)}));
+    EXPECT_EQ(s.used(), 4);
+    EXPECT_TRUE(s.resident(0, R));
+    EXPECT_EQ(s.lookup(0, 0, 0, 0), (LutEntry{0, 0, -1}));
+    EXPECT_EQ(s.lookup(0, 0, 1, 0), (LutEntry{0, 0, -1}));
+    EXPECT_EQ(s.lookup(0, 0, 2, 0), (LutEntry{2, 2, 3}));
+    EXPECT_EQ(s.lookup(0, 0, 3, 0), (LutEntry{2, 1, 3}));
 
-    // Step 3: a0 (P 3) and a1 (P 2) are candidates again (removed only in the previous step).
-    // Add a0 -> 1, full. Best add a1 (2); evictions: drop a0 is not allowed (added in this
-    // step), swap inserting B costs 120 + 20 = 140 >= 2: stop.
-    EXPECT_EQ(describe(s.step(v2, allAvailable, 8)), (std::vector<std::string>{add(a0, 1)}));
-    // Step 4: drop a0 now costs 3 >= 2: nothing more to do.
+    // Step 3: A (P 10) is a candidate again (removed only in the previous step). Full; the
+    // cheapest drop, b1, costs 20 >= 10: stop.
     EXPECT_TRUE(s.step(v2, allAvailable, 8).empty());
 
-    // wanted: a1 is the only candidate; group priority = sum of v * norm over resident tiles:
-    // A 2 * 2 + a0 1 * 4 + b0 20 * 6 + b1 20 * 7 = 268.
-    EXPECT_EQ(s.wanted(v2, 5), (std::vector<std::pair<int, TileId>>{{0, a1}}));
-    EXPECT_DOUBLE_EQ(s.groupPriority(0, 0, v2), 268.0);
+    // wanted: A is the only candidate; group priority = sum of v * norm over resident tiles:
+    // R 42 * 1 + B 40 * 3 + b0 20 * 6 + b1 20 * 7 = 422.
+    EXPECT_EQ(s.wanted(v2, 5), (std::vector<std::pair<int, TileId>>{{0, A}}));
+    EXPECT_DOUBLE_EQ(s.groupPriority(0, 0, v2), 422.0);
     EXPECT_DOUBLE_EQ(s.priority(0, b0, v2), 120.0);
 
-    // Step 5, votes move to a1 (100) and away from b: P(a1) = 200; cheapest eviction: the swap
-    // inserting B, c = 6 * 0 + 1 * 0 = 0 (b0 before b1 on the tie) -> B takes slot 3; a1 -> 0
-    // covers A, which leaves.
+    // Step 4, votes move to a1 (100) and away from b: P(A) = 5 * 101 = 505. Drops b0 and b1
+    // cost 0 (b0 first: lower index): b0 (slot 2) for A, b1 (slot 1) for a1 (200); B is then a
+    // leaf of cost 0 < P(a0) = 3: B (slot 3) for a0.
     s.clearLutDirty(0);
-    TileVotes v5 = handVotes(s, 1, 100, 0, 0);
-    EXPECT_EQ(describe(s.step(v5, allAvailable, 8)),
-              (std::vector<std::string>{evicted(b0, 0), evicted(b1, 3), swapIn(B, 3), add(a1, 0),
-                                        covered(A, 2)}));
+    TileVotes v4 = handVotes(s, 1, 100, 0, 0);
+    EXPECT_EQ(describe(s.step(v4, allAvailable, 8)),
+              (std::vector<std::string>{evicted(b0, 2), add(A, 2), evicted(b1, 1), add(a1, 1),
+                                        evicted(B, 3), add(a0, 3)}));
     EXPECT_TRUE(s.lutDirty(0));
-    EXPECT_TRUE(s.step(v5, allAvailable, 8).empty());
-    EXPECT_EQ(s.lookup(0, 0, 1, 0), (LutEntry{2, 0}));
-    EXPECT_EQ(s.lookup(0, 0, 3, 0), (LutEntry{1, 3}));
+    EXPECT_TRUE(s.step(v4, allAvailable, 8).empty());
+    EXPECT_EQ(s.lookup(0, 0, 0, 0), (LutEntry{2, 3, 2}));
+    EXPECT_EQ(s.lookup(0, 0, 1, 0), (LutEntry{2, 1, 2}));
+    EXPECT_EQ(s.lookup(0, 0, 3, 0), (LutEntry{0, 0, -1}));
 }
 
-TEST(TileScheduler, HandWorkedDropAndRefusedSwap) {
+TEST(TileScheduler, HandWorkedDropsAndRefusals) {
     // Capacity 3, votes a0 10, a1 10: add A -> 1, a0 -> 2 (P 30 before a1's 20); full, and no
-    // eviction exists (a0 was added in this step, A is not a leaf, R has no parent).
+    // drop exists (a0 was added in this step, A is not a leaf, R is level 0).
     TileScheduler s(3);
     s.addMaterial(handLayout(), handWeights(), std::vector<float>(7, 1.f));
     TileVotes v1 = handVotes(s, 10, 10, 0, 0);
@@ -669,13 +595,12 @@ TEST(TileScheduler, HandWorkedDropAndRefusedSwap) {
     EXPECT_TRUE(s.step(v1, allAvailable, 8).empty());
     EXPECT_EQ(s.wanted(v1, 5), (std::vector<std::pair<int, TileId>>{{0, a1}}));
 
-    // Votes a0 10, a1 10, b0 20: P(B) = 4 * 20 = 80 is the best add; the drop of a0 (a leaf
-    // whose parent A is resident) costs 30 < 80: a0 leaves (slot 2), B takes it and covers R
-    // (A and B resident), which leaves (slot 0); b0 (6 * 20 = 120) takes slot 0. a1 (20): full,
-    // and no allowed eviction (A's drop needs R, which is gone; b0 is new in this step): stop.
+    // Votes a0 10, a1 10, b0 20: P(B) = 4 * 20 = 80 is the best add; the drop of a0 costs
+    // 30 < 80: a0 leaves (slot 2), B takes it. b0 (6 * 20 = 120) is next; A, a leaf now,
+    // costs 5 * 20 = 100 < 120: A leaves (slot 1), b0 takes it. a1 (20) has no parent left.
     TileVotes v2 = handVotes(s, 10, 10, 20, 0);
     EXPECT_EQ(describe(s.step(v2, allAvailable, 8)),
-              (std::vector<std::string>{evicted(a0, 2), add(B, 2), covered(R, 0), add(b0, 0)}));
+              (std::vector<std::string>{evicted(a0, 2), add(B, 2), evicted(A, 1), add(b0, 1)}));
 
     // A tie is no gain: votes a0 10, a1 15 give P(a0) = 30 = P(a1) (a0 first: lower index);
     // then the drop of a0 would cost exactly P(a1) = 30, and c* < P* does not hold.
@@ -686,24 +611,22 @@ TEST(TileScheduler, HandWorkedDropAndRefusedSwap) {
               (std::vector<std::string>{add(A, 1), add(a0, 2)}));
     EXPECT_TRUE(tie.step(vt, allAvailable, 8).empty());
 
-    // A budget of one add: the swap that would make room (two adds) is not taken, nor is an
-    // unavailable tile added. Fresh scheduler in the state of HandWorkedAddsCoveredParentsAndSwap
-    // after step 1.
+    // The budget counts adds (a drop costs no upload), and an unavailable tile is not added.
+    // Fresh scheduler in the state of HandWorkedAddsDropsAndLut after step 1 (A, a0, a1).
     TileScheduler t(4);
     t.addMaterial(handLayout(), handWeights(), std::vector<float>(7, 1.f));
     t.step(handVotes(t, 10, 10, 0, 0), allAvailable, 8);
     TileVotes v3 = handVotes(t, 1, 1, 20, 20);
     EXPECT_EQ(describe(t.step(v3, allAvailable, 1)),
-              (std::vector<std::string>{add(B, 1), covered(R, 0)}));
-    const auto noA = [](int, const TileId& tile) { return tile != A; };
-    EXPECT_EQ(describe(t.step(v3, noA, 1)), (std::vector<std::string>{add(b0, 0)}));
-    // Full; b1 (20) would need the swap inserting A: not while A is not available, nor with a
-    // budget of one add (the swap's A and b1 are two uploads).
-    EXPECT_TRUE(t.step(v3, noA, 8).empty());
-    EXPECT_TRUE(t.step(v3, allAvailable, 1).empty());
+              (std::vector<std::string>{evicted(a1, 3), add(B, 3)}));
+    // b0 (120) not available: b1 (20) for a0 (3). Then A is a leaf (10), and a1 (2), whose
+    // parent it is, is all that is left to add: stop.
+    const auto noB0 = [](int, const TileId& tile) { return tile != b0; };
+    EXPECT_EQ(describe(t.step(v3, noB0, 8)),
+              (std::vector<std::string>{evicted(a0, 2), add(b1, 2)}));
+    EXPECT_TRUE(t.step(v3, noB0, 8).empty());
     EXPECT_EQ(describe(t.step(v3, allAvailable, 8)),
-              (std::vector<std::string>{evicted(a1, 3), evicted(a0, 2), swapIn(A, 2), add(b1, 3),
-                                        covered(B, 1)}));
+              (std::vector<std::string>{evicted(A, 1), add(b0, 1)}));
 }
 
 TEST(TileScheduler, NoEvictionOfATileAddedInTheSameStep) {
@@ -736,7 +659,7 @@ TEST(TileScheduler, NoEvictionOfATileAddedInTheSameStep) {
 
 TEST(TileScheduler, InvariantsHoldAfterEveryStep) {
     // What the runs went through, so that the checks above are not vacuous.
-    int refines = 0, swaps = 0, drops = 0, coveredRemovals = 0, fullStops = 0;
+    int refines = 0, drops = 0, fullStops = 0;
     for (std::uint32_t seed = 1; seed <= 12; ++seed) {
         SCOPED_TRACE("seed " + std::to_string(seed));
         std::mt19937 rng(seed);
@@ -793,26 +716,18 @@ TEST(TileScheduler, InvariantsHoldAfterEveryStep) {
             checkState(w, "after step");
             check.checkStoppedAtOptimum(ops, removedNow, addedNow);
             if (HasFailure()) return;
-            for (std::size_t k = 0; k < ops.size(); ++k) {
-                const TileOperation& o = ops[k];
+            for (const TileOperation& o : ops) {
                 refines += o.reason == Reason::Refine;
-                swaps += o.reason == Reason::SwapIn;
-                coveredRemovals += o.reason == Reason::Covered;
-                drops += o.reason == Reason::Evicted && k + 1 < ops.size() &&
-                         ops[k + 1].reason == Reason::Refine &&
-                         (k == 0 || ops[k - 1].reason != Reason::Evicted);
+                drops += o.reason == Reason::Evicted;
             }
             fullStops += int(addedNow.size()) < check.maxAdds && w.scheduler.used() == capacity &&
                          !w.scheduler.wanted(votes, 1).empty();
         }
     }
-    std::cout << "[ runs     ] " << refines << " adds, " << swaps << " swaps, " << drops
-              << " drops, " << coveredRemovals << " covered removals, " << fullStops
+    std::cout << "[ runs     ] " << refines << " adds, " << drops << " drops, " << fullStops
               << " steps stopped full under budget\n";
     EXPECT_GT(refines, 100);
-    EXPECT_GT(swaps, 5);
     EXPECT_GT(drops, 5);
-    EXPECT_GT(coveredRemovals, 5);
     EXPECT_GT(fullStops, 5);
 }
 
@@ -879,8 +794,8 @@ TEST(TileScheduler, BigEnoughCacheShowsEveryVotedFinestTile) {
 }
 
 TEST(TileScheduler, HundredMaterialScene) {
-    // Scene 1 of seed 003: 100 materials of 512^2 texels (8 groups of 85 tiles: 68,000 tiles), a
-    // 3136-slot cache, 32 uploads per step, fresh votes every step.
+    // Scene 1 of Schwartz et al. 2013: 100 materials of 512^2 texels (8 groups of 85 tiles: 68,000
+    // tiles), a 3136-slot cache, 32 uploads per step, fresh votes every step.
     std::mt19937 rng(3);
     TileScheduler s(3136);
     const TileLayout layout(512, 512, 8);

@@ -35,6 +35,11 @@ uniform bool osgBTF_bilinear = false;
 uniform bool osgBTF_blendTexels = false;
 bool btfBilinear = false;
 vec2 btfBilinearCoordinate = vec2(0.0);
+// The fragment's level of detail in base texels (btfMipLod), set by main() in uniform control
+// flow before any evaluation: for a method that picks levels itself (the BSVTF cache,
+// shaders/bsvtf.frag), whose btfEvaluate runs inside the light loop, where derivatives are
+// undefined. Not set in the coordinate-map variant.
+float btfFragmentLod = 0.0;
 
 /** The method's BTF value for one texel and local unit directions (view, light: away from the
  *  surface, z > 0). Measured values include the cosine term: nothing multiplies by n.l again. */
@@ -130,6 +135,7 @@ void main() {
     btfSurfaceFrame(t, b, n);
     vec3 view = btfLocalView(t, b, n);
 #ifndef OSGBTF_COORDINATE_MAP
+    btfFragmentLod = btfMipLod(btfTexCoord);
     // A mip-mapped material blends two levels as GL_LINEAR_MIPMAP_LINEAR (btfAddMipTaps: the
     // level selection environment.glsl shares); the four texels of each, or the nearest one.
     btfAddMipTaps(btfTexCoord, osgBTF_blendTexels);

@@ -1,9 +1,11 @@
-// BSVTF on the GPU (issue 13): a streamed fmf material from a tile set in a folder, drawn under a
+// BSVTF on the GPU: a streamed fmf material from a tile set in a folder, drawn under a
 // StreamingGroup whose feedback pass drives the tile cache. Every frame the render equals the CPU
 // evaluation of what has arrived (StreamedFmfMaterial::snapshot); once converged with a cache that
 // holds every finest tile it equals the fmf material itself, at texel centres and filtered between
 // them, across tile edges and the material's wrap edge; the feedback pass reports level
-// L - k where 2^k texels fall in a pixel (seed 003 eq. 1).
+// L - k where 2^k texels fall in a pixel (Schwartz et al. 2013 eq. 1); minified, a fragment blends
+// its deepest resident level with the parent level (trilinear) as StreamedFmfMaterial's CPU
+// reference does.
 #include <cmath>
 #include <iostream>
 #include <tuple>
@@ -80,10 +82,11 @@ double gpuVsCpu(const osg::Image& image, const Material& material, const glm::ve
 }
 
 /** An orthographic view of `texels` x `texels` finest texels around texel corner (x, y) of the
- *  patch tiled `repeats` times, over kPixels x kPixels pixels. */
-struct MagnifiedWindow {
+ *  patch tiled `repeats` times, over kPixels x kPixels pixels: magnified for texels < kPixels,
+ *  minified (lod log2(texels / kPixels)) above. */
+struct TexelWindow {
     static constexpr int kPixels = 64;
-    MagnifiedWindow(double x, double y, double texels, float repeats_) : repeats(repeats_) {
+    TexelWindow(double x, double y, double texels, float repeats_) : repeats(repeats_) {
         // Patch coordinates = texture coordinates / repeats.
         x0 = (x - 0.5 * texels) / (kWidth * repeats);
         x1 = (x + 0.5 * texels) / (kWidth * repeats);
@@ -152,7 +155,7 @@ TEST_F(BsvtfGpu, RendersWhatHasArrivedEveryFrameAndConvergesToTheFmfMaterial) {
     std::cout << "converged after " << frames << " frames: " << stats.residentTiles
               << " resident tiles, " << stats.uploads << " uploads, " << stats.bytesReceived
               << " bytes received\n";
-    // Every finest tile resident (their parents covered and removed): 15 per group.
+    // Every finest tile resident (15 per group), with all their ancestors.
     for (int g = 0; g < 2; ++g)
         for (int ty = 0; ty < 3; ++ty)
             for (int tx = 0; tx < 5; ++tx)
@@ -197,7 +200,7 @@ TEST_F(BsvtfGpu, ConvergedMagnifiedRenderIsFilteredAsTheFmfMaterialAcrossTileAnd
     for (const Case& w : {Case{8, 8, 1.0f, "tile corner"}, Case{40, 24, 2.0f, "wrap"}})
         for (const glm::vec3& light : {glm::normalize(glm::vec3(-0.4f, 0.1f, 0.8f)),
                                        glm::normalize(glm::vec3(0.5f, 0.6f, 0.6f))}) {
-            const MagnifiedWindow window(w.x, w.y, 4, w.repeats);
+            const TexelWindow window(w.x, w.y, 4, w.repeats);
             const osg::ref_ptr<osg::Image> streamedImage = renderer.render(
                 patch(*streamed, view, light, w.repeats, true).get(), window.camera);
             const osg::ref_ptr<osg::Image> fmfImage = renderer.render(
@@ -206,8 +209,8 @@ TEST_F(BsvtfGpu, ConvergedMagnifiedRenderIsFilteredAsTheFmfMaterialAcrossTileAnd
             // and the streamed material's own), relative to the largest value.
             const double scale = largestValue(view, light);
             double streamedVsFmf = 0, streamedVsCpu = 0, ownCpu = 0, filteredVsNearest = 0;
-            for (int j = 0; j < MagnifiedWindow::kPixels; ++j)
-                for (int i = 0; i < MagnifiedWindow::kPixels; ++i) {
+            for (int j = 0; j < TexelWindow::kPixels; ++j)
+                for (int i = 0; i < TexelWindow::kPixels; ++i) {
                     const glm::vec2 uv = window.uv(i, j);
                     const glm::vec3 cpu =
                         original()->evaluateFiltered(uv.x, uv.y, 0.0f, view, light);
@@ -266,12 +269,12 @@ TEST_F(BsvtfGpu, TilesWithoutPaddingBlendTheValuesOfFourTexels) {
                 ASSERT_TRUE(group->streamer()->scheduler().resident(0, {g, kFinest, tx, ty}));
     const double scale = largestValue(view, light);
     for (const auto& [x, y, repeats] : {std::tuple{8, 8, 1.0f}, {40, 24, 2.0f}}) {
-        const MagnifiedWindow window(x, y, 4, repeats);
+        const TexelWindow window(x, y, 4, repeats);
         const osg::ref_ptr<osg::Image> image =
             renderer.render(patch(*streamed, view, light, repeats, true).get(), window.camera);
         double worst = 0;
-        for (int j = 0; j < MagnifiedWindow::kPixels; ++j)
-            for (int i = 0; i < MagnifiedWindow::kPixels; ++i) {
+        for (int j = 0; j < TexelWindow::kPixels; ++j)
+            for (int i = 0; i < TexelWindow::kPixels; ++i) {
                 const glm::vec2 uv = window.uv(i, j);
                 const glm::vec3 cpu = original()->evaluateFiltered(uv.x, uv.y, 0.0f, view, light);
                 for (int c = 0; c < 3; ++c)
@@ -309,12 +312,12 @@ TEST_F(BsvtfGpu, AFragmentIsFilteredAtItsTilesResidentLevel) {
     // 4 x 4 level-0 texels around level-0 texel corner (2, 2), and around (5, 3), the level's
     // border (the patch tiled twice: the coordinates pass 1 there).
     for (const auto& [x, y] : {std::pair{16, 16}, {40, 24}}) {
-        const MagnifiedWindow window(x, y, 32, 2.0f);
+        const TexelWindow window(x, y, 32, 2.0f);
         const osg::ref_ptr<osg::Image> image =
             renderer.render(patch(*streamed, view, light, 2.0f, true).get(), window.camera);
         double worst = 0, filteredVsNearest = 0;
-        for (int j = 0; j < MagnifiedWindow::kPixels; ++j)
-            for (int i = 0; i < MagnifiedWindow::kPixels; ++i) {
+        for (int j = 0; j < TexelWindow::kPixels; ++j)
+            for (int i = 0; i < TexelWindow::kPixels; ++i) {
                 const glm::vec2 uv = window.uv(i, j);
                 // GL_LINEAR on the 5 x 3 level with wrap-around; level-0 texel (a, b) is what
                 // the streamed material (its snapshot) shows at finest texel (8a, 8b).
@@ -347,6 +350,102 @@ TEST_F(BsvtfGpu, AFragmentIsFilteredAtItsTilesResidentLevel) {
                   << "; filtered vs nearest " << filteredVsNearest << "\n";
         EXPECT_LT(worst, 1e-3) << x << ", " << y;
         EXPECT_GT(filteredVsNearest, 1e-2) << x << ", " << y;
+    }
+}
+
+TEST_F(BsvtfGpu, MinifiedFragmentsBlendTheDeepestResidentLevelWithItsParent) {
+    // Trilinear (bsvtf.frag): the GL_LINEAR value at the fragment's deepest resident level d,
+    // mixed with the one at d's parent level by lod - (L - d) clamped to [0, 1]. 64 x 64 pixels
+    // against StreamedFmfMaterial::evaluateResidentFiltered at each pixel centre and the view's
+    // lod, and against the single-level blend (lod 0: d alone, the filter before trilinear),
+    // from which the render must differ. Cases (texels per pixel; what is resident):
+    //  - 1.5, converged there: every finest tile; levels L (share 0.415) and L - 1 (0.585);
+    //  - 3, the same cache: d = L is finer than the footprint needs, its parent alone (share 1);
+    //  - 3, converged there: the feedback asks for L - 1, which is d: L - 1 and L - 2 (0.585).
+    // While the first converges, every frame too: tiles at different levels side by side, level-0
+    // tiles still zero, U packets missing.
+    // Tolerance: 1e-3 of the largest value, as the magnified filtered tests (GL_LINEAR's weights
+    // may be 8-bit fixed point on GPUs); the texture coordinates the GPU interpolates and the CPU
+    // computes differ by float rounding (~1e-6 at uv ~ 10, ~4e-5 of a finest texel), the lods
+    // by ~1e-7.
+    const glm::vec3 view = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    const glm::vec3 light = glm::normalize(glm::vec3(-0.4f, 0.1f, 0.8f));
+    const double scale = largestValue(view, light);
+    struct Case {
+        double texels;  // finest texels across the 64 pixels
+        float repeats;
+        bool converge;  // a fresh streamer converged for this view, else the previous one's cache
+        int deepest;    // the level every finest tile position shows
+        const char* name;
+    };
+    const Case cases[] = {{96, 8.0f, true, kFinest, "1.5 texels per pixel"},
+                          {192, 16.0f, false, kFinest, "3 texels per pixel, every tile resident"},
+                          {192, 16.0f, true, kFinest - 1, "3 texels per pixel, converged there"}};
+    HeadlessRenderer& renderer = sharedRenderer();
+    osg::ref_ptr<StreamingGroup> group;
+    osg::ref_ptr<StreamedFmfMaterial> streamed;
+    /** Largest |GPU - CPU| / scale over the pixels, and of |CPU - CPU at lod 0| / scale. */
+    const auto compare = [&](const osg::Image& image, const TexelWindow& window, float lod,
+                             double& gpuVsCpu, double& trilinearVsSingle) {
+        gpuVsCpu = trilinearVsSingle = 0;
+        for (int j = 0; j < TexelWindow::kPixels; ++j)
+            for (int i = 0; i < TexelWindow::kPixels; ++i) {
+                const glm::vec2 uv = window.uv(i, j);
+                const glm::vec3 cpu =
+                    streamed->evaluateResidentFiltered(uv.x, uv.y, lod, view, light);
+                const glm::vec3 single =
+                    streamed->evaluateResidentFiltered(uv.x, uv.y, 0.0f, view, light);
+                for (int k = 0; k < 3; ++k) {
+                    gpuVsCpu = std::max(gpuVsCpu, std::abs(pixel(image, i, j, k) - cpu[k]) / scale);
+                    trilinearVsSingle =
+                        std::max(trilinearVsSingle, std::abs(double(cpu[k] - single[k])) / scale);
+                }
+            }
+    };
+    for (const Case& c : cases) {
+        const TexelWindow window(kWidth * c.repeats / 2, kHeight * c.repeats / 2, c.texels,
+                                 c.repeats);
+        const float lod = float(std::log2(c.texels / TexelWindow::kPixels));
+        if (c.converge) {
+            group = new StreamingGroup(new TileStreamer(streamerOptions(7)));
+            group->setFeedbackScale(1);
+            streamed = group->streamer()->open(dir.file("tiles"));
+            group->addChild(patch(*streamed, view, light, c.repeats, true));
+            renderer.setScene(group.get());
+            renderer.setCamera(window.camera);
+            int frames = 0, partial = 0;
+            double worst = 0;
+            for (; !group->settled() && frames < 200; ++frames) {
+                const osg::ref_ptr<osg::Image> image = renderer.render();
+                if (&c != &cases[0]) continue;
+                // The frame showed what the CPU reference sees now (single-threaded viewer).
+                double gpuVsCpu = 0, unused = 0;
+                compare(*image, window, lod, gpuVsCpu, unused);
+                ASSERT_LT(gpuVsCpu, 1e-3) << c.name << ", frame " << frames;
+                worst = std::max(worst, gpuVsCpu);
+                if (group->streamer()->stats().residentTiles < 48) ++partial;
+            }
+            ASSERT_TRUE(group->settled()) << c.name;
+            if (&c == &cases[0]) {
+                std::cout << c.name << ": " << frames << " frames while tiles arrive (" << partial
+                          << " partial), GPU vs CPU " << worst << "\n";
+                EXPECT_GE(partial, 3) << "the intermediate states were not exercised";
+            }
+        }
+        const TileScheduler& scheduler = group->streamer()->scheduler();
+        const TileLayout& layout = scheduler.layout(0);
+        for (int g = 0; g < 2; ++g)
+            for (int ty = 0; ty < layout.tilesY(kFinest); ++ty)
+                for (int tx = 0; tx < layout.tilesX(kFinest); ++tx)
+                    ASSERT_EQ(scheduler.lookup(0, g, tx, ty).level, c.deepest) << c.name;
+        const osg::ref_ptr<osg::Image> image =
+            renderer.render(patch(*streamed, view, light, c.repeats, true).get(), window.camera);
+        double gpuVsCpu = 0, trilinearVsSingle = 0;
+        compare(*image, window, lod, gpuVsCpu, trilinearVsSingle);
+        std::cout << c.name << " (lod " << lod << "): GPU vs CPU " << gpuVsCpu
+                  << "; trilinear vs one level " << trilinearVsSingle << "\n";
+        EXPECT_LT(gpuVsCpu, 1e-3) << c.name;
+        EXPECT_GT(trilinearVsSingle, 1e-2) << c.name;
     }
 }
 
