@@ -57,7 +57,7 @@ struct FilterTap {
 };
 
 /** The texels a filtered lookup blends (four per level, two levels), in the order the shaders
- *  add them up (surface_frame.glsl's btfTapTexel, btfTapWeight). */
+ *  add them up (surface_frame.glsl's btfTapTexel(k), btfTapWeight(k)). */
 struct FilterTaps {
     FilterTap taps[8];
     int count = 0;

@@ -157,7 +157,7 @@ void main() {
             if (visible > 0.0) {
                 vec3 value = vec3(0.0);
                 for (int k = 0; k < btfTapCount; ++k)
-                    value += btfTapWeight[k] * btfEvaluate(btfTapTexel[k], view, light);
+                    value += btfTapWeight(k) * btfEvaluate(btfTapTexel(k), view, light);
                 color += visible * osgBTF_lightColor[i] * value;
             }
         }

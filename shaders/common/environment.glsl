@@ -55,7 +55,7 @@ void main() {
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {
         for (int k = 0; k < btfTapCount; ++k)
-            color += btfTapWeight[k] * btfEnvironmentEvaluate(btfTapTexel[k], view);
+            color += btfTapWeight(k) * btfEnvironmentEvaluate(btfTapTexel(k), view);
         color *= osgBTF_envExposure;
     }
     gl_FragColor = vec4(color, 1.0);

@@ -78,17 +78,60 @@ float btfMipLod(vec2 uv) {
 // The texels a fragment evaluates and their shares of its value (at most four per level, two
 // levels), in the order the CPU references add them up (materials/BilinearTaps.h: FilterTaps,
 // mipFilterTaps). Texels of weight 0 are left out: they cost no evaluation.
+// Eight named variables, not arrays: an array indexed per fragment lives in memory on a software
+// rasteriser, and llvmpipe then spent ~2.5 ms per 256 x 256 pass on it in every program, also
+// where a fragment reads one texel (lambert's whole shading took 0.4 ms without it). Reads and
+// writes pick a variable by comparisons, which stay in registers.
 const int btfMaxTaps = 8;
-ivec2 btfTapTexel[btfMaxTaps];
-float btfTapWeight[btfMaxTaps];
+ivec2 btfTap0, btfTap1, btfTap2, btfTap3, btfTap4, btfTap5, btfTap6, btfTap7;
+float btfWeight0, btfWeight1, btfWeight2, btfWeight3, btfWeight4, btfWeight5, btfWeight6,
+    btfWeight7;
 int btfTapCount = 0;
 
 void btfAddTap(ivec2 texel, float weight) {
     if (weight > 0.0) {
-        btfTapTexel[btfTapCount] = texel;
-        btfTapWeight[btfTapCount] = weight;
+        int k = btfTapCount;
+        if (k == 0) {
+            btfTap0 = texel;
+            btfWeight0 = weight;
+        } else if (k == 1) {
+            btfTap1 = texel;
+            btfWeight1 = weight;
+        } else if (k == 2) {
+            btfTap2 = texel;
+            btfWeight2 = weight;
+        } else if (k == 3) {
+            btfTap3 = texel;
+            btfWeight3 = weight;
+        } else if (k == 4) {
+            btfTap4 = texel;
+            btfWeight4 = weight;
+        } else if (k == 5) {
+            btfTap5 = texel;
+            btfWeight5 = weight;
+        } else if (k == 6) {
+            btfTap6 = texel;
+            btfWeight6 = weight;
+        } else {
+            btfTap7 = texel;
+            btfWeight7 = weight;
+        }
         ++btfTapCount;
     }
+}
+
+/** Tap k's texel (k < btfTapCount). */
+ivec2 btfTapTexel(int k) {
+    return k < 4 ? (k < 2 ? (k == 0 ? btfTap0 : btfTap1) : (k == 2 ? btfTap2 : btfTap3))
+                 : (k < 6 ? (k == 4 ? btfTap4 : btfTap5) : (k == 6 ? btfTap6 : btfTap7));
+}
+
+/** Tap k's share of the fragment's value (k < btfTapCount). */
+float btfTapWeight(int k) {
+    return k < 4 ? (k < 2 ? (k == 0 ? btfWeight0 : btfWeight1)
+                          : (k == 2 ? btfWeight2 : btfWeight3))
+                 : (k < 6 ? (k == 4 ? btfWeight4 : btfWeight5)
+                          : (k == 6 ? btfWeight6 : btfWeight7));
 }
 
 /** The four texels of `level` around uv, wrapped inside the level's rectangle of the atlas (the
