@@ -8,25 +8,36 @@
 #include <osg/observer_ptr>
 
 #include "materials/DirectionLookup.h"
-#include "materials/Material.h"
+#include "materials/MethodMaterial.h"
 
 namespace osgBTF {
 
 class FmfMaterial;
 class TileStreamer;
 
-class StreamedFmfMaterial : public Material {
+/** A streamed material's members: which stream of which streamer it shows. Copies share the
+ *  stream (a shallow copy). */
+struct StreamedFmfData {
+protected:
+    osg::observer_ptr<TileStreamer> _streamer;
+    int _index = -1;
+    std::string _location;
+    DirectionLookup _viewLookup, _lightLookup;
+};
+
+/** Not a registered method (its streamer makes it, nothing loads it by name): the base gives it
+ *  copying, assignFrom and methodName(), no registration. */
+class StreamedFmfMaterial : public MethodMaterial<StreamedFmfMaterial, StreamedFmfData> {
 public:
+    static constexpr const char* kMethod = "bsvtf";
     StreamedFmfMaterial() = default;
     StreamedFmfMaterial(const StreamedFmfMaterial& other,
-                        const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY);
+                        const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
     META_Object(osgBTF, StreamedFmfMaterial)
-
-        std::string methodName() const override {
-        return "bsvtf";
-    }
-    /** The fmf material of what has arrived (snapshot()): the CPU reference of the shader. */
-    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+        /** The fmf material of what has arrived (snapshot()): the CPU reference of the shader. */
+        glm::vec3
+        evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
     /** This material's own GPU bytes: U and its lookup table (the tile cache is the streamer's,
      *  shared by every streamed material: TileStreamer::gpuBytes). */
@@ -34,8 +45,6 @@ public:
     /** The snapshot's file: an fmf material of what has arrived. */
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
-    /** Shares the other material's stream (a shallow copy). */
-    void assignFrom(const Material& other) override;
 
     /** The fmf material the shader renders now: every texel's Eigen-Texture values from the
      *  deepest resident tile over it (zeros where its data have not arrived), U with zeros for
@@ -74,10 +83,6 @@ protected:
 
 private:
     friend class TileStreamer;
-    osg::observer_ptr<TileStreamer> _streamer;
-    int _index = -1;
-    std::string _location;
-    DirectionLookup _viewLookup, _lightLookup;
 };
 
 }  // namespace osgBTF

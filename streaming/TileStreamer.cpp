@@ -658,24 +658,6 @@ osg::ref_ptr<osg::StateSet> TileStreamer::createStateSet(
 
 // ---- StreamedFmfMaterial -----------------------------------------------------------------------
 
-StreamedFmfMaterial::StreamedFmfMaterial(const StreamedFmfMaterial& other,
-                                         const osg::CopyOp& copyop)
-    : Material(other, copyop),
-      _streamer(other._streamer),
-      _index(other._index),
-      _location(other._location),
-      _viewLookup(other._viewLookup),
-      _lightLookup(other._lightLookup) {}
-
-void StreamedFmfMaterial::assignFrom(const Material& other) {
-    const auto& same = assignCommon<StreamedFmfMaterial>(other);
-    _streamer = same._streamer;
-    _index = same._index;
-    _location = same._location;
-    _viewLookup = same._viewLookup;
-    _lightLookup = same._lightLookup;
-}
-
 osg::ref_ptr<FmfMaterial> StreamedFmfMaterial::snapshot() const {
     osg::ref_ptr<TileStreamer> streamer;
     if (!_streamer.lock(streamer))
