@@ -1,0 +1,89 @@
+// osgBTF: one osg::Program per method and variant (plain, through a coordinate map, under a shadow
+// map) for the whole process: every material of a method shares it, so OSG compiles it once per
+// context. Declared beside their users: methodProgram (MethodRegistry.h), coordinateMapProgram and
+// shadowMapProgram (CoordinateMapRendering.h), releaseCachedPrograms (MaterialState.h).
+#include <map>
+#include <mutex>
+#include <tuple>
+
+#include <osg/Shader>
+
+#include "core/ShaderSource.h"
+#include "materials/CoordinateMapRendering.h"
+#include "materials/EnvironmentState.h"
+#include "materials/LightVisibility.h"
+#include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
+#include "materials/ShaderInterface.h"
+
+namespace osgBTF {
+
+namespace {
+
+/** One program per method and variant for the whole process (every material of a method shares
+ *  it, so OSG compiles it once per context); releaseCachedPrograms empties its per-context part. */
+struct ProgramCache {
+    std::mutex mutex;
+    std::map<std::tuple<std::string, bool, bool>, osg::ref_ptr<osg::Program>> programs;
+};
+
+ProgramCache& programCache() {
+    static ProgramCache cache;
+    return cache;
+}
+
+osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordinateMap,
+                                          bool shadowMap = false) {
+    ProgramCache& cache = programCache();
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    auto& program = cache.programs[{method, coordinateMap, shadowMap}];
+    if (!program) {
+        osg::ref_ptr<osg::Program> created = new osg::Program;
+        created->setName("osgBTF_" + method + (coordinateMap ? "_coordinateMap" : "") +
+                         (shadowMap ? "_shadowMap" : ""));
+        const std::string vert = "common/btf.vert", frag = method + ".frag";
+        std::string vertex = shaderSource(vert);
+        // The shadow variant reads the technique's TexGen in the vertex stage too.
+        if (shadowMap) vertex = addShaderDefine(vertex, shader::kShadowMapDefine);
+        osg::ref_ptr<osg::Shader> vs = new osg::Shader(osg::Shader::VERTEX, vertex);
+        vs->setName(shaderOrigin(vert));
+        std::string fragment = shaderSource(frag);
+        if (coordinateMap) fragment = addShaderDefine(fragment, shader::kCoordinateMapDefine);
+        if (shadowMap) fragment = addShaderDefine(fragment, shader::kShadowMapDefine);
+        osg::ref_ptr<osg::Shader> fs = new osg::Shader(osg::Shader::FRAGMENT, fragment);
+        fs->setName(shaderOrigin(frag));
+        created->addShader(vs);
+        created->addShader(fs);
+        created->addBindAttribLocation(shader::kTangentAttributeName, shader::kTangentAttribute);
+        for (int a = 0; a < shader::kLightVisibilityAttributes; ++a)
+            created->addBindAttribLocation(shader::kLightVisibilityAttributeName[a],
+                                           shader::kLightVisibilityAttribute[a]);
+        program = created;
+    }
+    return program;
+}
+
+}  // namespace
+
+osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
+    return programVariant(method, false);
+}
+
+void releaseCachedPrograms(osg::State* state) {
+    {
+        ProgramCache& cache = programCache();
+        std::lock_guard<std::mutex> lock(cache.mutex);
+        for (const auto& entry : cache.programs) entry.second->releaseGLObjects(state);
+    }
+    releaseCachedEnvironmentPrograms(state);
+}
+
+osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method) {
+    return programVariant(method, true);
+}
+
+osg::ref_ptr<osg::Program> shadowMapProgram(const std::string& method, bool coordinateMap) {
+    return programVariant(method, coordinateMap, true);
+}
+
+}  // namespace osgBTF

@@ -1,0 +1,118 @@
+// osgBTF: the method registry. Each method (materials/<name>/) registers a MethodInfo from a
+// static initialiser in its own .cpp (registerMethodClass, materials/MethodMaterial.h) and its
+// fitter from its <Name>Fit.cpp in libosgBTFFit (registerFitterClass); the tools, the harness,
+// the plugins and the serializers find methods here by name, and load and save any method's
+// file through it.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+/** Environment lighting folded per vertex (materials/EnvironmentState.h, Sattler et al. 2003
+ * section 5.2), for a method whose point-light rendering is linear in the light interpolation
+ * weights: the environment projected onto the measured lights (g) folds into the method's own light
+ * basis. Its shader is "environment/<name>.frag" (materials/<name>/<name>_environment.frag). The
+ *  functions get materials of the method's own class. */
+struct EnvironmentHooks {
+    /** Whether this material folds (empty: every material of the method does); e.g. fmf only
+     *  without dynamic-range reduction. */
+    std::function<bool(const Material&)> folds;
+    /** One vertex's data from g (one RGB value per measured light); throws Error for g of the
+     *  wrong size or a material that does not fold. */
+    std::function<std::vector<float>(const Material&, const std::vector<glm::vec3>& g)> fold;
+    /** What the environment shader draws from one vertex's data: its CPU reference. */
+    std::function<glm::vec3(const Material&, const std::vector<float>& folded, int x, int y,
+                            const glm::vec3& view)>
+        evaluateFolded;
+    /** RGB values per vertex in fold's result. */
+    std::function<std::size_t(const Material&)> foldedStride;
+    /** Adds the uniforms the environment shader needs beyond the material's StateSet and the
+     *  common ones (e.g. a size its loops run to); empty: none. */
+    std::function<void(const Material&, osg::StateSet&)> addUniforms;
+};
+
+/** A compression method: everything the tools, the harness, the serializers and the tests need
+ *  to know about it, so that a new method is one folder that registers one of these. */
+struct MethodInfo {
+    std::string name;         ///< "laf"
+    std::string description;  ///< one line for --help
+    /** The fit options, in the order help texts list them (see MethodOptions.h). */
+    std::vector<OptionSpec> options;
+    /** Fits the method. Implementations start with validateOptions(), so every caller gets the
+     *  one error format; they read typed values from its result. The built-in methods' fitters
+     *  live in libosgBTFFit (materials/<name>/<Name>Fit.cpp), which sets them with
+     *  registerFitter when it is loaded; without it, fit throws Error "method 'X': fitting
+     *  needs libosgBTFFit ...". */
+    std::function<osg::ref_ptr<Material>(const BtfSource&, const FitOptions&)> fit;
+    std::function<osg::ref_ptr<Material>(const FittedMaterial&)> load;
+    /** A new empty material of the method's class (e.g. `[]() -> osg::Object* { return new
+     *  LafMaterial; }`): registerMethod adds an osgDB object wrapper for that class, named by its
+     *  libraryName()::className(), so .osgt/.osgb read and write the material (property
+     *  FittedData: the whole FittedMaterial). */
+    osg::Object* (*createInstance)() = nullptr;
+    /** Static ALU/TEX count of one fragment of a fitted material's shader (harness Table 3). */
+    std::function<ShaderCost(const Material&)> shaderCost;
+    /** The fragment shader's source when it is not built into the library as <name>.frag (from
+     *  materials/<name>/<name>.frag; a method defined outside the library's sources). An override
+     *  file shaders/<name>.frag on OSG_FILE_PATH still wins, as for the built-in shaders. */
+    std::string fragmentShader;
+    /** Folded environment lighting; none: the method is lit by representative lights. */
+    std::optional<EnvironmentHooks> environment;
+    /** The shader filters the per-texel parameters (GL's bilinear filter with wrap-around, or its
+     *  own blend of them) and evaluates once (Material::TexelFilter::Parameters): for a method
+     *  whose value is linear in them (up to Material::finishLinear), so that filtering the
+     *  parameters blends the texels' values. False: btf_main.glsl blends four evaluations
+     *  (TexelFilter::Values), which any method's shader supports unchanged. */
+    bool filtersParameters = false;
+    /** The baseline every comparison starts with (baselineMethod()); one method sets it. */
+    bool baseline = false;
+    /** The method whose fits `btf fit` can save as a UBO2014 .btf file (its factors are the
+     *  format's). */
+    bool writesUbo2014 = false;
+    /** The method the .btf/.btfmaterial plugins fit when the options name none
+     *  (pluginDefaultMethod()); one method sets it. */
+    bool pluginDefault = false;
+    /** Part of `btf compare --methods all` (false for the baseline, which is always added). */
+    bool compareAll = true;
+    /** Position in `--methods all` and other lists that follow the paper's order. */
+    int order = 100;
+    /** Options for a fit that is quick on a few texels (tests fit every method with these). */
+    std::string quickFitOptions;
+};
+
+/** Adds a method; each method's .cpp calls it from a static initialiser. Returns true. */
+bool registerMethod(MethodInfo info);
+/** Sets the fit of method `name`, registered now or later (libosgBTFFit's static initialisers
+ *  call it, so the render library holds no fitting code). Returns true. */
+bool registerFitter(const std::string& name, decltype(MethodInfo::fit) fit);
+/** Throws Error "unknown method 'X' (known: laf, slaf, ...)". */
+const MethodInfo& findMethod(const std::string& name);
+/** findMethod without the error: nullptr for a name no method registered. */
+const MethodInfo* findMethodIfRegistered(const std::string& name);
+/** The method with MethodInfo::baseline; throws Error when none is registered. */
+const MethodInfo& baselineMethod();
+/** The method with MethodInfo::pluginDefault; throws Error when none is registered. */
+const MethodInfo& pluginDefaultMethod();
+/** Registered method names, alphabetically. */
+std::vector<std::string> methodNames();
+/** Registered method names by MethodInfo::order (then name). */
+std::vector<std::string> methodNamesInOrder();
+
+/** Saves through the fitted-material container (atomic). */
+void saveMaterial(const Material& material, const std::string& path);
+/** Loads any registered method's file; throws Error naming the file and the problem. */
+osg::ref_ptr<Material> loadMaterial(const std::string& path);
+osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file);
+
+/** The method's shared program: common/btf.vert + <method>.frag (materials/<method>/, or the
+ *  method's MethodInfo::fragmentShader), the tangent bound to shader::kTangentAttribute. Compiled
+ * by OSG at first use; built once per process and method. Throws Error if a source is missing. */
+osg::ref_ptr<osg::Program> methodProgram(const std::string& method);
+
+}  // namespace osgBTF
