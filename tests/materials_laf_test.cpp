@@ -184,7 +184,7 @@ TEST(Laf, SaveLoadRoundTripIsExact) {
     EXPECT_EQ(info.exitCode, 0) << info.output;
 }
 
-TEST(Laf, MemoryMatchesSeed001Table2) {
+TEST(Laf, MemoryMatchesMeseth2003Table2) {
     // The standard configuration: 256 x 256 texels, Bonn 81 x 81 directions, 2 lobes.
     osg::ref_ptr<LafMaterial> m =
         LafMaterial::create(256, 256, 2, DirectionSet::bonn81(), DirectionSet::bonn81());

@@ -193,7 +193,7 @@ TEST(Lpca, SaveLoadRoundTripIsExactAndOiioReadsTheFile) {
     EXPECT_EQ(info.exitCode, 0) << info.output;
 }
 
-TEST(Lpca, MemoryMatchesSeed001Table2AtTheStandardConfiguration) {
+TEST(Lpca, MemoryMatchesMeseth2003Table2AtTheStandardConfiguration) {
     // Bonn 81x81, 256x256 texels, 32 clusters x 8 components: 85.9 values, 170.8 bytes per texel.
     osg::ref_ptr<LpcaMaterial> m =
         LpcaMaterial::ofShape(256, 256, DirectionSet::bonn81(), DirectionSet::bonn81(), 32, 8);

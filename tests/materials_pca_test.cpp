@@ -246,7 +246,7 @@ TEST(Pca, FileWithMismatchedTexturesIsRefused) {
     }
 }
 
-TEST(Pca, MemoryMatchesSeed001Table2) {
+TEST(Pca, MemoryMatchesMeseth2003Table2) {
     // The standard configuration: Bonn 81 x 81, 256 x 256 texels, 16 components, 8-bit storage.
     osg::ref_ptr<PcaMaterial> material = new PcaMaterial;  // reference counted: never on the stack
     PcaMaterial& m = *material;

@@ -337,7 +337,7 @@ TEST(PtmFile, SaveLoadRoundTripIsExact) {
 // Boßerhoff and Nicoll 2003 Table 2 (256x256, one view): PTM-RGB 6 MB, PTM-Lum 3 MB, i.e. 96 and 48
 // bytes per texel: 18 coefficients in 6 RGBA float textures (24 floats) and 6 + 3 in 3 (12 floats).
 // Ours stores the same 18 and 9 values without the unused fourth channel, as half: 36 and 18 bytes.
-TEST(PtmMemory, MatchesSeed002Table2ValueCounts) {
+TEST(PtmMemory, MatchesBosserhoff2003Table2ValueCounts) {
     const DirectionSet bonn = DirectionSet::bonn81();
     struct Case {
         bool luminance, perView;

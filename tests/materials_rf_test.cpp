@@ -121,7 +121,7 @@ TEST(RfRegistry, RegisteredWithOptionDocs) {
 
 // Meseth et al. 2003 Table 2 at its standard configuration: Bonn 81 directions, 2 lobes, 256 x 256
 // texels. The numbers come from the sizes of the model's arrays and their declared storage kinds.
-TEST(RfMemory, MatchesSeed001Table2) {
+TEST(RfMemory, MatchesMeseth2003Table2) {
     const DirectionSet bonn = DirectionSet::bonn81();
     osg::ref_ptr<RfMaterial> m = RfMaterial::create(256, 256, bonn, bonn, 2);
     const MemoryFootprint f = m->memory();
@@ -579,7 +579,7 @@ TEST(RfVariants, SaveLoadRoundTripIsExactAndOldFilesLoadAsTheDefault) {
 // lobe values and a 3-value base colour, 11 32-bit floats per texel (256 x 256 x 44 bytes = 2.75
 // MiB). Ours per view: the same 11 values, in half; rgb: 24 lobe values (the paper's 24
 // coefficients) and the 3 per-channel scales. From the arrays' sizes and storage kinds (memory()).
-TEST(RfMemory, VariantsMatchSeed002PerView) {
+TEST(RfMemory, VariantsMatchBosserhoff2003PerView) {
     const DirectionSet bonn = DirectionSet::bonn81();
     // A small model: the footprint per texel does not depend on the size (the README scales it
     // to 256 x 256), and a 256 x 256 rgb model would take 570 MB of floats in a unit test.

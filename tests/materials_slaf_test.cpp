@@ -204,7 +204,7 @@ TEST(Slaf, SaveLoadRoundTripIsExact) {
     EXPECT_EQ(info.exitCode, 0) << info.output;
 }
 
-TEST(Slaf, MemoryMatchesSeed001Table2) {
+TEST(Slaf, MemoryMatchesMeseth2003Table2) {
     osg::ref_ptr<SlafMaterial> m =
         SlafMaterial::create(256, 256, 2, DirectionSet::bonn81(), DirectionSet::bonn81());
     EXPECT_EQ(m->memory().valuesPerTexel, 257.0);
