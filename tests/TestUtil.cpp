@@ -3,14 +3,36 @@
 #include <sys/wait.h>
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 
+#include <tbb/global_control.h>
+
 #include "core/Error.h"
 
 namespace osgBTF::test {
+
+namespace {
+
+/** OSGBTF_TEST_TBB_THREADS=N caps this test process at N TBB threads. tests/run-sharded.sh sets
+ *  it to 1: it runs more test processes than cores, so threads within one only compete with the
+ *  others. In the sanitizer build they also fight over the coverage counters libFuzzer needs
+ *  (every branch of the libraries increments a shared byte): measured, one PCA accuracy test
+ *  takes 48 CPU-s on two threads and 16 on one. */
+std::unique_ptr<tbb::global_control> threadLimitFromEnvironment() {
+    const char* value = std::getenv("OSGBTF_TEST_TBB_THREADS");
+    if (!value || std::atoi(value) < 1) return nullptr;
+    return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                 std::size_t(std::atoi(value)));
+}
+
+const std::unique_ptr<tbb::global_control> testThreadLimit = threadLimitFromEnvironment();
+
+}  // namespace
 
 TempDir::TempDir() {
     std::random_device rd;
