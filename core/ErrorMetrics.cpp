@@ -13,7 +13,8 @@
 namespace osgBTF {
 
 ErrorSummary computeError(const BtfSource& measured, const AbrdfEvaluator& model,
-                          const std::vector<std::size_t>* subset) {
+                          const std::vector<std::size_t>* subset,
+                          const std::vector<std::size_t>* pairSubset) {
     ErrorSummary summary;
     std::vector<std::size_t> all;
     if (!subset) {
@@ -23,7 +24,13 @@ ErrorSummary computeError(const BtfSource& measured, const AbrdfEvaluator& model
     }
     const std::size_t texels = subset->size();
     const std::size_t values = measured.imageCount() * 3;
-    const std::size_t pairs = values / 3;
+    std::vector<std::size_t> allPairs;
+    if (!pairSubset) {
+        allPairs.resize(values / 3);
+        std::iota(allPairs.begin(), allPairs.end(), std::size_t(0));
+        pairSubset = &allPairs;
+    }
+    const std::size_t pairs = pairSubset->size();
     summary.texelsCompared = texels;
     summary.perTexel.assign(measured.texelCount(),
                             subset == &all ? 0.0f : std::numeric_limits<float>::quiet_NaN());
@@ -40,7 +47,7 @@ ErrorSummary computeError(const BtfSource& measured, const AbrdfEvaluator& model
             const float* truth = truths.data() + (j - range.begin()) * values;
             model(t, approx.data());
             double lengthSum = 0;
-            for (std::size_t p = 0; p < pairs; ++p) {
+            for (const std::size_t p : *pairSubset) {
                 double sq = 0;
                 for (int c = 0; c < 3; ++c) {
                     double d = double(truth[p * 3 + c]) - double(approx[p * 3 + c]);
@@ -73,7 +80,7 @@ ErrorSummary computeError(const BtfSource& measured, const AbrdfEvaluator& model
     }
     summary.average = texels ? sum / double(texels) : 0.0;
     if (!texels) summary.minimum = 0;
-    const double mse = squared / double(texels * values);
+    const double mse = squared / double(texels * pairs * 3);
     summary.rmse = std::sqrt(mse);
     summary.psnr = mse > 0 ? 10.0 * std::log10(1.0 / mse) : std::numeric_limits<double>::infinity();
     return summary;

@@ -31,9 +31,11 @@ using AbrdfEvaluator = std::function<void(std::size_t texel, float* abrdfOut)>;
 /** Compares a model, evaluated texel by texel (in parallel), with the measured data. The model
  *  must be evaluated at the measured directions of `measured`. With `texels` (ascending, e.g.
  *  randomTexels()), only those texels are compared, at all their (view, light) pairs: the
- *  statistics are then those of the subsample. */
+ *  statistics are then those of the subsample. With `pairs` (image indices, view * lights +
+ *  light), only those (view, light) pairs are compared: the model need not fill the others. */
 ErrorSummary computeError(const BtfSource& measured, const AbrdfEvaluator& model,
-                          const std::vector<std::size_t>* texels = nullptr);
+                          const std::vector<std::size_t>* texels = nullptr,
+                          const std::vector<std::size_t>* pairs = nullptr);
 /** Compares two BTFs of the same size and direction sets; throws Error otherwise. */
 ErrorSummary computeError(const MeasuredBtf& measured, const MeasuredBtf& model);
 

@@ -487,6 +487,15 @@ void writeFileAtomically(const std::string& path,
     }
 }
 
+void writeTextAtomically(const std::string& path, const std::string& text) {
+    writeFileAtomically(path, [&](const std::string& temporary) {
+        std::ofstream out(temporary);
+        out << text;
+        out.close();
+        if (!out) fail(path, "cannot write");
+    });
+}
+
 std::size_t removeStaleTemporaries(const std::string& folder,
                                    const std::function<bool(const std::string& stem)>& matches) {
     std::size_t removed = 0;

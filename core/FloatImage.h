@@ -88,6 +88,9 @@ void requireFinite(const FloatImage& image, const std::string& path);
 void writeFileAtomically(const std::string& path,
                          const std::function<void(const std::string& temporaryPath)>& write);
 
+/** writeFileAtomically of a text (a report, a record). */
+void writeTextAtomically(const std::string& path, const std::string& text);
+
 /** Removes what killed writers left in `folder`: entries named "STEM.tmp<pid>" or "STEM.old<pid>"
  *  (the temporary names of writeFileAtomically and of folders published by rename) for which
  *  `matches(STEM)` holds and whose process <pid> no longer runs on this machine. A writer killed

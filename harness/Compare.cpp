@@ -39,15 +39,6 @@ std::string formatNumber(double value, int precision) {
     return out.str();
 }
 
-void writeText(const std::string& path, const std::string& text) {
-    writeFileAtomically(path, [&](const std::string& temporary) {
-        std::ofstream out(temporary);
-        out << text;
-        out.close();
-        if (!out) throw Error(path + ": cannot write");
-    });
-}
-
 std::vector<std::string> orderedMethods(const CompareOptions& options) {
     std::vector<std::string> methods{baselineMethod().name};
     for (const std::string& m : options.methods) {
@@ -390,7 +381,7 @@ void pictureStage(const BtfSource& btf, const fs::path& work, CompareResult& res
     std::vector<PlotPoint> points;
     for (const MethodResult& m : result.methods)
         if (!m.failed) points.push_back({m.method, m.memory.bytesPerTexel, m.error.average});
-    writeText(
+    writeTextAtomically(
         (work / "pictures/error-vs-memory.svg").string(),
         errorMemorySvg(points, "Error vs memory: " + fs::path(result.input).filename().string()));
     result.pictures.push_back({"pictures/error-vs-memory.svg",
@@ -493,9 +484,9 @@ CompareResult runCompare(const CompareOptions& options) {
             result.gpuNote = "GPU part skipped (--no-gpu)";
         pictureStage(btf, work, result, materials);
         recommend(result);
-        writeText((work / "report.md").string(), reportMarkdown(result));
-        writeText((work / "results.csv").string(), resultsCsv(result));
-        writeText((work / "results.json").string(), resultsJson(result));
+        writeTextAtomically((work / "report.md").string(), reportMarkdown(result));
+        writeTextAtomically((work / "results.csv").string(), resultsCsv(result));
+        writeTextAtomically((work / "results.json").string(), resultsJson(result));
         publishFolder(work, finalTarget);
     } catch (...) {
         fs::remove_all(work, ec);

@@ -75,21 +75,19 @@ nlohmann::json jobKey(const FitJob& job) {
 
 }  // namespace
 
-FitProcessResult runFitProcess(const FitJob& job) {
-    if (access(job.tool.c_str(), X_OK) != 0)
-        throw Error(job.tool + ": the btf tool to run fits with is missing or not executable");
-    const std::vector<std::string> args = commandLine(job);
+pid_t spawnChild(const std::vector<std::string>& args, const std::string& log) {
+    if (access(args.at(0).c_str(), X_OK) != 0)
+        throw Error(args[0] + ": the btf tool to run with is missing or not executable");
     std::vector<char*> argv;
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
 
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, job.log.c_str(),
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
     posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-    const auto start = std::chrono::steady_clock::now();
     pid_t pid = 0;
     // The child dies with this process (tools/btf/main.cpp reads OSGBTF_PARENT_PID).
     std::vector<std::string> environment;
@@ -100,9 +98,24 @@ FitProcessResult runFitProcess(const FitJob& job) {
     for (std::string& e : environment) envp.push_back(e.data());
     envp.push_back(nullptr);
     const int spawnError =
-        posix_spawn(&pid, job.tool.c_str(), &actions, nullptr, argv.data(), envp.data());
+        posix_spawn(&pid, args[0].c_str(), &actions, nullptr, argv.data(), envp.data());
     posix_spawn_file_actions_destroy(&actions);
-    if (spawnError != 0) throw Error(job.tool + ": cannot start: " + std::strerror(spawnError));
+    if (spawnError != 0) throw Error(args[0] + ": cannot start: " + std::strerror(spawnError));
+    return pid;
+}
+
+std::string childFailure(int status, const std::string& logPath) {
+    std::string text = failureText(logPath);
+    if (WIFSIGNALED(status))
+        return "crashed (signal " + std::to_string(WTERMSIG(status)) + ", " +
+               strsignal(WTERMSIG(status)) + ")" + (text.empty() ? "" : ": " + text);
+    if (text.empty()) text = "exited with status " + std::to_string(WEXITSTATUS(status));
+    return text;
+}
+
+FitProcessResult runFitProcess(const FitJob& job) {
+    const auto start = std::chrono::steady_clock::now();
+    const pid_t pid = spawnChild(commandLine(job), job.log);
 
     int status = 0;
     struct rusage usage {};
@@ -120,13 +133,7 @@ FitProcessResult runFitProcess(const FitJob& job) {
         result.ok = fs::exists(job.output);
         if (!result.ok) result.message = "btf fit exited 0 but wrote no " + job.output;
     } else {
-        std::string text = failureText(job.log);
-        if (WIFSIGNALED(status))
-            text = "crashed (signal " + std::to_string(WTERMSIG(status)) + ", " +
-                   strsignal(WTERMSIG(status)) + ")" + (text.empty() ? "" : ": " + text);
-        else if (text.empty())
-            text = "btf fit exited with status " + std::to_string(WEXITSTATUS(status));
-        result.message = text;
+        result.message = childFailure(status, job.log);
     }
     return result;
 }
@@ -135,11 +142,7 @@ void writeFitRecord(const FitJob& job, const FitProcessResult& result, const std
     nlohmann::json record = jobKey(job);
     record["wall_seconds"] = result.wallSeconds;
     record["peak_rss_bytes"] = result.peakRssBytes;
-    writeFileAtomically(path, [&](const std::string& temporary) {
-        std::ofstream out(temporary);
-        out << record.dump(2) << "\n";
-        if (!out) throw Error(path + ": cannot write");
-    });
+    writeTextAtomically(path, record.dump(2) + "\n");
 }
 
 bool canReuseFit(const FitJob& job, const std::string& previousOutput, FitProcessResult& result) {

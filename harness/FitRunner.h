@@ -2,6 +2,8 @@
 // exhausted memory limit in one method's fit is contained, and its peak memory can be measured.
 #pragma once
 
+#include <sys/types.h>
+
 #include <cstdint>
 #include <map>
 #include <string>
@@ -35,6 +37,15 @@ struct FitProcessResult {
  *  for it with wait4() and reports its exit, wall time and peak resident memory. Never throws for
  *  a failing child; throws Error only if the child cannot be started (tool missing). */
 FitProcessResult runFitProcess(const FitJob& job);
+
+/** Starts args[0] with args, stdout and stderr into `log`, stdin from /dev/null and
+ *  OSGBTF_PARENT_PID naming this process (the child dies with it). Throws Error when args[0] is
+ *  not executable or cannot start. */
+pid_t spawnChild(const std::vector<std::string>& args, const std::string& log);
+
+/** Why a child that wait4() reported with `status` failed: its own "btf: error: ..." line in
+ *  `logPath` (else its last line), after "crashed (signal N, Name)" for a signal. */
+std::string childFailure(int status, const std::string& logPath);
 
 /** The record kept beside a fitted file (<output>.json) so that a later run can reuse it. */
 void writeFitRecord(const FitJob& job, const FitProcessResult& result, const std::string& path);
