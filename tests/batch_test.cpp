@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <thread>
 
@@ -22,6 +23,7 @@
 #include "harness/batch/Batch.h"
 #include "harness/batch/Holdout.h"
 #include "materials/MethodRegistry.h"
+#include "tests/HandMadeBatch.h"
 #include "tests/TestUtil.h"
 
 namespace fs = std::filesystem;
@@ -389,4 +391,35 @@ TEST(BtfBatch, TwoRunsAtOnceDoEveryJobOnce) {
                                  << readTextFile(dir.file("b.log"));
     for (const std::string& id : jobIds(results)) EXPECT_EQ(state(results, id), "done") << id;
     EXPECT_TRUE(temporaries(results).empty());
+}
+
+TEST(BtfBatch, ReportOfHandMadeResultsHasTheParetoFrontAndRecommendations) {
+    TempDir dir;
+    const fs::path results = dir.path() / "results";
+    test::writeHandMadeBatch(results);
+    const CommandResult r = runCommand(btf() + " batch report " + shellQuote(results.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const nlohmann::json report = readJson(results / "results.json");
+    std::map<std::string, nlohmann::json> rows;
+    for (const auto& row : report["rows"]) rows[row["job"].get<std::string>()] = row;
+    ASSERT_EQ(rows.size(), 9u);
+    EXPECT_EQ(rows["wool02--pca"]["status"], "failed");
+    EXPECT_EQ(rows["wool02--pca"]["failure"], "/data/fabric/wool02.zip: no such file <!--<script>");
+    EXPECT_EQ(rows["stone01--ptm"]["status"], "pending");
+    for (const auto& [id, row] : rows)
+        EXPECT_EQ(row["pareto"].get<bool>(), row["status"] == "done" && id != "wool01--ptm") << id;
+    std::map<std::string, std::string> recommended;
+    for (const auto& c : report["classes"])
+        recommended[c["class"].get<std::string>()] = c["recommended"].get<std::string>();
+    EXPECT_EQ(recommended,
+              (std::map<std::string, std::string>{{"fabric", "ptm"}, {"stone", "pca"}}));
+    const std::string md = readTextFile((results / "report.md").string());
+    EXPECT_NE(md.find("| fabric | 2 | ptm | lowest mean held-out average error (0.061)"),
+              std::string::npos)
+        << md;
+    EXPECT_NE(md.find("3 materials, 9 jobs: 7 done, 1 failed, 1 pending"), std::string::npos) << md;
+    // No value can end the page's script: the failure text's '<' is escaped.
+    const std::string page = readTextFile((results / "index.html").string());
+    EXPECT_EQ(page.find("<!--<script>"), std::string::npos);
+    EXPECT_NE(page.find("no such file \\u003c!--\\u003cscript>"), std::string::npos);
 }

@@ -3,12 +3,10 @@
 // not judged here (the GL tests compare renders with the CPU reference); that each one decodes
 // and is shown is.
 //
-// How the browser's view is read: `chromium --headless --dump-dom` prints the page's DOM after
-// its load event, where the page's own script has written into the body how many of its
-// pictures the browser could decode (data-pictures-shown) out of how many it has
-// (data-pictures); with --enable-logging=stderr every console message (a script error, a
-// console.error) appears on stderr as "CONSOLE". Both checks are checked: a gallery with one
-// picture deleted shows one fewer, and a page with a script error logs it.
+// The page's own script writes into the body how many of its pictures the browser could decode
+// (data-pictures-shown) out of how many it has (data-pictures); tests/viewer/Browser.h reads
+// them and the console. Both checks are checked: a gallery with one picture deleted shows one
+// fewer, and a page with a script error logs it.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -17,10 +15,14 @@
 #include <string>
 
 #include "tests/TestUtil.h"
+#include "tests/viewer/Browser.h"
 
 namespace fs = std::filesystem;
+using osgBTF::test::BrowserView;
 using osgBTF::test::builtTool;
 using osgBTF::test::CommandResult;
+using osgBTF::test::haveChromium;
+using osgBTF::test::openInChromium;
 using osgBTF::test::readTextFile;
 using osgBTF::test::runCommand;
 using osgBTF::test::shellQuote;
@@ -33,44 +35,6 @@ const std::vector<std::string> kMethods = {"lambert", "pca"};
 // examples/btf-examples/Gallery.cpp: galleryViews(), in column order.
 const std::vector<std::string> kViews = {"close-up", "grazing", "distance", "environment",
                                          "shadows"};
-
-struct BrowserView {
-    int exitCode = -1;
-    std::string dom;
-    std::string log;
-    int attribute(const std::string& name) const {
-        std::smatch match;
-        if (!std::regex_search(dom, match, std::regex("data-" + name + "=\"([0-9]+)\""))) return -1;
-        return std::stoi(match[1]);
-    }
-    bool consoleMessages() const { return log.find("CONSOLE") != std::string::npos; }
-};
-
-bool haveChromium() {
-    return runCommand("command -v chromium >/dev/null").exitCode == 0;
-}
-
-BrowserView openInChromium(const std::string& page, const fs::path& scratch) {
-    // --no-sandbox: CI runs as root, where Chromium's sandbox refuses to start. The virtual time
-    // budget lets the page load (pictures decoded, load event run) before the DOM is dumped. A
-    // fresh profile per run: nothing cached from the previous one. In braces: runCommand adds
-    // 2>&1 to the whole line, which would otherwise send the log into the DOM file.
-    static int run = 0;
-    const std::string profile = (scratch / ("profile-" + std::to_string(++run))).string();
-    const std::string log = (scratch / "chromium.log").string();
-    const std::string dom = (scratch / "dom.html").string();
-    const std::string command =
-        "{ timeout 120 chromium --headless --no-sandbox --disable-gpu --user-data-dir=" +
-        shellQuote(profile) +
-        " --enable-logging=stderr --v=0 --virtual-time-budget=10000 --dump-dom " +
-        shellQuote("file://" + fs::absolute(page).string()) + " >" + shellQuote(dom) + " 2>" +
-        shellQuote(log) + "; }";
-    BrowserView view;
-    view.exitCode = runCommand(command).exitCode;
-    view.dom = readTextFile(dom);
-    view.log = readTextFile(log);
-    return view;
-}
 
 std::string joined(const std::vector<std::string>& items) {
     std::string out;
