@@ -158,6 +158,9 @@ std::size_t submitSlurm(const Manifest& manifest, const std::string& resultsDir,
  *  squeue; empty without Slurm or submissions. */
 std::map<std::string, std::string> slurmStates(const std::string& resultsDir);
 
+/** Job id -> its last submitted Slurm array task ("123_4"; its log is RESULTS/slurm/123_4.out). */
+std::map<std::string, std::string> slurmTasks(const std::string& resultsDir);
+
 /** The leaderboard: RESULTS/report.md, results.csv, results.json and index.html (sortable
  *  tables and plots, no network needed), each written atomically. Returns the JSON text. */
 std::string writeReport(const Manifest& manifest, const std::string& resultsDir);

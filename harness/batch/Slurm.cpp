@@ -97,19 +97,20 @@ bool haveSlurm() {
     return false;
 }
 
-std::map<std::string, std::string> slurmStates(const std::string& resultsDir) {
-    std::map<std::string, std::string> states;
+namespace {
+
+/** Fills `states` from squeue; false when squeue itself fails (slurmctld down or busy). All of
+ *  this user's osgbtf-batch tasks are listed and matched here: a `-j` list with one job Slurm
+ *  has forgotten makes squeue fail for all of them. */
+bool querySlurm(const std::string& resultsDir, std::map<std::string, std::string>& states) {
+    states.clear();
     const nlohmann::json submissions = readSubmissions(resultsDir);
-    if (submissions.empty() || !haveSlurm()) return states;
-    std::string ids;
+    if (submissions.empty()) return true;
     std::map<std::string, const nlohmann::json*> byId;
-    for (const auto& s : submissions) {
-        const std::string id = s.at("slurm_job").get<std::string>();
-        ids += (ids.empty() ? "" : ",") + id;
-        byId[id] = &s;
-    }
+    for (const auto& s : submissions) byId[s.at("slurm_job").get<std::string>()] = &s;
     // -r: one line per array task, pending ones too ("123_4 PENDING").
-    const Output out = capture("squeue -h -r -o '%i %T' -j " + ids);
+    const Output out = capture("squeue -h -r --me -n osgbtf-batch -o '%i %T'");
+    if (out.status != 0) return false;
     std::istringstream lines(out.text);
     std::string task, state;
     while (lines >> task >> state) {
@@ -124,7 +125,26 @@ std::map<std::string, std::string> slurmStates(const std::string& resultsDir) {
         } catch (const std::exception&) {
         }
     }
+    return true;
+}
+
+}  // namespace
+
+std::map<std::string, std::string> slurmStates(const std::string& resultsDir) {
+    std::map<std::string, std::string> states;
+    if (haveSlurm() && !querySlurm(resultsDir, states)) states.clear();
     return states;
+}
+
+std::map<std::string, std::string> slurmTasks(const std::string& resultsDir) {
+    std::map<std::string, std::string> tasks;
+    for (const auto& s : readSubmissions(resultsDir)) {
+        const auto& jobs = s.at("jobs");
+        for (std::size_t i = 0; i < jobs.size(); ++i)
+            tasks[jobs[i].get<std::string>()] =
+                s.at("slurm_job").get<std::string>() + "_" + std::to_string(i);
+    }
+    return tasks;
 }
 
 std::size_t submitSlurm(const Manifest& manifest, const std::string& resultsDir,
@@ -136,7 +156,9 @@ std::size_t submitSlurm(const Manifest& manifest, const std::string& resultsDir,
     const std::string tool =
         fs::absolute(options.tool.empty() ? defaultFitTool() : options.tool).string();
     const std::string results = fs::absolute(resultsDir).lexically_normal().string();
-    const std::map<std::string, std::string> queued = slurmStates(results);
+    std::map<std::string, std::string> queued;
+    if (!querySlurm(results, queued))
+        throw Error("--slurm: squeue failed (is slurmctld running? see SLURM_CONF)");
     std::map<std::uint64_t, std::vector<const BatchJob*>> groups;
     RunSummary local;
     for (const BatchJob& job : manifest.jobs) {
@@ -201,9 +223,16 @@ std::size_t submitSlurm(const Manifest& manifest, const std::string& resultsDir,
         for (const auto& [mib, jobs] : groups)
             for (const BatchJob* job : jobs) mine.insert(job->id);
         std::size_t reported = 0;
+        bool warned = false;
         for (;;) {
             std::this_thread::sleep_for(std::chrono::duration<double>(options.pollSeconds));
-            const std::map<std::string, std::string> states = slurmStates(results);
+            std::map<std::string, std::string> states;
+            if (!querySlurm(results, states)) {
+                // slurmctld restarting or busy: ask again, the tasks are still Slurm's.
+                if (!warned) std::cerr << "batch: squeue failed; still waiting\n";
+                warned = true;
+                continue;
+            }
             std::size_t left = 0;
             for (const std::string& id : mine) left += states.count(id);
             if (tasks - left > reported) {
@@ -215,17 +244,12 @@ std::size_t submitSlurm(const Manifest& manifest, const std::string& resultsDir,
     }
     if (summary) {
         *summary = local;
+        summary->ran = tasks;
         if (options.wait)
             for (const auto& [mib, jobs] : groups)
-                for (const BatchJob* job : jobs) {
-                    ++local.ran;
-                    const JobResult r = readJobResult(results, job->id);
-                    if (r.state == JobState::Done)
-                        ++summary->done;
-                    else
-                        ++summary->failed;
-                }
-        summary->ran = tasks;
+                for (const BatchJob* job : jobs)
+                    ++(readJobResult(results, job->id).state == JobState::Done ? summary->done
+                                                                               : summary->failed);
     }
     return tasks;
 }

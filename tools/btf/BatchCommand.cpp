@@ -192,6 +192,7 @@ Runner addBatchCommand(CLI::App& app, CommonOptions& common) {
         } else if (status->parsed()) {
             const batch::Manifest manifest = batch::readManifest(options->results);
             const std::map<std::string, std::string> queued = batch::slurmStates(options->results);
+            const std::map<std::string, std::string> tasks = batch::slurmTasks(options->results);
             std::map<std::string, std::size_t> counts;
             for (const batch::BatchJob& j : manifest.jobs) {
                 const batch::JobResult r = batch::readJobResult(options->results, j.id);
@@ -203,6 +204,13 @@ Runner addBatchCommand(CLI::App& app, CommonOptions& common) {
                 ++counts[state.substr(0, state.find(' '))];
                 std::cout << std::left << std::setw(40) << j.id << " " << state;
                 if (r.state == batch::JobState::Failed) std::cout << ": " << r.failure;
+                const auto task = tasks.find(j.id);
+                if (r.state == batch::JobState::Pending && q == queued.end() &&
+                    task != tasks.end())
+                    std::cout << " (Slurm task " << task->second
+                              << " ended without a result: cancelled, out of time or its node "
+                                 "failed; see "
+                              << options->results << "/slurm/" << task->second << ".out)";
                 std::cout << "\n";
             }
             std::cout << manifest.jobs.size() << " jobs:";
