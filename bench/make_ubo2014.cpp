@@ -1,7 +1,10 @@
 // Benchmark input: a full-size UBO2014 DFMF file written with the project's
 // writer (writeUbo2014): 400x400 texels, 151 x 151 Dome-1 directions, K = 100 components per
 // channel, colour model 11 (exp-YUV), half scalars by default.
-// Usage: bench_make_ubo2014 -o FILE [--size N] [--components K] [--scalar 2|4] [--cosine]
+// Usage: bench_make_ubo2014 -o FILE [--size N] [--components K] [--scalar 2|4] [--cosine] [--seed
+// S]
+// --seed S (a database of varied materials, bench/batch.sh): other random factors, a glossy lobe
+// exponent in 10..80 and a thread period in 4..12 texels instead of 40 and 8.
 //
 // Values, chosen so the decoded BTF looks like a real material rather than noise:
 //   channel Y (stored as log(Y + eps)): component 0 = log of a smooth BRDF (diffuse + a glossy
@@ -45,6 +48,7 @@ int main(int argc, char** argv) {
     std::string output;
     int size = 400, components = 100, scalarSize = 2;
     bool cosine = false;
+    unsigned seed = 0;  // 0: the one file every other benchmark uses
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
         if ((arg == "-o" || arg == "--out") && i + 1 < argc)
@@ -57,12 +61,15 @@ int main(int argc, char** argv) {
             scalarSize = std::atoi(argv[++i]);
         else if (arg == "--cosine")
             cosine = true;
+        else if (arg == "--seed" && i + 1 < argc)
+            seed = unsigned(std::strtoul(argv[++i], nullptr, 10));
         else
             output.clear(), i = argc;
     }
     if (output.empty() || size < 1 || components < 2 || (scalarSize != 2 && scalarSize != 4)) {
         std::fprintf(stderr,
-                     "usage: %s -o FILE [--size N] [--components K>=2] [--scalar 2|4] [--cosine]\n",
+                     "usage: %s -o FILE [--size N] [--components K>=2] [--scalar 2|4] [--cosine] "
+                     "[--seed S]\n",
                      argv[0]);
         return 2;
     }
@@ -86,8 +93,10 @@ int main(int argc, char** argv) {
         const std::size_t nV = f.views.size(), nL = f.lights.size(), rows = nV * nL;
         const std::size_t texels = std::size_t(size) * std::size_t(size);
         const int K = components;
-        std::mt19937 random(2014);
+        std::mt19937 random(seed ? seed : 2014);
         std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+        const float shininess = seed ? 10.0f + 70.0f * uniform(random) : 40.0f;
+        const float period = seed ? 4.0f + 8.0f * uniform(random) : 8.0f;
         for (int c = 0; c < 3; ++c) {
             osgBTF::BtfFactor factor;
             factor.U.resize(Eigen::Index(rows), K);
@@ -115,7 +124,7 @@ int main(int argc, char** argv) {
                     if (c == 0) {
                         const glm::vec3 h = glm::normalize(wv + wl);
                         const float cosL = std::max(wl.z, 0.02f);
-                        const float lobe = std::pow(std::max(h.z, 0.0f), 40.0f);
+                        const float lobe = std::pow(std::max(h.z, 0.0f), shininess);
                         factor.U(row, 0) = std::log(cosL * (0.35f + 2.5f * lobe));
                         factor.U(row, 1) = 1.0f;
                     } else {
@@ -130,8 +139,8 @@ int main(int argc, char** argv) {
             for (int y = 0; y < size; ++y)
                 for (int x = 0; x < size; ++x) {
                     const Eigen::Index row = Eigen::Index(std::size_t(y) * size + x);
-                    // A woven pattern: threads every 8 texels, alternating direction.
-                    const float u = float(x) / 8.0f, w = float(y) / 8.0f;
+                    // A woven pattern: threads every `period` texels, alternating direction.
+                    const float u = float(x) / period, w = float(y) / period;
                     const bool over = (int(std::floor(u)) + int(std::floor(w))) % 2 == 0;
                     const float thread = 0.5f + 0.5f * std::sin(kPi * (over ? u : w));
                     for (int k = 0; k < K; ++k) {

@@ -20,7 +20,8 @@ PACKAGES=(
 # the big ones); OSGBTF_TEST_PACKAGES=0 leaves them out (tools/run-sample.sh does).
 TEST_PACKAGES=(
   xvfb xauth libglx-mesa0     # X server for the viewer tests and xvfb-run (osgviewer, btfviewer)
-  chromium                    # headless browser: the gallery page test (btf-examples --gallery)
+  chromium                    # headless browser: the gallery and leaderboard page tests
+  slurm-wlm munge             # a real single-node Slurm for `btf batch run --slurm` (tests/slurm/)
   dpkg-dev file               # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
   clang libclang-rt-14-dev    # CI's sanitizer build and the fuzz targets (libFuzzer, ASan, UBSan)
 )

@@ -131,19 +131,26 @@ std::vector<std::string> findMeasuredBtfs(const std::string& folder) {
 }
 
 std::uint64_t estimatePeakBytes(const BatchMaterial& material, const std::string& method) {
-    // Measured on the built-in sample and generated UBO2014 files (harness/batch/README.md): the
-    // per-view methods (pca, fmf, ptm) and lpca hold a working copy of the values they fit, the
-    // per-texel ones read blocks. A factored input decodes blocks; its fit holds the decoded
-    // values of the blocks in flight. Times 1.5 for the held-out fit's allocations, which the
-    // allocator does not always return before the next one.
-    const std::uint64_t program = std::uint64_t(160) << 20;
+    // Measured on the built-in sample (24x24 and 48x48, 81 x 81 directions, one job each with
+    // its held-out fit): above the program's ~150 MiB and the input, lpca and lpca-revised hold
+    // about twice the values as floats (a training matrix and its projection), pca, fmf and ptm
+    // under half of them, the per-texel methods blocks of texels. A factored UBO2014 input is
+    // decoded block by block instead: pca of a 400x400 file peaked at 2.72 GB, lpca's bound is
+    // 6 GB (bench/fit_ubo2014.sh); scaled by texels. docs/batch.md has the figures.
+    const std::uint64_t mib = std::uint64_t(1) << 20;
+    const std::uint64_t program = 160 * mib;
     const std::uint64_t values = std::uint64_t(material.width) * std::uint64_t(material.height) *
                                  material.views * material.lights * 3 * sizeof(float);
-    const bool gathers = method == "pca" || method == "fmf" || method == "ptm" ||
-                         method == "lpca" || method == "lpca-revised";
-    std::uint64_t working = gathers ? values : values / 4;
-    if (material.factored) working = std::min<std::uint64_t>(working, std::uint64_t(2) << 30);
-    return program + material.inputBytes + working + working / 2;
+    const bool clusters = method == "lpca" || method == "lpca-revised";
+    const bool perView = method == "pca" || method == "fmf" || method == "ptm";
+    const double factor = clusters ? 2.25 : perView ? 0.75 : 0.25;
+    std::uint64_t working = std::uint64_t(double(values) * factor);
+    if (material.factored) {
+        const double texels = double(material.width) * double(material.height) / 160000.0;
+        const double fullSize = clusters ? 6.0 : 3.0;  // GiB at 400 x 400
+        working = std::min(working, std::uint64_t(fullSize * texels * 1024 * mib) + 256 * mib);
+    }
+    return program + material.inputBytes + working;
 }
 
 const BatchMaterial& Manifest::material(const std::string& name) const {
