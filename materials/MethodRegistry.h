@@ -84,6 +84,15 @@ struct MethodInfo {
     int order = 100;
     /** Options for a fit that is quick on a few texels (tests fit every method with these). */
     std::string quickFitOptions;
+    /** A fit's memory beyond its input, in multiples of the input's values as floats (width x
+     *  height x views x lights x 12 bytes), measured with margin: what `btf batch` budgets a
+     *  job for (docs/batch.md). The default suits methods that read blocks of texels. */
+    double fitWorkingSet = 0.25;
+    /** The same for a 400 x 400 UBO2014 file fitted from its factors (block by block), in GiB;
+     *  scaled by texels for other sizes. */
+    double fitWorkingSetFullSizeGiB = 3;
+    /** And what a fit holds whatever the input's size (tables per cluster and direction), MiB. */
+    double fitTablesMiB = 0;
 };
 
 /** Adds a method; each method's .cpp calls it from a static initialiser. Returns true. */

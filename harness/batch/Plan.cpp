@@ -131,26 +131,21 @@ std::vector<std::string> findMeasuredBtfs(const std::string& folder) {
 }
 
 std::uint64_t estimatePeakBytes(const BatchMaterial& material, const std::string& method) {
-    // Measured on the built-in sample (24x24 and 48x48, 81 x 81 directions, one job each with
-    // its held-out fit): above the program's ~150 MiB and the input, lpca and lpca-revised hold
-    // about twice the values as floats (a training matrix and its projection), pca, fmf and ptm
-    // under half of them, the per-texel methods blocks of texels. A factored UBO2014 input is
-    // decoded block by block instead: pca of a 400x400 file peaked at 2.72 GB, lpca's bound is
-    // 6 GB (bench/fit_ubo2014.sh); scaled by texels. docs/batch.md has the figures.
+    // The program's ~150 MiB, the input as opened, and the method's own measured working set
+    // (MethodInfo::fitWorkingSet; docs/batch.md has the figures).
+    const MethodInfo& info = findMethod(method);
     const std::uint64_t mib = std::uint64_t(1) << 20;
-    const std::uint64_t program = 160 * mib;
     const std::uint64_t values = std::uint64_t(material.width) * std::uint64_t(material.height) *
                                  material.views * material.lights * 3 * sizeof(float);
-    const bool clusters = method == "lpca" || method == "lpca-revised";
-    const bool perView = method == "pca" || method == "fmf" || method == "ptm";
-    const double factor = clusters ? 2.25 : perView ? 0.75 : 0.25;
-    std::uint64_t working = std::uint64_t(double(values) * factor);
+    std::uint64_t working = std::uint64_t(double(values) * info.fitWorkingSet);
     if (material.factored) {
         const double texels = double(material.width) * double(material.height) / 160000.0;
-        const double fullSize = clusters ? 6.0 : 3.0;  // GiB at 400 x 400
-        working = std::min(working, std::uint64_t(fullSize * texels * 1024 * mib) + 256 * mib);
+        working = std::min(
+            working,
+            std::uint64_t(info.fitWorkingSetFullSizeGiB * texels * 1024 * double(mib)) + 256 * mib);
     }
-    return program + material.inputBytes + working;
+    return 160 * mib + material.inputBytes + working +
+           std::uint64_t(info.fitTablesMiB * double(mib));
 }
 
 const BatchMaterial& Manifest::material(const std::string& name) const {

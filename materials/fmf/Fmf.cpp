@@ -506,6 +506,7 @@ const bool registered = registerMethodClass<FmfMaterial>([] {
     m.environment = std::move(environment);
     m.writesUbo2014 = true;  // FmfMaterial::factors() are what a UBO2014 .btf file stores
     m.order = 70;
+    m.fitWorkingSet = 0.75;  // per-view blocks and the SVD's sketch (as pca)
     m.quickFitOptions = "components=2";
     return m;
 }());

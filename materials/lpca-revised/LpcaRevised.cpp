@@ -197,6 +197,11 @@ const bool registered = registerMethodClass<LpcaRevisedMaterial>([] {
                                              : "ALU 9c+69, TEX 3c+1 (c components)");
     };
     m.order = 60;
+    // Peaks of 577 and 715 MiB for 24x24 and 48x48 samples (43 and 173 MiB of values): ~1.06x
+    // the values and ~380 MiB of tables beyond the program.
+    m.fitWorkingSet = 1.25;
+    m.fitTablesMiB = 450;
+    m.fitWorkingSetFullSizeGiB = 6;
     m.quickFitOptions = "clusters=2 components=2 resolution=4";
     return m;
 }());

@@ -279,6 +279,9 @@ const bool registered = registerMethodClass<LpcaMaterial>([] {
     // What the .btf/.zip plugins fit when the options name no method (docs/scene-graph.md).
     m.pluginDefault = true;
     m.order = 50;
+    // A training matrix and its projection: 663 MiB peak for a 48x48 sample (173 MiB of values).
+    m.fitWorkingSet = 2.25;
+    m.fitWorkingSetFullSizeGiB = 6;  // bench/fit_ubo2014.sh's bound at 400 x 400
     m.quickFitOptions = "clusters=2 components=2";
     return m;
 }());

@@ -307,6 +307,7 @@ const bool registered = registerMethodClass<PtmMaterial>([] {
                                           ", T = " + std::to_string(v.tex) + ": the view lookup)");
     };
     m.order = 80;
+    m.fitWorkingSet = 0.75;  // per-view least squares
     return m;
 }());
 }  // namespace

@@ -70,8 +70,9 @@ Runner addBatchCommand(CLI::App& app, CommonOptions& common) {
     plan->add_option("INPUT", options->inputs, "Folders, list files (.txt) or measured BTFs")
         ->required();
     plan->add_option("--out", options->results, "Results folder")->required();
-    plan->add_option("--methods", options->methods,
-                     "Comma-separated methods, or 'all' (lambert" + methodList + ")")
+    plan->add_option(
+            "--methods", options->methods,
+            "Comma-separated methods, or 'all' (" + baselineMethod().name + methodList + ")")
         ->capture_default_str();
     plan->add_option("--set", options->settings,
                      "METHOD:KEY=VALUE, one method's fit option (repeatable; `btf fit --help`)");
@@ -130,7 +131,8 @@ Runner addBatchCommand(CLI::App& app, CommonOptions& common) {
             p.inputs = options->inputs;
             p.methods =
                 options->methods == "all" ? allCompareMethods() : splitCommas(options->methods);
-            if (options->methods == "all") p.methods.insert(p.methods.begin(), "lambert");
+            if (options->methods == "all")
+                p.methods.insert(p.methods.begin(), baselineMethod().name);
             for (const std::string& setting : options->settings) {
                 const auto colon = setting.find(':');
                 const auto eq = setting.find('=');
@@ -205,8 +207,7 @@ Runner addBatchCommand(CLI::App& app, CommonOptions& common) {
                 std::cout << std::left << std::setw(40) << j.id << " " << state;
                 if (r.state == batch::JobState::Failed) std::cout << ": " << r.failure;
                 const auto task = tasks.find(j.id);
-                if (r.state == batch::JobState::Pending && q == queued.end() &&
-                    task != tasks.end())
+                if (r.state == batch::JobState::Pending && q == queued.end() && task != tasks.end())
                     std::cout << " (Slurm task " << task->second
                               << " ended without a result: cancelled, out of time or its node "
                                  "failed; see "
