@@ -88,8 +88,8 @@ struct MethodInfo {
      *  height x views x lights x 12 bytes), measured with margin: what `btf batch` budgets a
      *  job for (docs/batch.md). The default suits methods that read blocks of texels. */
     double fitWorkingSet = 0.25;
-    /** The same for a 400 x 400 UBO2014 file fitted from its factors (block by block), in GiB;
-     *  scaled by texels for other sizes. */
+    /** At most this for a UBO2014 file fitted from its factors (block by block), in GiB: what a
+     *  400 x 400 file took. */
     double fitWorkingSetFullSizeGiB = 3;
     /** And what a fit holds whatever the input's size (tables per cluster and direction), MiB. */
     double fitTablesMiB = 0;

@@ -72,6 +72,7 @@ RunSummary runLocal(const Manifest& manifest, const std::string& resultsDir,
             inUse += job.estimatedPeakBytes;
             ++next;
         }
+        if (running.empty()) continue;  // every job left was running elsewhere
         int status = 0;
         struct rusage usage {};
         const pid_t pid = wait4(-1, &status, 0, &usage);
