@@ -67,7 +67,25 @@ RunSummary runLocal(const Manifest& manifest, const std::string& resultsDir,
             std::vector<std::string> args{tool};
             args.insert(args.end(), options.globalArguments.begin(), options.globalArguments.end());
             args.insert(args.end(), {"--no-progress", "batch", "job", resultsDir, job.id});
-            const pid_t pid = spawnChild(args, (fs::path(folder) / "log.txt").string());
+            pid_t pid = -1;
+            try {
+                pid = spawnChild(args, (fs::path(folder) / "log.txt").string());
+            } catch (const Error& e) {
+                // Recorded as the job's failure (a tool replaced while the run goes on); the
+                // others are still tried.
+                JobResult failed;
+                failed.id = job.id;
+                failed.state = JobState::Failed;
+                failed.failure = e.what();
+                writeTextAtomically((fs::path(folder) / "result.json").string(),
+                                    jobResultToJson(failed).dump(2) + "\n");
+                std::cerr << "batch: " << job.id << " failed: " << failed.failure << "\n";
+                ++summary.ran;
+                ++summary.failed;
+                progress.advance();
+                ++next;
+                continue;
+            }
             running[pid] = Child{&job, job.estimatedPeakBytes};
             inUse += job.estimatedPeakBytes;
             ++next;

@@ -131,8 +131,9 @@ std::vector<std::string> findMeasuredBtfs(const std::string& folder) {
 }
 
 std::uint64_t estimatePeakBytes(const BatchMaterial& material, const std::string& method) {
-    // The program's ~150 MiB, the input as opened, and the method's own measured working set
-    // (MethodInfo::fitWorkingSet; docs/batch.md has the figures).
+    // The program (150-200 MiB: its libraries, a UBO2014 file's decoded blocks), the input as
+    // opened, and the method's own measured working set (MethodInfo::fitWorkingSet; docs/batch.md
+    // has the figures).
     const MethodInfo& info = findMethod(method);
     const std::uint64_t mib = std::uint64_t(1) << 20;
     const std::uint64_t values = std::uint64_t(material.width) * std::uint64_t(material.height) *
@@ -141,9 +142,9 @@ std::uint64_t estimatePeakBytes(const BatchMaterial& material, const std::string
     // A UBO2014 file is decoded block by block: at most what a 400 x 400 fit measured (lpca's
     // training set does not shrink with the file: 1.73 GB for a 64 x 64 one).
     if (material.factored)
-        working = std::min(working,
-                           std::uint64_t(info.fitWorkingSetFullSizeGiB * 1024 * double(mib)));
-    return 160 * mib + material.inputBytes + working +
+        working =
+            std::min(working, std::uint64_t(info.fitWorkingSetFullSizeGiB * 1024 * double(mib)));
+    return 192 * mib + material.inputBytes + working +
            std::uint64_t(info.fitTablesMiB * double(mib));
 }
 
