@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/batch/Batch.h"
+#include "loaders/LoadOptions.h"
 
 namespace osgBTF::batch {
 
@@ -27,6 +28,12 @@ private:
 bool jobLockHeld(const std::string& lockPath);
 
 nlohmann::json jobResultToJson(const JobResult& result);
+/** JSON has no NaN or infinity: null stands for "not measured" (and an exact fit's PSNR). */
+nlohmann::json finiteOrNull(double value);
+/** Now, UTC, ISO 8601. */
+std::string utcNow();
+/** The load options a manifest names (`btf fit`'s --storage and --decode values). */
+LoadOptions manifestLoadOptions(const std::string& storage, const std::string& decode);
 JobResult jobResultFromJson(const nlohmann::json& json);
 
 }  // namespace osgBTF::batch

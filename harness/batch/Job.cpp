@@ -49,11 +49,6 @@ bool jobLockHeld(const std::string& lockPath) {
 
 namespace {
 
-/** JSON has no NaN or infinity: null stands for "not measured" (and an exact fit's PSNR). */
-nlohmann::json number(double value) {
-    return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
-
 double numberFrom(const nlohmann::json& json, const char* key) {
     const auto it = json.find(key);
     return it == json.end() || it->is_null() ? std::numeric_limits<double>::quiet_NaN()
@@ -67,23 +62,27 @@ std::string hostName() {
 
 }  // namespace
 
+nlohmann::json finiteOrNull(double value) {
+    return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
 nlohmann::json jobResultToJson(const JobResult& r) {
     return {{"id", r.id},
             {"state", jobStateName(r.state)},
             {"failure", r.failure},
-            {"avg", number(r.average)},
-            {"rmse", number(r.rmse)},
-            {"psnr", number(r.psnr)},
-            {"heldout_avg", number(r.heldOutAverage)},
-            {"heldout_rmse", number(r.heldOutRmse)},
-            {"heldout_psnr", number(r.heldOutPsnr)},
+            {"avg", finiteOrNull(r.average)},
+            {"rmse", finiteOrNull(r.rmse)},
+            {"psnr", finiteOrNull(r.psnr)},
+            {"heldout_avg", finiteOrNull(r.heldOutAverage)},
+            {"heldout_rmse", finiteOrNull(r.heldOutRmse)},
+            {"heldout_psnr", finiteOrNull(r.heldOutPsnr)},
             {"heldout_pairs", r.heldOutPairs},
             {"error_texels", r.errorTexels},
-            {"bytes_per_texel", number(r.bytesPerTexel)},
-            {"compression_ratio", number(r.compressionRatio)},
-            {"fit_seconds", number(r.fitSeconds)},
-            {"heldout_fit_seconds", number(r.heldOutFitSeconds)},
-            {"wall_seconds", number(r.wallSeconds)},
+            {"bytes_per_texel", finiteOrNull(r.bytesPerTexel)},
+            {"compression_ratio", finiteOrNull(r.compressionRatio)},
+            {"fit_seconds", finiteOrNull(r.fitSeconds)},
+            {"heldout_fit_seconds", finiteOrNull(r.heldOutFitSeconds)},
+            {"wall_seconds", finiteOrNull(r.wallSeconds)},
             {"peak_rss_bytes", r.peakRssBytes},
             {"host", r.host}};
 }
@@ -147,11 +146,7 @@ JobResult runJob(const Manifest& manifest, const std::string& resultsDir, const 
     result.heldOutAverage = result.heldOutRmse = result.heldOutPsnr = nan;
     result.heldOutFitSeconds = nan;
     try {
-        LoadOptions load;
-        load.storage = manifest.storage == "half" ? Storage::Half : Storage::Float;
-        load.curve = manifest.decode == "srgb"      ? LoadOptions::DecodeCurve::Srgb
-                     : manifest.decode == "gamma22" ? LoadOptions::DecodeCurve::Gamma22
-                                                    : LoadOptions::DecodeCurve::Linear;
+        const LoadOptions load = manifestLoadOptions(manifest.storage, manifest.decode);
         const std::unique_ptr<BtfSource> source = openBtfSource(material.input, load);
         if (source->width() != material.width || source->height() != material.height ||
             source->viewCount() != material.views || source->lightCount() != material.lights)

@@ -39,10 +39,6 @@ std::string optionsText(const std::map<std::string, std::string>& options) {
     return text;
 }
 
-nlohmann::json number(double value) {
-    return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
-
 /** Pareto front of (bytes per texel, average error) among a material's completed jobs: no other
  *  job is at most as large and at most as wrong, and better in one of the two. */
 void markPareto(std::vector<Row>& rows) {
@@ -128,13 +124,6 @@ std::vector<ClassChoice> recommendPerClass(const Manifest& manifest, const std::
     return choices;
 }
 
-std::string utcNow() {
-    const std::time_t now = std::time(nullptr);
-    char text[32];
-    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-    return text;
-}
-
 std::string cell(double value, int precision) {
     if (!std::isfinite(value)) return "–";
     std::ostringstream out;
@@ -191,7 +180,7 @@ std::string writeReport(const Manifest& manifest, const std::string& resultsDir)
     for (const Row& row : rows) {
         const JobResult& r = row.result;
         const bool done = row.done();
-        const auto measured = [&](double value) { return done ? number(value) : nullptr; };
+        const auto measured = [&](double value) { return done ? finiteOrNull(value) : nullptr; };
         data["rows"].push_back(
             {{"job", row.job->id},
              {"material", row.material->name},

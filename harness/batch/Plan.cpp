@@ -64,13 +64,6 @@ std::string classFromName(const std::string& name) {
     return stem.empty() ? name : stem;
 }
 
-std::string utcNow() {
-    const std::time_t now = std::time(nullptr);
-    char text[32];
-    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-    return text;
-}
-
 /** The inputs as (path, the folder it was found in or empty). */
 std::vector<std::pair<std::string, std::string>> expandInputs(const std::vector<std::string>& in) {
     std::vector<std::pair<std::string, std::string>> found;
@@ -105,6 +98,22 @@ std::vector<std::pair<std::string, std::string>> expandInputs(const std::vector<
 }
 
 }  // namespace
+
+std::string utcNow() {
+    const std::time_t now = std::time(nullptr);
+    char text[32];
+    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+    return text;
+}
+
+LoadOptions manifestLoadOptions(const std::string& storage, const std::string& decode) {
+    LoadOptions load;
+    load.storage = storage == "half" ? Storage::Half : Storage::Float;
+    load.curve = decode == "srgb"      ? LoadOptions::DecodeCurve::Srgb
+                 : decode == "gamma22" ? LoadOptions::DecodeCurve::Gamma22
+                                       : LoadOptions::DecodeCurve::Linear;
+    return load;
+}
 
 std::vector<std::string> findMeasuredBtfs(const std::string& folder) {
     std::vector<std::string> found;
@@ -180,11 +189,7 @@ Manifest planBatch(const PlanOptions& options) {
     manifest.errorTexels = options.errorTexels;
     manifest.storage = options.storage;
     manifest.decode = options.decode;
-    LoadOptions load;
-    load.storage = options.storage == "half" ? Storage::Half : Storage::Float;
-    load.curve = options.decode == "srgb"      ? LoadOptions::DecodeCurve::Srgb
-                 : options.decode == "gamma22" ? LoadOptions::DecodeCurve::Gamma22
-                                               : LoadOptions::DecodeCurve::Linear;
+    const LoadOptions load = manifestLoadOptions(options.storage, options.decode);
 
     const auto inputs = expandInputs(options.inputs);
     std::set<std::string> names, paths;

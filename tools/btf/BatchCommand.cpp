@@ -17,15 +17,6 @@ namespace osgBTF::tool {
 
 namespace {
 
-std::vector<std::string> splitCommas(const std::string& text) {
-    std::vector<std::string> items;
-    std::string item;
-    std::istringstream in(text);
-    while (std::getline(in, item, ','))
-        if (!item.empty()) items.push_back(item);
-    return items;
-}
-
 std::vector<std::string> globalArguments(const CommonOptions& common) {
     if (common.memoryLimit.empty()) return {};
     return {"--memory-limit", common.memoryLimit};
@@ -130,18 +121,10 @@ Runner addBatchCommand(CLI::App& app, CommonOptions& common) {
             batch::PlanOptions p;
             p.inputs = options->inputs;
             p.methods =
-                options->methods == "all" ? allCompareMethods() : splitCommas(options->methods);
+                options->methods == "all" ? allCompareMethods() : splitList(options->methods);
             if (options->methods == "all")
                 p.methods.insert(p.methods.begin(), baselineMethod().name);
-            for (const std::string& setting : options->settings) {
-                const auto colon = setting.find(':');
-                const auto eq = setting.find('=');
-                if (colon == std::string::npos || colon == 0 || eq == std::string::npos ||
-                    eq < colon + 2)
-                    throw Error("--set: '" + setting + "' is not METHOD:KEY=VALUE");
-                p.methodOptions[setting.substr(0, colon)]
-                               [setting.substr(colon + 1, eq - colon - 1)] = setting.substr(eq + 1);
-            }
+            addMethodSettings(options->settings, p.methodOptions);
             p.holdoutFraction = options->holdout;
             p.errorTexels = options->errorTexels;
             p.storage = common.storage;

@@ -2,6 +2,9 @@
 #pragma once
 
 #include <functional>
+#include <map>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -32,6 +35,13 @@ Runner addBatchCommand(CLI::App& app, CommonOptions& common);
 
 /** "laf, slaf, rf": the registered methods that have fit option `key` (for help texts). */
 std::string methodsWithOption(const std::string& key);
+
+/** "a,b,,c" -> {a, b, c}. */
+std::vector<std::string> splitList(const std::string& text);
+/** Parses --set METHOD:KEY=VALUE settings into METHOD -> KEY -> VALUE; throws Error
+ *  "--set: 'X' is not METHOD:KEY=VALUE". */
+void addMethodSettings(const std::vector<std::string>& settings,
+                       std::map<std::string, std::map<std::string, std::string>>& into);
 
 /** Adds --storage, --decode to a subcommand that loads measured data. */
 void addLoadOptions(CLI::App& command, CommonOptions& common);

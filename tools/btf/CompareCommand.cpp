@@ -14,15 +14,6 @@ namespace osgBTF::tool {
 
 namespace {
 
-std::vector<std::string> splitList(const std::string& text) {
-    std::vector<std::string> items;
-    std::string item;
-    std::istringstream in(text);
-    while (std::getline(in, item, ','))
-        if (!item.empty()) items.push_back(item);
-    return items;
-}
-
 /** "640x480" or "512" (square). */
 void parseResolution(const std::string& text, PassSettings& pass) {
     const auto x = text.find('x');
@@ -45,6 +36,27 @@ void parseResolution(const std::string& text, PassSettings& pass) {
 }
 
 }  // namespace
+
+std::vector<std::string> splitList(const std::string& text) {
+    std::vector<std::string> items;
+    std::string item;
+    std::istringstream in(text);
+    while (std::getline(in, item, ','))
+        if (!item.empty()) items.push_back(item);
+    return items;
+}
+
+void addMethodSettings(const std::vector<std::string>& settings,
+                       std::map<std::string, std::map<std::string, std::string>>& into) {
+    for (const std::string& setting : settings) {
+        const auto colon = setting.find(':');
+        const auto eq = setting.find('=');
+        if (colon == std::string::npos || colon == 0 || eq == std::string::npos || eq < colon + 2)
+            throw Error("--set: '" + setting + "' is not METHOD:KEY=VALUE");
+        into[setting.substr(0, colon)][setting.substr(colon + 1, eq - colon - 1)] =
+            setting.substr(eq + 1);
+    }
+}
 
 Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
     auto* command = app.add_subcommand(
@@ -192,15 +204,7 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
                 if (value && findOption(findMethod(m), key))
                     compare.methodOptions[m][key] = std::to_string(value);
         }
-        for (const std::string& setting : options->settings) {
-            const auto colon = setting.find(':');
-            const auto eq = setting.find('=');
-            if (colon == std::string::npos || colon == 0 || eq == std::string::npos ||
-                eq < colon + 2)
-                throw Error("--set: '" + setting + "' is not METHOD:KEY=VALUE");
-            compare.methodOptions[setting.substr(0, colon)][setting.substr(
-                colon + 1, eq - colon - 1)] = setting.substr(eq + 1);
-        }
+        addMethodSettings(options->settings, compare.methodOptions);
         compare.load = common.loadOptions();
         compare.fitExtraArguments = {"--storage", common.storage, "--decode", common.decode};
         if (!common.memoryLimit.empty())
