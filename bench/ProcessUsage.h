@@ -2,6 +2,9 @@
 #pragma once
 
 #include <sys/resource.h>
+#include <unistd.h>
+
+#include <cstdio>
 
 namespace osgBTF::bench {
 
@@ -18,6 +21,21 @@ inline double peakResidentGiB() {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     return double(usage.ru_maxrss) / (1024.0 * 1024.0);  // ru_maxrss is in KiB on Linux
+}
+
+/** Peak resident memory of this process so far, in MiB. */
+inline double peakResidentMiB() {
+    return peakResidentGiB() * 1024.0;
+}
+
+/** Resident memory of this process now, in MiB (/proc/self/statm; 0 where unreadable). */
+inline double residentMiB() {
+    long pages = 0, resident = 0;
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+        if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+        std::fclose(f);
+    }
+    return double(resident) * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
 }  // namespace osgBTF::bench

@@ -7,8 +7,6 @@
 //   pixel per texel through the GPU path: texture upload, shader compile, one pass) and the median
 //   of N more frames, and the process's peak resident memory. bench/open_ubo2014.sh adds the
 //   same for `btfviewer FILE --frames 1` under Xvfb.
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -18,6 +16,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "bench/ProcessUsage.h"
 #include "core/Directions.h"
 #include "core/Error.h"
 #include "harness/MaterialImage.h"
@@ -26,13 +25,8 @@
 #include "materials/fmf/Fmf.h"
 #include "scene/OpenMaterial.h"
 
-namespace {
-double peakResidentMiB() {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return double(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
-}  // namespace
+using osgBTF::bench::peakResidentMiB;
+using osgBTF::bench::residentMiB;
 
 int main(int argc, char** argv) {
     std::string file, storage = "half";
@@ -57,18 +51,22 @@ int main(int argc, char** argv) {
         auto seconds = [](clock::time_point a, clock::time_point b) {
             return std::chrono::duration<double>(b - a).count();
         };
+        const double startResident = residentMiB();
         const auto start = clock::now();
         osg::ref_ptr<osgBTF::Material> material =
             osgBTF::openUbo2014Material(file, storage == "float" ? osgBTF::MaterialTexture::Float
                                                                  : osgBTF::MaterialTexture::Half);
         const auto opened = clock::now();
+        const double openedResident = residentMiB(), openedPeak = peakResidentMiB();
         const auto* fmf = dynamic_cast<const osgBTF::FmfMaterial*>(material.get());
         osgBTF::HeadlessRenderer renderer;
         const auto context = clock::now();
+        const double contextResident = residentMiB();
         const glm::vec3 view = osgBTF::Direction{30, 45}.toVector();
         const glm::vec3 light = osgBTF::Direction{50, 200}.toVector();
         osgBTF::renderMaterialImage(renderer, *material, view, light);
         const auto first = clock::now();
+        const double firstResident = residentMiB(), firstPeak = peakResidentMiB();
         std::vector<double> times;
         for (int i = 0; i < frames; ++i) {
             const auto a = clock::now();
@@ -84,7 +82,10 @@ int main(int argc, char** argv) {
             "compile + pass): %.2f s; open + first frame: %.2f s (context excluded), %.2f s in "
             "all\n"
             "later frames (re-rendered through renderMaterialImage, median of %d): %.3f s\n"
-            "renderer: %s\npeak resident memory: %.0f MiB\n",
+            "renderer: %s\n"
+            "resident memory: %.0f MiB at the start, %.0f MiB after open (peak %.0f), %.0f MiB "
+            "with the context, %.0f MiB "
+            "after the first frame (peak %.0f)\npeak resident memory: %.0f MiB\n",
             file.c_str(), material->methodName().c_str(), material->width(), material->height(),
             material->views().size(), material->lights().size(),
             fmf ? fmf->factors().components(0) : 0, fmf ? fmf->factors().components(1) : 0,
@@ -92,7 +93,8 @@ int main(int argc, char** argv) {
             double(memory.totalBytes) / 1e6, seconds(start, opened), seconds(opened, context),
             material->width(), material->height(), seconds(context, first),
             seconds(start, opened) + seconds(context, first), seconds(start, first), frames,
-            times[times.size() / 2], renderer.glRenderer().c_str(), peakResidentMiB());
+            times[times.size() / 2], renderer.glRenderer().c_str(), startResident, openedResident,
+            openedPeak, contextResident, firstResident, firstPeak, peakResidentMiB());
     } catch (const osgBTF::Error& e) {
         std::fprintf(stderr, "bench_open_ubo2014: %s\n", e.what());
         return 1;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <regex>
+#include <vector>
 
 #include <osg/GLExtensions>
 #include <osg/State>
@@ -151,7 +152,59 @@ private:
     }
 };
 
+/** Allocates a texture array object with glTexImage3D (mutable storage, so that an object OSG
+ *  recycles for it is simply specified again) and uploads each layer as `source` writes it. */
+class GeneratedLayers : public osg::Texture2DArray::SubloadCallback {
+public:
+    GeneratedLayers(const MaterialTexture& shape, LayerSource source)
+        : _width(shape.width),
+          _height(shape.height),
+          _depth(shape.depth),
+          _channels(shape.channels),
+          _internalFormat(internalFormat(shape)),
+          _source(std::move(source)) {}
+
+    void load(const osg::Texture2DArray& texture, osg::State& state) const override {
+        const osg::GLExtensions* gl = state.get<osg::GLExtensions>();
+        const GLenum format = pixelFormat(_channels);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+        gl->glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, _internalFormat, _width, _height, _depth, 0,
+                         format, GL_FLOAT, nullptr);
+        std::vector<float> layer(std::size_t(_width) * std::size_t(_height) * _channels);
+        for (int z = 0; z < _depth; ++z) {
+            _source(z, layer.data());
+            gl->glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, z, _width, _height, 1, format,
+                                GL_FLOAT, layer.data());
+        }
+        if (osg::Texture::TextureObject* object = texture.getTextureObject(state.getContextID()))
+            object->setAllocated(1, _internalFormat, _width, _height, _depth, 0);
+    }
+
+    // Everything is uploaded by load(); there is nothing to update later.
+    void subload(const osg::Texture2DArray&, osg::State&) const override {}
+
+private:
+    int _width, _height, _depth, _channels;
+    GLint _internalFormat;
+    LayerSource _source;
+};
+
 }  // namespace
+
+osg::ref_ptr<osg::Texture2DArray> createGeneratedTextureArray(const MaterialTexture& shape,
+                                                              LayerSource source, bool bilinear) {
+    if (shape.kind == MaterialTexture::UNorm8)
+        throw Error("texture '" + shape.name + "': generated textures are half or float");
+    if (shape.width < 1 || shape.height < 1 || shape.depth < 1)
+        throw Error("texture '" + shape.name + "': generated texture of no texels");
+    osg::ref_ptr<osg::Texture2DArray> array = new osg::Texture2DArray;
+    array->setTextureSize(shape.width, shape.height, shape.depth);
+    array->setSubloadCallback(new GeneratedLayers(shape, std::move(source)));
+    configure(*array, shape, bilinear, bilinear);
+    array->setName(shape.name);
+    return array;
+}
 
 osg::ref_ptr<osg::Texture2DArray> newTexture2DArray() {
     return new ReuploadingTexture2DArray;

@@ -2,6 +2,7 @@
 // direction tables are materials/DirectionLookup.h's).
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include <osg/Program>
@@ -29,6 +30,20 @@ osg::ref_ptr<osg::Texture> createFloatTexture(const MaterialTexture& texture,
 osg::ref_ptr<osg::Texture2DArray> createFloatTextureArray(const MaterialTexture& texture,
                                                           bool bilinear = false);
 osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& texture, bool linear);
+
+/** Fills layer `layer` of a generated texture: width * height * channels floats, rows bottom-up. */
+using LayerSource = std::function<void(int layer, float* values)>;
+
+/** A texture array of `shape` (name, size, channels, Half or Float; its data are ignored) whose
+ *  layers `source` writes at upload, one at a time, into a buffer of one layer: the GPU gets the
+ *  values with no image of the whole texture in host memory, and a context that needs the
+ *  texture again (a new one, or after a release) gets it from `source` again. For textures that
+ *  a method can produce from what it holds anyway (fmf's U and SxV from its factors): `source`
+ *  must own, or share ownership of, what it reads, since the texture can outlive the material.
+ *  Filtering as createFloatTextureArray. Throws Error for a UNorm8 shape or an empty one. */
+osg::ref_ptr<osg::Texture2DArray> createGeneratedTextureArray(const MaterialTexture& shape,
+                                                              LayerSource source,
+                                                              bool bilinear = false);
 
 /** An empty osg::Texture2DArray that uploads its layers again into a texture object created after
  *  a release. OSG 3.6.5's Texture2DArray keeps each context's "layer uploaded" counts when its

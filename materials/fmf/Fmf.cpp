@@ -58,11 +58,11 @@ void roundToHalf(FactorMatrix& m, const std::string& source, const char* name) {
 }  // namespace
 
 int FmfMaterial::groups(int channel) const {
-    return groupsOf(_factors.components(channel));
+    return groupsOf(_factors->components(channel));
 }
 
 int FmfMaterial::layerOffset(int channel) const {
-    if (_factors.model == FactorModel::Fmf) return 0;
+    if (_factors->model == FactorModel::Fmf) return 0;
     int offset = 0;
     for (int c = 0; c < channel; ++c) offset += groups(c);
     return offset;
@@ -97,14 +97,14 @@ void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind sto
             roundToHalf(f.SxV, source, "SxV");
         }
     setGeometry(factors.width, factors.height, factors.views, factors.lights);
-    _factors = std::move(factors);
+    _factors = std::make_shared<const FactoredBtf>(std::move(factors));
     _storage = storage;
     try {
         _viewLookup = DirectionLookup(_views);
         _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
     } catch (const Error& e) {
         // A direction set the interpolation cannot triangulate is the file's problem: name it.
-        fail(_factors.source, e.what());
+        fail(_factors->source, e.what());
     }
 }
 
@@ -140,9 +140,9 @@ void FmfMaterial::factorSums(std::size_t row, const std::size_t* images, const f
                              int count, float sums[3]) const {
     // As fmf.frag: per group of 4 components, the U rows blended over the combinations,
     // then one dot product with the texel's SxV (the same order of operations as the GPU).
-    const bool fmf = _factors.model == FactorModel::Fmf;
+    const bool fmf = _factors->model == FactorModel::Fmf;
     for (int c = 0; c < 3; ++c) {
-        const BtfFactor& f = _factors.factors[fmf ? 0 : std::size_t(c)];
+        const BtfFactor& f = _factors->factors[fmf ? 0 : std::size_t(c)];
         const int k = int(f.U.cols());
         const float* sxv = f.SxV.data() + row * std::size_t(k);
         float sum = 0.0f;
@@ -174,7 +174,7 @@ glm::vec3 FmfMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
     std::array<float, 9> weights;
     const int count = directionCombinations(view, light, images, weights);
     float sums[3];
-    factorSums(_factors.factorRow(x, y), images.data(), weights.data(), count, sums);
+    factorSums(_factors->factorRow(x, y), images.data(), weights.data(), count, sums);
     return glm::vec3(sums[0], sums[1], sums[2]);
 }
 
@@ -182,18 +182,18 @@ glm::vec3 FmfMaterial::finishLinear(const glm::vec3& linear, const glm::vec3&,
                                     const glm::vec3& light) const {
     const float sums[3] = {linear.x, linear.y, linear.z};
     float rgb[3];
-    _factors.decodeColor(sums, rgb);
-    const float scale = _factors.cosineScale(light.z);
+    _factors->decodeColor(sums, rgb);
+    const float scale = _factors->cosineScale(light.z);
     return glm::vec3(rgb[0], rgb[1], rgb[2]) * scale;
 }
 
 void FmfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
     const int x = int(texel % std::size_t(_width)), y = int(texel / std::size_t(_width));
-    const std::size_t row = _factors.factorRow(x, y), images = _factors.imageCount();
-    const bool fmf = _factors.model == FactorModel::Fmf;
+    const std::size_t row = _factors->factorRow(x, y), images = _factors->imageCount();
+    const bool fmf = _factors->model == FactorModel::Fmf;
     Eigen::VectorXf products[3];
-    for (std::size_t f = 0; f < _factors.factors.size(); ++f) {
-        const BtfFactor& factor = _factors.factors[f];
+    for (std::size_t f = 0; f < _factors->factors.size(); ++f) {
+        const BtfFactor& factor = _factors->factors[f];
         products[f].noalias() = factor.U * factor.SxV.row(Eigen::Index(row)).transpose();
     }
     for (std::size_t i = 0; i < images; ++i) {
@@ -201,8 +201,8 @@ void FmfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
         for (int c = 0; c < 3; ++c)
             sums[c] = fmf ? products[0](Eigen::Index(i * 3 + std::size_t(c)))
                           : products[c](Eigen::Index(i));
-        _factors.decodeColor(sums, abrdf);
-        const float scale = _factors.cosineScale(_lights.vector(i % _lights.size()).z);
+        _factors->decodeColor(sums, abrdf);
+        const float scale = _factors->cosineScale(_lights.vector(i % _lights.size()).z);
         for (int c = 0; c < 3; ++c) abrdf[c] *= scale;
         abrdf += 3;
     }
@@ -210,54 +210,82 @@ void FmfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
 
 // ---- textures, memory, files ---------------------------------------------------------------
 
-MaterialTexture FmfMaterial::uTexture() const {
-    const int maxGroups = std::max({groups(0), groups(1), groups(2)});
-    const std::size_t nL = _lights.size();
-    MaterialTexture t{"u", maxGroups, int(nL * 3), int(_views.size()), 4, _storage, {}};
-    t.data.assign(t.valueCount(), 0.0f);
-    const bool fmf = _factors.model == FactorModel::Fmf;
-    for (std::size_t image = 0; image < _factors.imageCount(); ++image) {
-        const std::size_t view = image / nL, light = image % nL;
-        for (int c = 0; c < 3; ++c) {
-            const BtfFactor& f = _factors.factors[fmf ? 0 : std::size_t(c)];
-            const std::size_t uRow = fmf ? image * 3 + std::size_t(c) : image;
-            const std::size_t y = light * 3 + std::size_t(c);
-            float* dst = t.data.data() + (view * nL * 3 + y) * std::size_t(maxGroups) * 4;
-            for (Eigen::Index k = 0; k < f.U.cols(); ++k) dst[k] = f.U(Eigen::Index(uRow), k);
+namespace {
+
+/** U's layer for measured view `view`: texel (group g, light * 3 + channel) = components
+ *  4g..4g+3 of that (view, light, channel) row, zero beyond the factor's rank. */
+void writeULayer(const FactoredBtf& factors, int maxGroups, std::size_t view, float* out) {
+    const std::size_t nL = factors.lights.size(), rowValues = std::size_t(maxGroups) * 4;
+    std::fill_n(out, nL * 3 * rowValues, 0.0f);
+    const bool fmf = factors.model == FactorModel::Fmf;
+    for (std::size_t light = 0; light < nL; ++light) {
+        const std::size_t image = view * nL + light;
+        for (std::size_t c = 0; c < 3; ++c) {
+            const BtfFactor& f = factors.factors[fmf ? 0 : c];
+            const Eigen::Index uRow = Eigen::Index(fmf ? image * 3 + c : image);
+            std::copy_n(f.U.row(uRow).data(), f.U.cols(), out + (light * 3 + c) * rowValues);
         }
     }
+}
+
+/** SxV's layer `layer`: components 4g..4g+3 of one factor (the factors' groups one after the
+ *  other) for every texel, rows bottom-up, zero beyond the factor's rank. */
+void writeSxvLayer(const FactoredBtf& factors, int layer, float* out) {
+    const std::size_t texels = factors.texelCount();
+    std::fill_n(out, texels * 4, 0.0f);
+    std::size_t f = 0;
+    while (layer >= groupsOf(factors.components(int(f))))
+        layer -= groupsOf(factors.components(int(f++)));
+    const FactorMatrix& sxv = factors.factors[f].SxV;
+    const Eigen::Index first = Eigen::Index(layer) * 4;
+    const Eigen::Index count = std::min<Eigen::Index>(4, sxv.cols() - first);
+    for (int y = 0; y < factors.height; ++y)
+        for (int x = 0; x < factors.width; ++x) {
+            const float* src = sxv.row(Eigen::Index(factors.factorRow(x, y))).data() + first;
+            std::copy_n(src, count,
+                        out + (std::size_t(y) * std::size_t(factors.width) + std::size_t(x)) * 4);
+        }
+}
+
+}  // namespace
+
+MaterialTexture FmfMaterial::uShape() const {
+    const int maxGroups = std::max({groups(0), groups(1), groups(2)});
+    return {"u", maxGroups, int(_lights.size() * 3), int(_views.size()), 4, _storage, {}};
+}
+
+MaterialTexture FmfMaterial::sxvShape() const {
+    const bool fmf = _factors->model == FactorModel::Fmf;
+    const int layers = fmf ? groups(0) : groups(0) + groups(1) + groups(2);
+    return {"sxv", _width, _height, layers, 4, _storage, {}};
+}
+
+MaterialTexture FmfMaterial::uTexture() const {
+    MaterialTexture t = uShape();
+    t.data.resize(t.valueCount());
+    const std::size_t layerValues = std::size_t(t.width) * std::size_t(t.height) * 4;
+    for (int view = 0; view < t.depth; ++view)
+        writeULayer(*_factors, t.width, std::size_t(view), t.data.data() + view * layerValues);
     return t;
 }
 
 MaterialTexture FmfMaterial::sxvTexture() const {
-    const bool fmf = _factors.model == FactorModel::Fmf;
-    const int layers = fmf ? groups(0) : groups(0) + groups(1) + groups(2);
-    MaterialTexture t{"sxv", _width, _height, layers, 4, _storage, {}};
-    t.data.assign(t.valueCount(), 0.0f);
-    const std::size_t texels = texelCount();
-    for (std::size_t f = 0; f < _factors.factors.size(); ++f) {
-        const FactorMatrix& sxv = _factors.factors[f].SxV;
-        const std::size_t first = std::size_t(layerOffset(int(f)));
-        for (int y = 0; y < _height; ++y)
-            for (int x = 0; x < _width; ++x) {
-                const Eigen::Index row = Eigen::Index(_factors.factorRow(x, y));
-                const std::size_t texel = std::size_t(y) * std::size_t(_width) + std::size_t(x);
-                for (Eigen::Index k = 0; k < sxv.cols(); ++k)
-                    t.data[((first + std::size_t(k / 4)) * texels + texel) * 4 +
-                           std::size_t(k % 4)] = sxv(row, k);
-            }
-    }
+    MaterialTexture t = sxvShape();
+    t.data.resize(t.valueCount());
+    const std::size_t layerValues = std::size_t(t.width) * std::size_t(t.height) * 4;
+    for (int layer = 0; layer < t.depth; ++layer)
+        writeSxvLayer(*_factors, layer, t.data.data() + layer * layerValues);
     return t;
 }
 
 FmfMaterial::MemoryBreakdown FmfMaterial::memoryBreakdown() const {
     const double texels = double(texelCount()), bytes = bytesPerValue(_storage);
-    const bool fmf = _factors.model == FactorModel::Fmf;
+    const bool fmf = _factors->model == FactorModel::Fmf;
     const int maxGroups = std::max({groups(0), groups(1), groups(2)});
     const int layers = fmf ? groups(0) : groups(0) + groups(1) + groups(2);
     // As uploaded: groups of 4 components (a rank that is not a multiple of 4 pads with zeros).
     const double sxvValues = double(layers) * 4 * texels;
-    const double uValues = double(_factors.imageCount()) * 3 * maxGroups * 4;
+    const double uValues = double(_factors->imageCount()) * 3 * maxGroups * 4;
     MemoryBreakdown m;
     m.perTexelValues = sxvValues / texels;
     m.perTexelBytes = m.perTexelValues * bytes;
@@ -276,27 +304,27 @@ MemoryFootprint FmfMaterial::memory() const {
 
 FittedMaterial FmfMaterial::toFittedMaterial() const {
     FittedMaterial file = writeCommon();
-    const bool fmf = _factors.model == FactorModel::Fmf;
+    const bool fmf = _factors->model == FactorModel::Fmf;
     file.parameters["model"] = fmf ? kFmfPlainModel : "dfmf";
-    const int ks[3] = {_factors.components(0), _factors.components(1), _factors.components(2)};
+    const int ks[3] = {_factors->components(0), _factors->components(1), _factors->components(2)};
     file.parameters["components"] =
         fmf ? std::to_string(ks[0])
             : std::to_string(ks[0]) + "," + std::to_string(ks[1]) + "," + std::to_string(ks[2]);
-    file.parameters["cosine"] = _factors.cosine ? "1" : "0";
-    file.parameters["colorModel"] = std::to_string(_factors.colorModel);
-    file.parameters["colorMean"] = floatList(_factors.colorMean.data(), 3);
-    file.parameters["colorMatrix"] = floatList(_factors.colorMatrix.data(), 9);
-    file.parameters["dynamicRangeReduction"] = std::to_string(_factors.dynamicRangeReduction);
-    file.parameters["eps"] = floatText(_factors.eps);
+    file.parameters["cosine"] = _factors->cosine ? "1" : "0";
+    file.parameters["colorModel"] = std::to_string(_factors->colorModel);
+    file.parameters["colorMean"] = floatList(_factors->colorMean.data(), 3);
+    file.parameters["colorMatrix"] = floatList(_factors->colorMatrix.data(), 9);
+    file.parameters["dynamicRangeReduction"] = std::to_string(_factors->dynamicRangeReduction);
+    file.parameters["eps"] = floatText(_factors->eps);
     file.textures.push_back(uTexture());
     file.textures.push_back(sxvTexture());
     // The singular values are not needed to render; kept so that a file describes its factors.
     const int maxK = std::max({ks[0], ks[1], ks[2]});
-    MaterialTexture s{"singularValues",       maxK, int(_factors.factors.size()), 1, 1,
+    MaterialTexture s{"singularValues",       maxK, int(_factors->factors.size()), 1, 1,
                       MaterialTexture::Float, {}};
     s.data.assign(s.valueCount(), 0.0f);
-    for (std::size_t f = 0; f < _factors.factors.size(); ++f) {
-        const Eigen::VectorXf& values = _factors.factors[f].S;
+    for (std::size_t f = 0; f < _factors->factors.size(); ++f) {
+        const Eigen::VectorXf& values = _factors->factors[f].S;
         for (Eigen::Index k = 0; k < values.size() && k < maxK; ++k)
             s.data[f * std::size_t(maxK) + std::size_t(k)] = values(k);
     }
@@ -419,28 +447,44 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
     // Arrays even with one layer (rank <= 4, one view): fmf.frag samples sampler2DArrays.
-    addTexture(*stateSet, createFloatTextureArray(uTexture()).get(), "fmfU", 0);
-    addTexture(*stateSet, createFloatTextureArray(sxvTexture(), filtersParameters()).get(),
-               "fmfSxV", 1);
+    // Generated layer by layer from the shared factors: no copy of the textures stays in host
+    // memory (a full-size UBO2014 file's are 110 MB as halves, 220 MB as the floats uploaded).
+    const MaterialTexture u = uShape();
+    addTexture(
+        *stateSet,
+        createGeneratedTextureArray(u,
+                                    [factors = _factors, groups = u.width](int view, float* out) {
+                                        writeULayer(*factors, groups, std::size_t(view), out);
+                                    })
+            .get(),
+        "fmfU", 0);
+    addTexture(
+        *stateSet,
+        createGeneratedTextureArray(
+            sxvShape(),
+            [factors = _factors](int layer, float* out) { writeSxvLayer(*factors, layer, out); },
+            filtersParameters())
+            .get(),
+        "fmfSxV", 1);
     _viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
     _lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
-    const bool fmf = _factors.model == FactorModel::Fmf;
+    const bool fmf = _factors->model == FactorModel::Fmf;
     stateSet->addUniform(new osg::Uniform("fmfShared", fmf ? 1 : 0));
     stateSet->addUniform(new osg::Uniform("fmfGroups", groups(0), groups(1), groups(2)));
     stateSet->addUniform(
         new osg::Uniform("fmfLayerOffset", layerOffset(0), layerOffset(1), layerOffset(2)));
     // Fmf decodes with exp or not at all; model 0 (none) stands for that in the colour branch.
-    stateSet->addUniform(new osg::Uniform("fmfColorModel", fmf ? 0 : _factors.colorModel));
-    const auto& mtx = _factors.colorMatrix;
+    stateSet->addUniform(new osg::Uniform("fmfColorModel", fmf ? 0 : _factors->colorModel));
+    const auto& mtx = _factors->colorMatrix;
     osg::ref_ptr<osg::Uniform> rows = new osg::Uniform(osg::Uniform::FLOAT_VEC3, "fmfColorRows", 3);
     for (unsigned i = 0; i < 3; ++i)
         rows->setElement(i, osg::Vec3(mtx[i * 3], mtx[i * 3 + 1], mtx[i * 3 + 2]));
     stateSet->addUniform(rows.get());
-    const auto& mean = _factors.colorMean;
+    const auto& mean = _factors->colorMean;
     stateSet->addUniform(new osg::Uniform("fmfColorMean", osg::Vec3(mean[0], mean[1], mean[2])));
-    stateSet->addUniform(new osg::Uniform("fmfDrr", _factors.drr() ? 1 : 0));
-    stateSet->addUniform(new osg::Uniform("fmfEps", _factors.eps));
-    stateSet->addUniform(new osg::Uniform("fmfCosine", _factors.cosine ? 1 : 0));
+    stateSet->addUniform(new osg::Uniform("fmfDrr", _factors->drr() ? 1 : 0));
+    stateSet->addUniform(new osg::Uniform("fmfEps", _factors->eps));
+    stateSet->addUniform(new osg::Uniform("fmfCosine", _factors->cosine ? 1 : 0));
     return stateSet;
 }
 

@@ -21,6 +21,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 
 #include "core/FactoredBtf.h"
 #include "materials/DirectionLookup.h"
@@ -36,7 +37,10 @@ inline constexpr char kFmfPlainModel[] = "fmf";
 /** FmfMaterial's members (materials/MethodMaterial.h). */
 struct FmfData {
 protected:
-    FactoredBtf _factors;
+    /** Shared, never changed once set: the GPU textures generate their layers from it
+     *  (createGeneratedTextureArray), so the factors are held once, by the material and its
+     *  textures together, and copies of the material share them. */
+    std::shared_ptr<const FactoredBtf> _factors = std::make_shared<const FactoredBtf>();
     MaterialTexture::PixelKind _storage = MaterialTexture::Half;
     DirectionLookup _viewLookup, _lightLookup;
 };
@@ -65,7 +69,7 @@ public:
     static osg::ref_ptr<FmfMaterial> fromFile(const FittedMaterial& file);
 
     /** The factors as rendered (half storage: the rounded values). */
-    const FactoredBtf& factors() const { return _factors; }
+    const FactoredBtf& factors() const { return *_factors; }
     MaterialTexture::PixelKind storage() const { return _storage; }
 
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
@@ -91,7 +95,7 @@ public:
     /** First SxV layer of channel c (Fmf: 0 for every c). */
     int layerOffset(int channel) const;
     /** The textures as the GPU and the file get them (built on demand: the material keeps only
-     *  the factors). */
+     *  the factors; the GPU gets them layer by layer, createStateSet). */
     MaterialTexture uTexture() const;
     MaterialTexture sxvTexture() const;
 
@@ -106,6 +110,9 @@ protected:
                            const glm::vec3& light) const override;
 
 private:
+    /** The textures' sizes and storage (no data). */
+    MaterialTexture uShape() const;
+    MaterialTexture sxvShape() const;
     /** Sets the factors after checks and rounding; prepares the direction lookups. */
     void setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage);
     /** The up to 9 (image, weight) combinations for a query view and light. The one place that
