@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_for.h>
+
 #include <osg/Uniform>
 
 #include "core/Error.h"
@@ -165,12 +167,14 @@ FloatImage evaluateMaterialImage(const Material& material, const CoordinateMap& 
     FloatImage out(w, h, 3);
     out.channelNames = {"R", "G", "B"};
     if (light.z <= 0.0f || view.z <= 0.0f) return out;  // as the shader: below the horizon is dark
-    for (int y = 0; y < h; ++y)
+    // Rows in parallel: Material::evaluate is const and thread-safe (the comparison relies on it).
+    tbb::parallel_for(0, h, [&](int y) {
         for (int x = 0; x < w; ++x) {
             const glm::vec3 value =
                 material.evaluate(map.sampleX(x, y), map.sampleY(x, y), view, light);
             for (int c = 0; c < 3; ++c) out.at(x, h - 1 - y, c) = value[c];
         }
+    });
     return out;
 }
 
@@ -181,11 +185,12 @@ FloatImage evaluateMaterialImage(const Material& material, const glm::vec3& view
     FloatImage out(w, h, 3);
     out.channelNames = {"R", "G", "B"};
     if (light.z <= 0.0f || view.z <= 0.0f) return out;  // as the shader: below the horizon is dark
-    for (int y = 0; y < h; ++y)
+    tbb::parallel_for(0, h, [&](int y) {
         for (int x = 0; x < w; ++x) {
             const glm::vec3 value = material.evaluate(x, y, view, light);
             for (int c = 0; c < 3; ++c) out.at(x, h - 1 - y, c) = value[c];
         }
+    });
     return out;
 }
 
