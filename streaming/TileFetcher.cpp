@@ -89,6 +89,28 @@ namespace {
 
 constexpr long kMaxRedirects = 3;
 
+/** Whether a failed transfer may succeed when tried again: the connection (refused, reset,
+ *  stalled, cut short) or the server's state (5xx, 408 Request Timeout, 429 Too Many Requests),
+ *  not an answer about the file (404, redirect loops) or a limit of ours (size, cancelled). */
+bool isTransient(CURLcode code, long status) {
+    switch (code) {
+        case CURLE_OK:
+        case CURLE_HTTP_RETURNED_ERROR:
+            return status >= 500 || status == 408 || status == 429;
+        case CURLE_COULDNT_CONNECT:
+        case CURLE_COULDNT_RESOLVE_HOST:
+        case CURLE_COULDNT_RESOLVE_PROXY:
+        case CURLE_OPERATION_TIMEDOUT:
+        case CURLE_GOT_NOTHING:
+        case CURLE_PARTIAL_FILE:
+        case CURLE_SEND_ERROR:
+        case CURLE_RECV_ERROR:
+            return true;
+        default:
+            return false;
+    }
+}
+
 /** curl_global_init is not thread-safe before libcurl 7.84; once per process, never cleaned up
  *  (other libraries in the process may use libcurl too). */
 bool curlReady() {
@@ -237,43 +259,49 @@ FetchResult HttpTileSource::fetchInterruptible(const std::string& relativePath,
     curl_easy_getinfo(curl, CURLINFO_CONNECT_TIME_T, &connectMicroseconds);
     curl_easy_setopt(curl, CURLOPT_ERRORBUFFER, nullptr);  // errorBuffer dies with this frame
 
+    const bool transient = isTransient(code, status);
+    const auto fail = [&](const std::string& problem) {
+        FetchResult result = failure(url, problem);
+        result.transient = transient;
+        return result;
+    };
     const std::string sizeLimit =
         "response larger than " + std::to_string(_options.maxBytes) + " bytes";
     switch (code) {
         case CURLE_OK:
-            if (status < 200 || status > 299) return failure(url, "HTTP " + std::to_string(status));
+            if (status < 200 || status > 299) return fail("HTTP " + std::to_string(status));
             break;
         case CURLE_ABORTED_BY_CALLBACK:
-            return failure(url, "cancelled");
+            return fail("cancelled");
         case CURLE_HTTP_RETURNED_ERROR:
-            return failure(url, "HTTP " + std::to_string(status));
+            return fail("HTTP " + std::to_string(status));
         case CURLE_FILESIZE_EXCEEDED:
-            return failure(url, sizeLimit);
+            return fail(sizeLimit);
         case CURLE_WRITE_ERROR:
-            if (transfer.tooLarge) return failure(url, sizeLimit);
-            if (transfer.outOfMemory) return failure(url, "out of memory");
+            if (transfer.tooLarge) return fail(sizeLimit);
+            if (transfer.outOfMemory) return fail("out of memory");
             break;
         case CURLE_COULDNT_CONNECT:
-            if (osErrno == ECONNREFUSED) return failure(url, "connection refused");
-            if (osErrno != 0) return failure(url, "cannot connect: " + errnoText(int(osErrno)));
+            if (osErrno == ECONNREFUSED) return fail("connection refused");
+            if (osErrno != 0) return fail("cannot connect: " + errnoText(int(osErrno)));
             break;
         case CURLE_OPERATION_TIMEDOUT:
             if (connectMicroseconds > 0)
-                return failure(
-                    url, "timed out (no data for " + std::to_string(_options.stallSeconds) + " s)");
-            return failure(url, "cannot connect: timed out after " +
-                                    std::to_string(_options.connectTimeoutSeconds) + " s");
+                return fail("timed out (no data for " + std::to_string(_options.stallSeconds) +
+                            " s)");
+            return fail("cannot connect: timed out after " +
+                        std::to_string(_options.connectTimeoutSeconds) + " s");
         case CURLE_TOO_MANY_REDIRECTS:
-            return failure(url, "more than " + std::to_string(kMaxRedirects) + " redirects");
+            return fail("more than " + std::to_string(kMaxRedirects) + " redirects");
         case CURLE_GOT_NOTHING:
-            return failure(url, "empty reply from the server");
+            return fail("empty reply from the server");
         case CURLE_PARTIAL_FILE:
-            return failure(url, "the connection closed before the whole response arrived");
+            return fail("the connection closed before the whole response arrived");
         default:
             break;
     }
     if (code != CURLE_OK)
-        return failure(url, errorBuffer[0] ? std::string(errorBuffer) : curl_easy_strerror(code));
+        return fail(errorBuffer[0] ? std::string(errorBuffer) : curl_easy_strerror(code));
 
     FetchResult result;
     result.ok = true;
@@ -296,7 +324,8 @@ bool TileFetcher::QueueEntry::operator<(const QueueEntry& other) const {
 }
 
 TileFetcher::TileFetcher(std::shared_ptr<TileSource> source, TileFetcherOptions options)
-    : _source(std::move(source)), _paused(options.paused) {
+    : _source(std::move(source)), _options(options), _paused(options.paused) {
+    _options.tries = std::max(1, _options.tries);
     const int threads = std::max(1, options.threads);
     _threads.reserve(std::size_t(threads));
     for (int i = 0; i < threads; ++i) _threads.emplace_back([this] { work(); });
@@ -321,6 +350,11 @@ void TileFetcher::request(std::uint64_t key, const std::string& relativePath, do
         if (found != _keys.end()) {
             KeyState& state = found->second;
             if (state.state == State::InFlight) state.discard = false;
+            if (state.state == State::Waiting) {
+                state.entry.priority = priority;
+                state.path = relativePath;
+                return;
+            }
             if (state.state != State::Pending) return;
             QueueEntry entry = *state.queued;
             _queue.erase(state.queued);
@@ -345,6 +379,10 @@ void TileFetcher::cancel(std::uint64_t key) {
         if (found == _keys.end()) return;
         if (found->second.state == State::Pending) {
             _queue.erase(found->second.queued);
+            _keys.erase(found);
+            changed = true;
+        } else if (found->second.state == State::Waiting) {
+            _waiting.erase({found->second.due, key});
             _keys.erase(found);
             changed = true;
         } else if (found->second.state == State::InFlight) {
@@ -378,8 +416,9 @@ std::vector<FetchedItem> TileFetcher::takeCompleted() {
 
 bool TileFetcher::waitIdle(std::chrono::milliseconds timeout) {
     std::unique_lock<std::mutex> lock(_mutex);
-    return _idle.wait_for(
-        lock, timeout, [this] { return _stop || (_inFlight == 0 && (_paused || _queue.empty())); });
+    return _idle.wait_for(lock, timeout, [this] {
+        return _stop || (_inFlight == 0 && (_paused || (_queue.empty() && _waiting.empty())));
+    });
 }
 
 void TileFetcher::setPaused(bool paused) {
@@ -393,7 +432,7 @@ void TileFetcher::setPaused(bool paused) {
 
 std::size_t TileFetcher::pending() const {
     const std::lock_guard<std::mutex> lock(_mutex);
-    return _queue.size();
+    return _queue.size() + _waiting.size();
 }
 
 std::size_t TileFetcher::inFlight() const {
@@ -401,16 +440,34 @@ std::size_t TileFetcher::inFlight() const {
     return _inFlight;
 }
 
+void TileFetcher::queueDueRetries() {
+    const Clock::time_point now = Clock::now();
+    while (!_waiting.empty() && _waiting.begin()->first <= now) {
+        KeyState& state = _keys.at(_waiting.begin()->second);
+        _waiting.erase(_waiting.begin());
+        state.state = State::Pending;
+        state.queued = _queue.insert(state.entry).first;
+    }
+}
+
 void TileFetcher::work() {
     std::unique_lock<std::mutex> lock(_mutex);
     for (;;) {
-        _wake.wait(lock, [this] { return _stop || (!_paused && !_queue.empty()); });
         if (_stop) return;
+        queueDueRetries();
+        if (_paused || _queue.empty()) {
+            if (_waiting.empty())
+                _wake.wait(lock);
+            else
+                _wake.wait_until(lock, _waiting.begin()->first);
+            continue;
+        }
 
         const QueueEntry entry = *_queue.begin();
         _queue.erase(_queue.begin());
         KeyState& state = _keys.at(entry.key);
         state.state = State::InFlight;
+        const int tries = ++state.tries;
         const std::string path = state.path;
         ++_inFlight;
         lock.unlock();
@@ -430,6 +487,22 @@ void TileFetcher::work() {
         if (_stop) return;  // aborted: neither delivered nor reported
         auto found = _keys.find(entry.key);
         const bool discard = found == _keys.end() || found->second.discard;
+        if (!discard && !result.ok && result.transient && tries < _options.tries) {
+            // Again later, after a delay that doubles with each try; no warning yet.
+            KeyState& state = found->second;
+            auto delay = _options.retryDelay;
+            for (int i = 1; i < tries && delay < _options.maxRetryDelay; ++i) delay *= 2;
+            delay = std::min(delay, _options.maxRetryDelay);
+            state.state = State::Waiting;
+            state.entry = entry;
+            state.due = Clock::now() + delay;
+            _waiting.insert({state.due, entry.key});
+            ++_retries;
+            --_inFlight;
+            _wake.notify_all();  // a worker waits for the earliest retry
+            continue;
+        }
+        if (!result.ok && tries > 1) result.error += " (" + std::to_string(tries) + " tries)";
         bool warn = false;
         if (!discard && !result.ok) {
             std::string where;

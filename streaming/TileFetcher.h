@@ -15,8 +15,12 @@
 // Failures: a network fails in many ways (refused, stalled, 404, 500, truncated, huge). Each is a
 // failed item with a message "URL-or-path: problem", never an exception or a crash; the message
 // goes to OSG's WARN once per URL (a missing tile requested every frame must not flood the log),
-// and a failed key is not fetched again until the caller forget()s it: retrying is the caller's
-// policy (e.g. after the user fixed the server), not a loop in here.
+// and a failed key is not fetched again until the caller forget()s it. Failures that a second try
+// may not repeat (refused, reset or stalled connections, HTTP 5xx, 408 and 429: a server
+// restarting, overloaded or behind a flaky link) are tried again first, after delays that double
+// (TileFetcherOptions::tries, retryDelay), before they count as failed: a server that comes back
+// within that time is used again, and one that does not costs one warning. A 404, a redirect
+// loop or a response too large fail at once: the same request gets the same answer.
 //
 // Stopping: the destructor must not hang on a dead server. Transfers check a stop flag from
 // libcurl's progress callback, which runs at least about once a second even when no byte arrives,
@@ -34,6 +38,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace osgBTF {
@@ -46,6 +51,9 @@ struct FetchResult {
      *  "...: timed out (no data for 5 s)", "/data/x/index.bsvtf: cannot open: No such file or
      *  directory". */
     std::string error;
+    /** When !ok: whether trying again may succeed (the connection failed, stalled or was cut, or
+     *  the server answered 5xx, 408 or 429), as opposed to an answer that a retry repeats. */
+    bool transient = false;
 };
 
 /** Where the files of one tile set come from; fetch() may run in several threads at once. */
@@ -121,6 +129,14 @@ struct TileFetcherOptions {
     /** Start with the workers paused (see setPaused): e.g. to queue a batch first so it is
      *  fetched strictly by priority, not first-come. */
     bool paused = false;
+    /** Tries of a file whose fetch fails transiently (FetchResult::transient) before it is
+     *  delivered as failed (at least 1: no retry). */
+    int tries = 5;
+    /** Delay before the second try; each later one waits twice as long as the one before, at
+     *  most maxRetryDelay (defaults: 0.5, 1, 2 and 4 s, so a server away for up to ~7 s is used
+     *  again). Meanwhile the key is pending: it counts for pending() and waitIdle(). */
+    std::chrono::milliseconds retryDelay{500};
+    std::chrono::milliseconds maxRetryDelay{8000};
 };
 
 /** Fetches requested files of one source in the background, highest priority first.
@@ -164,6 +180,8 @@ public:
     /** Pauses or resumes taking requests; a transfer in flight completes. */
     void setPaused(bool paused);
 
+    /** Fetches tried again after a transient failure, since the start. */
+    std::uint64_t retries() const { return _retries.load(); }
     /** Sum of the sizes of the files delivered successfully. */
     std::uint64_t bytesReceived() const { return _bytesReceived.load(); }
     std::size_t pending() const;
@@ -177,22 +195,31 @@ private:
         std::uint64_t key;
         bool operator<(const QueueEntry& other) const;
     };
-    enum class State { Pending, InFlight, Delivered };
+    using Clock = std::chrono::steady_clock;
+    /** Waiting: failed transiently, queued again at `due` (in _waiting, not in _queue). */
+    enum class State { Pending, Waiting, InFlight, Delivered };
     struct KeyState {
         State state = State::Pending;
         std::string path;
         std::set<QueueEntry>::iterator queued;  ///< valid while Pending
         bool discard = false;                   ///< InFlight: drop the result (cancelled)
+        int tries = 0;                          ///< fetches made so far
+        QueueEntry entry{};                     ///< Waiting: its place in the queue once due
+        Clock::time_point due{};                ///< Waiting
     };
 
     void work();
     void removeCompleted(std::uint64_t key);
+    /** Moves the waiting keys whose time has come to the queue. */
+    void queueDueRetries();
 
     std::shared_ptr<TileSource> _source;
     mutable std::mutex _mutex;
     std::condition_variable _wake;  ///< workers: a request, resume or stop
     std::condition_variable _idle;  ///< waitIdle: something completed
     std::set<QueueEntry> _queue;
+    std::set<std::pair<Clock::time_point, std::uint64_t>> _waiting;  ///< retries by due time
+    TileFetcherOptions _options;
     std::map<std::uint64_t, KeyState> _keys;
     std::vector<FetchedItem> _completed;
     std::set<std::string> _reported;  ///< describe(path) of every failure already warned about
@@ -201,6 +228,7 @@ private:
     bool _paused = false;
     std::atomic<bool> _stop{false};
     std::atomic<std::uint64_t> _bytesReceived{0};
+    std::atomic<std::uint64_t> _retries{0};
     std::vector<std::thread> _threads;
 };
 

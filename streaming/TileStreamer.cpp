@@ -229,6 +229,8 @@ osg::ref_ptr<StreamedFmfMaterial> TileStreamer::open(const std::string& location
 
     TileFetcherOptions fetching;
     fetching.threads = std::max(1, _options.fetchThreads);
+    fetching.tries = _options.fetchTries;
+    fetching.retryDelay = _options.retryDelay;
     stream->fetcher =
         std::make_unique<TileFetcher>(std::shared_ptr<TileSource>(std::move(source)), fetching);
     // The level-0 tiles are resident from now on: zeros in their slots until their data

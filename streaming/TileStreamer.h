@@ -16,6 +16,8 @@
 // uploads the queued tiles when it is applied (one graphics context).
 #pragma once
 
+#include <chrono>
+
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -46,7 +48,11 @@ struct TileStreamerOptions {
      *  limit). A limit paces the requests like a slow link would, so that what arrives first
      *  is what matters most (Schwartz et al. 2013 section 6). */
     int requestsPerUpdate = 0;
-    int fetchThreads = 2;                           ///< per material
+    int fetchThreads = 2;  ///< per material
+    /** Tries of a file that fails transiently, and the delay before the second try (doubling
+     *  after that): TileFetcherOptions::tries and retryDelay. */
+    int fetchTries = 5;
+    std::chrono::milliseconds retryDelay{500};
     std::size_t ramBytes = std::size_t(512) << 20;  ///< decoded tiles kept that are not resident
 };
 

@@ -204,6 +204,15 @@ std::string NginxServer::start() {
     return "nginx exited:\n" + log;
 }
 
+std::string NginxServer::restart() {
+    if (running()) return "";
+    if (_port == 0) return "the server never ran: start() it first";
+    std::string log;
+    bool failed = false;
+    if (launch(log, failed)) return "";
+    return "nginx exited:\n" + log;
+}
+
 bool NginxServer::launch(std::string& log, bool& failed) {
     const std::string nginx = executable();
     const std::vector<std::string> args{nginx,

@@ -54,6 +54,9 @@ public:
      *  does not send the tests' requests to a proxy from the environment. On Linux nginx is
      *  killed when the thread that started it ends (a crashed test leaves no server behind). */
     std::string start();
+    /** Starts nginx again after stop(), on the port it had (a server that comes back after a
+     *  crash or a restart). Returns "" when it runs, else the problem. */
+    std::string restart();
     /** Kills nginx (SIGKILL: open connections are reset at once, as when a server crashes or a
      *  network drops) and waits for it. Nothing when it is not running. */
     void stop();

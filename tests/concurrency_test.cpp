@@ -2,10 +2,13 @@
 // .btf at once through osgDB: from std::threads calling osgDB::readRefNodeFile, and through an
 // osgDB::DatabasePager whose threads load ProxyNodes naming the same files.
 // These run in the ThreadSanitizer build too (ctest label "concurrency", README "Reliability").
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <string>
 #include <thread>
@@ -28,6 +31,7 @@
 #include "materials/Material.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/MaterialNode.h"
+#include "streaming/TileFetcher.h"
 #include "tests/PluginTestUtil.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
@@ -86,6 +90,32 @@ void expectCompleteCacheEntries(const std::string& cache) {
         EXPECT_EQ(errorOf([&] { loadMaterial(name); }), "no error");
     }
 }
+
+/** Files "f/<n>" whose first two fetches fail transiently (a server restarting), counted. */
+class FlakySource : public TileSource {
+public:
+    FetchResult fetch(const std::string& path) override {
+        std::lock_guard<std::mutex> lock(_mutex);
+        FetchResult result;
+        if (++_fetches[path] <= 2) {
+            result.error = path + ": connection refused";
+            result.transient = true;
+        } else {
+            result.ok = true;
+            result.data.assign(path.begin(), path.end());
+        }
+        return result;
+    }
+    std::string describe(const std::string& path) const override { return path; }
+    std::map<std::string, int> fetches() const {
+        std::lock_guard<std::mutex> lock(_mutex);
+        return _fetches;
+    }
+
+private:
+    mutable std::mutex _mutex;
+    std::map<std::string, int> _fetches;
+};
 
 }  // namespace
 
@@ -242,4 +272,38 @@ TEST(Concurrency, DatabasePagerThreadsLoadProxyNodesNamingTheSameFiles) {
         EXPECT_NE(node->getMaterial(), nullptr) << proxy->getFileName(0);
     }
     expectCompleteCacheEntries(f.cache);
+}
+
+// Three workers fetch and retry while two threads request the same keys with changing
+// priorities: every file is delivered once, after exactly its two transient failures.
+TEST(Concurrency, FetcherRetriesWhileThreadsRequestTheSameKeys) {
+    constexpr int kKeys = 200;
+    const auto source = std::make_shared<FlakySource>();
+    TileFetcherOptions options;
+    options.threads = 3;
+    options.retryDelay = std::chrono::milliseconds(1);
+    TileFetcher fetcher(source, options);
+    std::vector<std::thread> requesters;
+    for (int t = 0; t < 2; ++t)
+        requesters.emplace_back([&fetcher, t] {
+            for (int round = 0; round < 3; ++round)
+                for (int i = 0; i < kKeys; ++i)
+                    fetcher.request(std::uint64_t(i), "f/" + std::to_string(i),
+                                    double((i * (t + 1) + round) % 17));
+        });
+    for (std::thread& thread : requesters) thread.join();
+    ASSERT_TRUE(fetcher.waitIdle(std::chrono::seconds(60)));
+    std::vector<bool> seen(kKeys, false);
+    for (const FetchedItem& item : fetcher.takeCompleted()) {
+        ASSERT_LT(item.key, std::uint64_t(kKeys));
+        EXPECT_FALSE(seen[item.key]) << item.key;
+        seen[item.key] = true;
+        EXPECT_TRUE(item.result.ok) << item.result.error;
+        EXPECT_EQ(std::string(item.result.data.begin(), item.result.data.end()), item.path);
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), true), kKeys);
+    const std::map<std::string, int> fetches = source->fetches();
+    EXPECT_EQ(fetches.size(), std::size_t(kKeys));
+    for (const auto& [path, count] : fetches) EXPECT_EQ(count, 3) << path;
+    EXPECT_EQ(fetcher.retries(), std::uint64_t(2 * kKeys));
 }

@@ -152,6 +152,8 @@ protected:
     }
 
     void stopServer() { _server.stop(); }
+    std::string restartServer() { return _server.restart(); }
+    int requestCount(const std::string& path) const { return _server.requestCount(path); }
 
     /** The tile set's URL. */
     std::string base() const { return _server.url("/set"); }
@@ -173,10 +175,15 @@ TEST_F(NginxTileServer, ReportsMissingFilesServerErrorsAndRedirectLoops) {
     EXPECT_FALSE(missing.ok);
     EXPECT_TRUE(missing.data.empty());
     EXPECT_EQ(missing.error, base() + "/tiles/0/0/5_5.tile: HTTP 404");
+    EXPECT_FALSE(missing.transient);  // the same request gets the same answer
 
     HttpTileSource server(root());
-    EXPECT_EQ(server.fetch("broken/x.tile").error, root() + "/broken/x.tile: HTTP 500");
-    EXPECT_EQ(server.fetch("loop/x").error, root() + "/loop/x: more than 3 redirects");
+    const FetchResult broken = server.fetch("broken/x.tile");
+    EXPECT_EQ(broken.error, root() + "/broken/x.tile: HTTP 500");
+    EXPECT_TRUE(broken.transient);  // the server's state: worth another try
+    const FetchResult loop = server.fetch("loop/x");
+    EXPECT_EQ(loop.error, root() + "/loop/x: more than 3 redirects");
+    EXPECT_FALSE(loop.transient);
 }
 
 TEST_F(NginxTileServer, RefusesAResponseLargerThanTheLimit) {
@@ -200,6 +207,7 @@ TEST_F(NginxTileServer, TimesOutAStalledTransfer) {
     const double seconds = secondsSince(start);
     EXPECT_FALSE(result.ok);
     EXPECT_EQ(result.error, root() + "/stall/x.tile: timed out (no data for 1 s)");
+    EXPECT_TRUE(result.transient);
     EXPECT_GE(seconds, 0.9);
     EXPECT_LT(seconds, 3.0);
 }
@@ -211,15 +219,60 @@ TEST_F(NginxTileServer, ReportsAStoppedServer) {
     FetchResult result = source.fetch("tiles/0/0/0_0.tile");
     EXPECT_FALSE(result.ok);
     EXPECT_EQ(result.error, base() + "/tiles/0/0/0_0.tile: connection refused");
+    EXPECT_TRUE(result.transient);
 
-    TileFetcher fetcher(std::make_shared<HttpTileSource>(base()));
+    // Tried 5 times (delays 20, 40, 80, 160 ms), then failed with one warning.
+    TileFetcherOptions options;
+    options.retryDelay = std::chrono::milliseconds(20);
+    TileFetcher fetcher(std::make_shared<HttpTileSource>(base()), options);
     ScopedNotifyCapture capture;
     fetcher.request(1, "f/0", 1.0);
-    ASSERT_TRUE(fetcher.waitIdle(std::chrono::seconds(5)));
+    ASSERT_TRUE(fetcher.waitIdle(std::chrono::seconds(10)));
     std::vector<FetchedItem> items = fetcher.takeCompleted();
     ASSERT_EQ(items.size(), 1u);
+    EXPECT_EQ(items[0].result.error, base() + "/f/0: connection refused (5 tries)");
+    EXPECT_EQ(capture.text(), "osgBTF: " + base() + "/f/0: connection refused (5 tries)\n");
+    EXPECT_EQ(fetcher.retries(), 4u);
+
+    TileFetcherOptions once;
+    once.tries = 1;
+    TileFetcher impatient(std::make_shared<HttpTileSource>(base()), once);
+    impatient.request(1, "f/0", 1.0);
+    ASSERT_TRUE(impatient.waitIdle(std::chrono::seconds(5)));
+    items = impatient.takeCompleted();
+    ASSERT_EQ(items.size(), 1u);
     EXPECT_EQ(items[0].result.error, base() + "/f/0: connection refused");
-    EXPECT_EQ(capture.text(), "osgBTF: " + base() + "/f/0: connection refused\n");
+    EXPECT_EQ(impatient.retries(), 0u);
+}
+
+// A server that dies and comes back on its port within the retry delays: the files requested
+// meanwhile arrive, with no warning, each fetched once from the server that came back.
+TEST_F(NginxTileServer, FetcherUsesAServerThatComesBack) {
+    ASSERT_TRUE(HttpTileSource(base()).fetch("f/1").ok);
+    stopServer();
+    TileFetcherOptions options;
+    options.threads = 2;
+    options.retryDelay = std::chrono::milliseconds(200);  // tries at 0, 0.2, 0.6, 1.4, 3.0 s
+    ScopedNotifyCapture capture;
+    TileFetcher fetcher(std::make_shared<HttpTileSource>(base()), options);
+    for (int i = 0; i < 4; ++i) fetcher.request(std::uint64_t(i), "f/" + std::to_string(i), i);
+    // Refused at least once each before the server is back.
+    const auto start = Clock::now();
+    while (fetcher.retries() < 4 && secondsSince(start) < 5)
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ASSERT_GE(fetcher.retries(), 4u);
+    EXPECT_EQ(fetcher.pending(), 4u);  // waiting for their next try
+    const int before = requestCount("/set/f/0");
+    ASSERT_EQ(restartServer(), "");
+    ASSERT_TRUE(fetcher.waitIdle(std::chrono::seconds(10)));
+    const std::vector<FetchedItem> items = fetcher.takeCompleted();
+    ASSERT_EQ(items.size(), 4u);
+    for (const FetchedItem& item : items) {
+        EXPECT_TRUE(item.result.ok) << item.result.error;
+        EXPECT_EQ(item.result.data, fileBytes(int(item.key)));
+    }
+    EXPECT_EQ(requestCount("/set/f/0") - before, 1);
+    EXPECT_EQ(capture.text(), "");
 }
 
 TEST_F(NginxTileServer, FetchesTheBytesAndFollowsARedirect) {
@@ -307,7 +360,9 @@ TEST_F(NginxTileServer, FetcherDeliversInPriorityOrder) {
 
 TEST_F(NginxTileServer, FetcherReportsEachFailureOnce) {
     ScopedNotifyCapture capture;
-    TileFetcher fetcher(std::make_shared<HttpTileSource>(root()), TileFetcherOptions{2, false});
+    TileFetcherOptions options{2, false};
+    options.retryDelay = std::chrono::milliseconds(10);  // HTTP 500 is tried 5 times
+    TileFetcher fetcher(std::make_shared<HttpTileSource>(root()), options);
     fetcher.request(1, "set/missing.tile", 1.0);
     fetcher.request(2, "set/missing.tile", 1.0);  // another key, the same URL
     fetcher.request(3, "broken/a", 1.0);
@@ -327,7 +382,7 @@ TEST_F(NginxTileServer, FetcherReportsEachFailureOnce) {
 
     std::string text = capture.text();
     const std::string missing = "osgBTF: " + root() + "/set/missing.tile: HTTP 404\n";
-    const std::string broken = "osgBTF: " + root() + "/broken/a: HTTP 500\n";
+    const std::string broken = "osgBTF: " + root() + "/broken/a: HTTP 500 (5 tries)\n";
     // Two workers: the two messages may come in either order.
     EXPECT_TRUE(text == missing + broken || text == broken + missing) << text;
     EXPECT_EQ(fetcher.bytesReceived(), 0u);

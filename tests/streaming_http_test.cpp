@@ -70,6 +70,7 @@ TileStreamerOptions streamerOptions() {
     o.padding = kPadding;
     o.cacheSize = 7 * (kTile + 2 * kPadding);
     o.uploadsPerUpdate = 4;  // several updates to converge: the intermediate states are seen
+    o.retryDelay = std::chrono::milliseconds(10);  // transient failures: 5 tries within 0.15 s
     return o;
 }
 
@@ -340,17 +341,19 @@ protected:
     }
 
     /** Streams the raw set from url() until settled and checks the outcome of one tile that
-     *  fails with `warning`: reported exactly once, counted once, fetched once and never again;
+     *  fails with `warning`: reported exactly once, counted once, fetched `fetches` times (a
+     *  transient failure's tries) and never again;
      *  within its group its region stays at its parent's level and renders the parent's texels,
      *  everything else converges to the finest tiles. */
-    void expectOnlyThisTileMissing(const TileId& broken, const std::string& warning) {
+    void expectOnlyThisTileMissing(const TileId& broken, const std::string& warning,
+                                   int fetches = 1) {
         ScopedNotifyCapture capture;
         const osg::ref_ptr<TileStreamer> streamer = streamUntilSettled();
         ASSERT_TRUE(streamer->settled());
         const std::string brokenPath = TileSetIndex::tilePath(broken);
         EXPECT_EQ(capture.text(), warning);
         EXPECT_EQ(streamer->stats().failures, 1u);
-        EXPECT_EQ(requests(brokenPath), 1);
+        EXPECT_EQ(requests(brokenPath), fetches);
         EXPECT_EQ(streamer->stats().uPacketsReceived, kGroups);
 
         for (int g = 0; g < kGroups; ++g)
@@ -382,7 +385,7 @@ protected:
         EXPECT_TRUE(streamer->settled());
         EXPECT_EQ(capture.text(), warning);
         EXPECT_EQ(streamer->stats().failures, 1u);
-        EXPECT_EQ(requests(brokenPath), 1);
+        EXPECT_EQ(requests(brokenPath), fetches);
     }
 
     /** The same for a U packet that fails with `warning`: every tile converges; the group's
@@ -485,7 +488,7 @@ TEST_F(StreamingHttp, AServerErrorForATileIsReportedOnceAndItsRegionStaysCoarser
     const std::string path = TileSetIndex::tilePath(kBroken);
     server.answer("/set/" + path, 500);  // the file is there; nginx answers 500 for it
     startServer();
-    expectOnlyThisTileMissing(kBroken, "osgBTF: " + url(path) + ": HTTP 500\n");
+    expectOnlyThisTileMissing(kBroken, "osgBTF: " + url(path) + ": HTTP 500 (5 tries)\n", 5);
 }
 
 TEST_F(StreamingHttp, ATruncatedTileIsReportedOnceAndItsRegionStaysCoarser) {
@@ -592,6 +595,36 @@ TEST_F(StreamingHttp, AServerThatStopsMidwayLeavesWhatArrivedRendering) {
     for (int i = 0; i < 20; ++i) ASSERT_NO_THROW(streamer->update(votes));
     EXPECT_EQ(capture.text(), text);
     EXPECT_EQ(streamer->stats().failures, stats.failures);
+}
+
+// A server that goes away and comes back on its port within the fetchers' retry delays: the
+// tiles and packets requested meanwhile are tried again and arrive; everything converges to the
+// whole material, with no warning and no failure.
+TEST_F(StreamingHttp, AServerThatComesBackIsUsedAgain) {
+    build("raw");
+    startServer();
+    TileStreamerOptions options = streamerOptions();
+    options.retryDelay = std::chrono::milliseconds(200);  // tries at 0, 0.2, 0.6, 1.4, 3.0 s
+    osg::ref_ptr<TileStreamer> streamer = new TileStreamer(options);
+    ScopedNotifyCapture capture;
+    streamer->open(url());
+    const TileVotes votes = finestVotes(*streamer);
+    server.stop();  // before anything but the index arrived
+    const auto start = Clock::now();
+    while (secondsSince(start) < 0.4) {
+        streamer->update(votes);
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    EXPECT_EQ(streamer->stats().uPacketsReceived, 0);
+    ASSERT_EQ(server.restart(), "");
+    int updates = 0;
+    ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, kSettleDeadlineSeconds));
+    ASSERT_TRUE(streamer->settled()) << "not settled after " << updates << " updates";
+    EXPECT_EQ(streamer->stats().failures, 0u);
+    EXPECT_EQ(capture.text(), "");
+    EXPECT_EQ(residentFinestTiles(*streamer), kGroups * kFinestX * kFinestY);
+    EXPECT_EQ(differingTexels(*streamer->snapshot(0), *loadTileSetFinest(pristine())),
+              std::vector<std::size_t>{});
 }
 
 // The stall itself times out only after HttpOptions::stallSeconds (5 s with the options
