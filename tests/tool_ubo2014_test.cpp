@@ -11,6 +11,8 @@
 
 #include "core/FloatImage.h"
 #include "loaders/Ubo2014.h"
+#include "materials/fmf/Fmf.h"
+#include "streaming/TileSet.h"
 #include "tests/HandWrittenUbo2014.h"
 #include "tests/TestUtil.h"
 
@@ -208,4 +210,91 @@ TEST(BtfToolUbo2014, EvalRendersTheStoredFactors) {
                         << "x " << x << " row " << row << " channel " << c;
             }
     }
+}
+
+namespace {
+
+/** "RMSE <x>" from `btf tiles`'s conversion line; NaN when missing. */
+double statedRmse(const std::string& output) {
+    const std::string key = "converted to FMF with ";
+    const std::size_t line = output.find(key);
+    const std::size_t at = output.find("RMSE ", line == std::string::npos ? 0 : line);
+    if (line == std::string::npos || at == std::string::npos)
+        return std::numeric_limits<double>::quiet_NaN();
+    return std::stod(output.substr(at + 5));
+}
+
+/** RMSE of a tile set's finest material against the hand-written file's values (its own
+ *  decoder, HandWrittenBtf::value), over every texel and (view, light) pair; also the largest
+ *  |value|. */
+double tileSetRmse(const std::string& folder, const HandWrittenBtf& f, double& largest) {
+    const osg::ref_ptr<osgBTF::FmfMaterial> m = osgBTF::loadTileSetFinest(folder);
+    const std::size_t nV = f.views.size(), nL = f.lights.size();
+    EXPECT_EQ(m->views().size(), nV);
+    EXPECT_EQ(m->lights().size(), nL);
+    std::vector<float> abrdf(nV * nL * 3);
+    double squared = 0;
+    std::size_t n = 0;
+    largest = 0;
+    for (int y = 0; y < f.height; ++y)
+        for (int x = 0; x < f.width; ++x) {
+            m->evaluateMeasured(std::size_t(y * f.width + x), abrdf.data());
+            for (std::size_t v = 0; v < nV; ++v)
+                for (std::size_t l = 0; l < nL; ++l) {
+                    const auto want = f.value(int(v), int(l), x, f.height - 1 - y);
+                    for (int c = 0; c < 3; ++c, ++n) {
+                        const double d = abrdf[(v * nL + l) * 3 + std::size_t(c)] - want[c];
+                        squared += d * d;
+                        largest = std::max(largest, std::abs(want[c]));
+                    }
+                }
+        }
+    return std::sqrt(squared / double(n));
+}
+
+}  // namespace
+
+// A DFMF file (colour model 11, non-linear: no recombination of its factors is FMF) is converted
+// by an fmf fit of its decoded values, whose stated error is checked against the file's own
+// decoder: at full rank (12 = its texels) the tiles reproduce it up to half rounding; at rank 2
+// the stated RMSE is what the tile set measures against the hand-written values.
+TEST(BtfToolUbo2014, TilesConvertADfmfFileAndStateTheError) {
+    TempDir dir;
+    const HandWrittenBtf f = handWrittenDfmf11();
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, f.bytes);
+    const std::string common = " --codec raw --tile-size 8 --padding 0";
+
+    const CommandResult full = btf("tiles " + shellQuote(path) + " -o " +
+                                   shellQuote(dir.file("full")) + common + " --components 12");
+    ASSERT_EQ(full.exitCode, 0) << full.output;
+    EXPECT_NE(full.output.find("DFMF (ranks 2, 3, 1, colour model 11) converted to FMF with 12 "
+                               "components"),
+              std::string::npos)
+        << full.output;
+    double largest = 0;
+    const double fullRmse = tileSetRmse(dir.file("full"), f, largest);
+    // Half tiles: U and SxV each within 2^-11 relative; the sums stay well inside 1e-3.
+    EXPECT_LT(fullRmse, 1e-3 * largest);
+    EXPECT_LT(statedRmse(full.output), 1e-5 * largest) << full.output;  // a float fit, full rank
+
+    const CommandResult two = btf("tiles " + shellQuote(path) + " -o " +
+                                  shellQuote(dir.file("two")) + common + " --components 2");
+    ASSERT_EQ(two.exitCode, 0) << two.output;
+    const double stated = statedRmse(two.output);
+    const double measured = tileSetRmse(dir.file("two"), f, largest);
+    EXPECT_GT(stated, 10 * fullRmse) << two.output;  // rank 2 does not hold this data
+    EXPECT_NEAR(measured, stated, 0.02 * stated + 1e-3 * largest) << two.output;
+
+    // An FMF input needs no conversion, and says so when asked for one.
+    const HandWrittenBtf fmf = handWrittenFmfDrrCosine();
+    writeTextFile(dir.file("fmf.btf"), fmf.bytes);
+    const CommandResult refused = btf("tiles " + shellQuote(dir.file("fmf.btf")) + " -o " +
+                                      shellQuote(dir.file("f")) + common + " --components 2");
+    EXPECT_NE(refused.exitCode, 0);
+    EXPECT_NE(refused.output.find(dir.file("fmf.btf") +
+                                  ": --components converts DFMF input; this material is FMF "
+                                  "already"),
+              std::string::npos)
+        << refused.output;
 }

@@ -1,6 +1,14 @@
 // btf tiles INPUT -o DIR: the BSVTF tile set of an fmf material (Schwartz et al. 2013 sections
 // 5-7), for streaming from a folder or a static HTTP server (streaming/TileSet.h describes the
 // files).
+//
+// BSVTF streams FMF: one factorisation with the colour in U's rows. The UBO2014 database is
+// distributed as DFMF (one factorisation per channel of a decorrelating colour model, usually
+// the non-linear exp-YUV), which no linear recombination turns into FMF; such an input is
+// converted by fitting fmf to its decoded values, streamed from the factors block by block
+// (FactoredBtfSource: the decoded whole never exists), and the conversion's error against the
+// DFMF values is measured and printed before the tiles are written.
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <iomanip>
@@ -8,12 +16,48 @@
 #include <memory>
 
 #include "core/Error.h"
+#include "core/ErrorMetrics.h"
+#include "core/FactoredBtf.h"
+#include "loaders/LoadBtf.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/OpenMaterial.h"
 #include "streaming/TileBuilder.h"
 #include "tools/btf/Commands.h"
 
 namespace osgBTF::tool {
+
+namespace {
+
+/** The fmf fit of a DFMF material's decoded values with `components` (0: its largest rank), and
+ *  its error against those values over `errorTexels` texels at every (view, light) pair. */
+osg::ref_ptr<FmfMaterial> convertDfmf(const FmfMaterial& dfmf, int components,
+                                      long long errorTexels) {
+    const FactoredBtf& factors = dfmf.factors();
+    const int ranks[3] = {factors.components(0), factors.components(1), factors.components(2)};
+    if (components == 0) components = std::max({ranks[0], ranks[1], ranks[2]});
+    const FactoredBtfSource source(factors);
+    FitOptions fit;
+    fit.set("components", std::to_string(components));
+    fit.set("storage", dfmf.storage() == MaterialTexture::Float ? "float" : "half");
+    osg::ref_ptr<FmfMaterial> fmf = FmfMaterial::fit(source, fit);
+    fmf->sourceFile = dfmf.sourceFile;
+    const std::vector<std::size_t> texels =
+        randomTexels(source, errorTexelCount(source, errorTexels));
+    const ErrorSummary error = computeError(
+        source, [&](std::size_t t, float* abrdf) { fmf->evaluateMeasured(t, abrdf); }, &texels);
+    std::cout << std::setprecision(6) << dfmf.sourceFile << ": DFMF (ranks " << ranks[0] << ", "
+              << ranks[1] << ", " << ranks[2] << ", colour model " << factors.colorModel
+              << ") converted to FMF with " << components << " components in "
+              << std::setprecision(3) << std::stod(fmf->fitInfo["seconds"]) << " s; against the "
+              << "DFMF values (" << texels.size() << " of " << source.texelCount()
+              << " texels, every (view, light) pair): RMSE " << std::setprecision(6) << error.rmse
+              << ", average error " << error.average << ", PSNR " << std::setprecision(2)
+              << std::fixed << error.psnr << " dB\n"
+              << std::defaultfloat;
+    return fmf;
+}
+
+}  // namespace
 
 Runner addTilesCommand(CLI::App& app, CommonOptions&) {
     auto* command = app.add_subcommand(
@@ -25,13 +69,15 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
     struct Options {
         std::string input, output, codec = "dct";
         TileBuildOptions build;
+        int components = 0;
+        long long errorTexels = -1;
     };
     auto options = std::make_shared<Options>();
     command
         ->add_option("INPUT", options->input,
                      "An fmf material: a fitted-material file from `btf fit -m fmf --no-mipmap`, "
-                     "or a UBO2014 "
-                     "FMF .btf (its stored factors; DFMF files: fit fmf first)")
+                     "or a UBO2014 .btf (FMF: its stored factors; DFMF: converted to FMF first, "
+                     "see --components)")
         ->required();
     command
         ->add_option("-o,--output", options->output,
@@ -42,6 +88,16 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
                      "dct (coded residuals, Schwartz et al. 2013) or raw (41,472-byte half tiles)")
         ->check(CLI::IsMember({"dct", "raw"}))
         ->capture_default_str();
+    command
+        ->add_option("--components", options->components,
+                     "DFMF input: components of the FMF it is converted to (an fmf fit of its "
+                     "decoded values, streamed from its factors; the conversion's error is "
+                     "printed); default: its largest rank")
+        ->check(CLI::PositiveNumber);
+    command->add_option(
+        "--error-texels", options->errorTexels,
+        "DFMF input: texels the conversion's error covers (every (view, light) pair "
+        "each; 0 = all; default 4096)");
     command->add_option("--quality", options->build.quality, "JPEG-like quality of dct, 1..100")
         ->check(CLI::Range(1, 100))
         ->capture_default_str();
@@ -58,7 +114,22 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
             fail(options->input, "is a measured BTF; tile an fmf fit of it (`btf fit " +
                                      options->input +
                                      " -m fmf -o M.btfmat`, then `btf tiles M.btfmat`)");
-        const osg::ref_ptr<Material> material = openMaterial(options->input);
+        osg::ref_ptr<Material> material = openMaterial(options->input);
+        const auto* opened = dynamic_cast<const FmfMaterial*>(material.get());
+        if (opened && opened->factors().model == FactorModel::Dfmf) {
+            // Converted from the factors as stored: a file of float scalars opened again as
+            // floats (the default rounds them to half, as the GPU would get them).
+            osg::ref_ptr<Material> exact = material;
+            if (isUbo2014File(options->input)) {
+                material = nullptr;
+                exact = openMaterial(options->input, MaterialTexture::Float);
+            }
+            material = convertDfmf(dynamic_cast<const FmfMaterial&>(*exact), options->components,
+                                   options->errorTexels);
+        } else if (options->components != 0) {
+            fail(options->input, "--components converts DFMF input; this material is " +
+                                     std::string(opened ? "FMF already" : "not fmf"));
+        }
         const auto* fmf = dynamic_cast<const FmfMaterial*>(material.get());
         if (!fmf)
             fail(options->input, "is a '" + material->methodName() +
