@@ -1,24 +1,18 @@
 #include "harness/Soak.h"
 
-#include <malloc.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <iomanip>
 #include <sstream>
 
-#include <osg/ContextData>
-#include <osg/GLExtensions>
 #include <osg/Geode>
 #include <osg/MatrixTransform>
-#include <osg/Texture>
 #include <osgDB/ReadFile>
 #include <osgViewer/Viewer>
 
 #include "core/Error.h"
+#include "harness/SoakSampling.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "materials/Material.h"
 #include "scene/MaterialNode.h"
@@ -26,54 +20,6 @@
 namespace osgBTF {
 
 namespace {
-
-/** The RSS after malloc_trim: free memory the allocator kept (how much depends on what the
- *  process did before, e.g. every other GL test in one process: swings of 7 MiB) goes back to
- *  the system first, so what is left is live memory (within ~0.1 MiB from sample to sample). */
-double residentMiB() {
-    malloc_trim(0);
-    std::ifstream statm("/proc/self/statm");
-    long pages = 0, resident = 0;
-    statm >> pages >> resident;
-    return double(resident) * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
-}
-
-/** Counts the GL objects alive in the context after the frame's draw, when asked: every name up
- *  to beyond the newest one the driver hands out (a fresh name from glGen* bounds the names in
- *  use whether the driver reuses freed names or counts upward). */
-class CountObjects : public osg::Camera::DrawCallback {
-public:
-    mutable bool wanted = false;
-    mutable SoakSample counts;
-
-    void operator()(osg::RenderInfo& info) const override {
-        if (!wanted) return;
-        wanted = false;
-        const unsigned id = info.getContextID();
-        const osg::GLExtensions* gl = osg::GLExtensions::Get(id, true);
-        GLuint probeTexture = 0, probeBuffer = 0;
-        glGenTextures(1, &probeTexture);
-        gl->glGenBuffers(1, &probeBuffer);
-        const GLuint probeShader = gl->glCreateShader(GL_VERTEX_SHADER);
-        _bound = std::max({_bound, probeTexture + 4096u, probeBuffer + 4096u, probeShader + 4096u});
-        glDeleteTextures(1, &probeTexture);
-        gl->glDeleteBuffers(1, &probeBuffer);
-        gl->glDeleteShader(probeShader);
-        counts = SoakSample();
-        for (GLuint name = 1; name < _bound; ++name) {
-            counts.textures += glIsTexture(name) ? 1 : 0;
-            counts.buffers += gl->glIsBuffer(name) ? 1 : 0;
-            counts.programs += gl->glIsProgram(name) ? 1 : 0;
-            counts.shaders += gl->glIsShader(name) ? 1 : 0;
-        }
-        const auto* textures = osg::get<osg::TextureObjectManager>(id);
-        counts.osgTextureObjects =
-            textures->getNumberActiveTextureObjects() + textures->getNumberOrphanedTextureObjects();
-    }
-
-private:
-    mutable GLuint _bound = 16384;
-};
 
 /** The files read again through osgDB, one patch each in a row along x; their materials. */
 osg::ref_ptr<osg::Group> loadScene(const std::vector<std::string>& files,
@@ -110,7 +56,7 @@ SoakResult runSoak(HeadlessRenderer& renderer, const std::vector<std::string>& m
         options.sampleEvery < 1)
         throw Error("soak: frames and intervals must be at least 1");
     SoakResult result;
-    osg::ref_ptr<CountObjects> count = new CountObjects;
+    osg::ref_ptr<CountGlObjects> count = new CountGlObjects;
     renderer.camera().setPostDrawCallback(count.get());
     std::vector<osg::ref_ptr<Material>> materials;
     std::vector<MaterialNode*> nodes;
@@ -142,7 +88,7 @@ SoakResult runSoak(HeadlessRenderer& renderer, const std::vector<std::string>& m
         if (sample) {
             SoakSample s = count->counts;
             s.frame = frame;
-            s.rssMiB = residentMiB();
+            s.rssMiB = trimmedResidentMiB();
             result.samples.push_back(s);
         }
     }
@@ -150,42 +96,14 @@ SoakResult runSoak(HeadlessRenderer& renderer, const std::vector<std::string>& m
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     renderer.camera().setPostDrawCallback(nullptr);
 
-    // Flat: no sample after warm-up above the largest warm-up sample plus the tolerance.
-    SoakSample warm;
-    bool haveWarm = false, haveLater = false;
-    for (const SoakSample& s : result.samples) {
-        if (s.frame > options.warmupFrames) {
-            haveLater = true;
-            continue;
-        }
-        haveWarm = true;
-        warm.rssMiB = std::max(warm.rssMiB, s.rssMiB);
-        warm.textures = std::max(warm.textures, s.textures);
-        warm.programs = std::max(warm.programs, s.programs);
-        warm.shaders = std::max(warm.shaders, s.shaders);
-        warm.buffers = std::max(warm.buffers, s.buffers);
-        warm.osgTextureObjects = std::max(warm.osgTextureObjects, s.osgTextureObjects);
-    }
-    if (!haveWarm || !haveLater)
+    try {
+        result.growth = growthAfterWarmup(
+            result.samples, [&](const SoakSample& s) { return s.frame <= options.warmupFrames; },
+            options.rssToleranceMiB, options.glObjectTolerance);
+    } catch (const Error&) {
         throw Error("soak: needs samples both within the warm-up (" +
                     std::to_string(options.warmupFrames) + " frames) and after it");
-    std::ostringstream growth;
-    for (const SoakSample& s : result.samples) {
-        if (s.frame <= options.warmupFrames) continue;
-        auto judge = [&](const char* what, double now, double before, double tolerance) {
-            if (now > before + tolerance)
-                growth << "frame " << s.frame << ": " << what << " " << now << " > " << before
-                       << " + " << tolerance << "; ";
-        };
-        judge("RSS MiB", s.rssMiB, warm.rssMiB, options.rssToleranceMiB);
-        judge("GL textures", s.textures, warm.textures, options.glObjectTolerance);
-        judge("GL programs", s.programs, warm.programs, options.glObjectTolerance);
-        judge("GL shaders", s.shaders, warm.shaders, options.glObjectTolerance);
-        judge("GL buffers", s.buffers, warm.buffers, options.glObjectTolerance);
-        judge("OSG texture objects", s.osgTextureObjects, warm.osgTextureObjects,
-              options.glObjectTolerance);
     }
-    result.growth = growth.str();
     return result;
 }
 

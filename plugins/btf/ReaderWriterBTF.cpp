@@ -232,6 +232,32 @@ bool splitPseudoName(const std::string& inner, std::string& model, std::string& 
     return !material.empty() && material.find(')') == std::string::npos;
 }
 
+/** The pseudo-loader with a BSVTF tile set's index as the material: the tile set read through
+ *  osgDB (osgdb_bsvtf: a StreamingGroup over a MaterialNode of the streamed material), the model
+ *  under that MaterialNode. Through osgDB, so this module needs no streaming library. */
+osgDB::ReaderWriter::ReadResult streamedUnder(const std::string& modelName,
+                                              const std::string& indexName,
+                                              const Settings& settings,
+                                              const osgDB::Options* options) {
+    osgDB::ReaderWriter::ReadResult read =
+        osgDB::Registry::instance()->readNode(indexName, options);
+    if (!read.success())
+        return error(read.message().empty() ? indexName + ": cannot read the tile set"
+                                            : read.message());
+    osg::ref_ptr<osg::Group> group = dynamic_cast<osg::Group*>(read.getNode());
+    MaterialNode* node = group && group->getNumChildren() == 1
+                             ? dynamic_cast<MaterialNode*>(group->getChild(0))
+                             : nullptr;
+    if (!node) return error(indexName + ": did not read as a streamed material");
+    osg::ref_ptr<osg::Node> model = osgDB::readRefNodeFile(modelName, options);
+    if (!model) return error(modelName + ": cannot read the model");
+    node->setTextureScale(settings.textureScale);
+    if (const std::string problem = applyCoordinateMap(*node, settings, options); !problem.empty())
+        return error(problem);
+    node->addChild(model.get());
+    return group.get();
+}
+
 }  // namespace
 
 ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
@@ -314,6 +340,8 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
             if (!splitPseudoName(inner, modelName, materialName, words))
                 return error(file + ": expected " + kPseudoSyntax);
             const Settings settings = parseSettings(options, words);
+            if (osgDB::getLowerCaseFileExtension(materialName) == "bsvtf")
+                return streamedUnder(modelName, materialName, settings, options);
             const std::string materialPath = osgDB::findDataFile(materialName, options);
             if (materialPath.empty()) return notFound(materialName);
             osg::ref_ptr<Material> material = readMaterial(materialPath, settings);

@@ -43,6 +43,7 @@
 #include "tests/RandomFactors.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+#include "tests/gl/GlErrorWatch.h"
 #include "tests/gl/GlTestEnv.h"
 
 using namespace osgBTF;
@@ -51,41 +52,6 @@ using namespace osgBTF::test;
 namespace {
 
 constexpr int kImageSize = 64;
-
-osg::State& sharedState() {
-    osg::GraphicsContext* context = sharedRenderer().camera().getGraphicsContext();
-    if (!context || !context->getState())
-        throw std::runtime_error("the shared context has no State");
-    return *context->getState();
-}
-
-/** While alive: OSG checks for a GL error after every attribute, and its reports are collected.
- *  Some of them are notices (osg::State::checkGLErrors), so notices are let through. */
-class GlErrorWatch {
-public:
-    GlErrorWatch() : _check(sharedState().getCheckForGLErrors()), _level(osg::getNotifyLevel()) {
-        sharedState().setCheckForGLErrors(osg::State::ONCE_PER_ATTRIBUTE);
-        if (_level < osg::NOTICE) osg::setNotifyLevel(osg::NOTICE);
-    }
-    ~GlErrorWatch() {
-        sharedState().setCheckForGLErrors(_check);
-        osg::setNotifyLevel(_level);
-    }
-    /** The lines that reported a GL error since the last call. */
-    std::string take() {
-        std::istringstream lines(_capture.text());
-        std::string line, errors;
-        while (std::getline(lines, line))
-            if (line.find("OpenGL error") != std::string::npos) errors += line + "\n";
-        _capture.capture->text.clear();
-        return errors;
-    }
-
-private:
-    osg::State::CheckForGLErrors _check;
-    osg::NotifySeverity _level;
-    ScopedNotifyCapture _capture{true};  // echoed: the driver's own messages help on a failure
-};
 
 /** A perspective camera (30 degrees) from the front (-Y) and above, the node's bound filling the
  *  view: roughly a viewer's home view. */

@@ -570,17 +570,26 @@ TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
     const fs::path lib = prefix.path() / OSGBTF_INSTALL_LIBDIR;  // lib, or lib/<multiarch>
     const fs::path plugins = lib / ("osgPlugins-" + std::string(OSGBTF_OSG_VERSION));
     const fs::path include = prefix.path() / "include" / "osgBTF";
-    for (const fs::path& file :
-         {lib / "libosgBTF.so", lib / "libosgBTFEnvironment.so", plugins / "osgdb_btfmat.so",
-          plugins / "osgdb_btf.so", plugins / "osgdb_btfzip.so", plugins / "osgdb_btfmaterial.so",
-          plugins / "osgdb_btfexr.so", plugins / "osgdb_serializers_osgbtf.so",
-          prefix.path() / "bin" / "btf", prefix.path() / "bin" / "btfviewer",
-          prefix.path() / "bin" / "btf-examples", include / "MaterialNode",
-          include / "scene" / "MaterialNode.h", include / "Version",
-          lib / "cmake" / "osgBTF" / "osgBTFConfig.cmake",
-          lib / "cmake" / "osgBTF" / "osgBTFConfigVersion.cmake",
-          lib / "cmake" / "osgBTF" / "osgBTFTargets.cmake", lib / "pkgconfig" / "osgBTF.pc",
-          lib / "pkgconfig" / "osgBTFEnvironment.pc"})
+    for (const fs::path& file : {lib / "libosgBTF.so",
+                                 lib / "libosgBTFEnvironment.so",
+                                 plugins / "osgdb_btfmat.so",
+                                 plugins / "osgdb_btf.so",
+                                 plugins / "osgdb_btfzip.so",
+                                 plugins / "osgdb_btfmaterial.so",
+                                 plugins / "osgdb_btfexr.so",
+                                 plugins / "osgdb_serializers_osgbtf.so",
+                                 plugins / "osgdb_bsvtf.so",
+                                 prefix.path() / "bin" / "btf",
+                                 prefix.path() / "bin" / "btfviewer",
+                                 prefix.path() / "bin" / "btf-examples",
+                                 include / "MaterialNode",
+                                 include / "scene" / "MaterialNode.h",
+                                 include / "Version",
+                                 lib / "cmake" / "osgBTF" / "osgBTFConfig.cmake",
+                                 lib / "cmake" / "osgBTF" / "osgBTFConfigVersion.cmake",
+                                 lib / "cmake" / "osgBTF" / "osgBTFTargets.cmake",
+                                 lib / "pkgconfig" / "osgBTF.pc",
+                                 lib / "pkgconfig" / "osgBTFEnvironment.pc"})
         EXPECT_TRUE(fs::exists(file)) << file << " was not installed";
     // The SDK is the runtime only: the harness (static, inside the tools) is not installed.
     EXPECT_FALSE(fs::exists(include / "harness"));
