@@ -16,6 +16,7 @@
 #include <osg/Notify>
 #include <osg/Transform>
 #include <osg/View>
+#include <osgDB/FileNameUtils>
 #include <osgDB/FileUtils>
 #include <osgShadow/ShadowMap>
 #include <osgShadow/ShadowedScene>
@@ -379,6 +380,16 @@ void MaterialNode::setMaterial(Material* material) {
 }
 
 bool MaterialNode::setMaterialFile(const std::string& file, const osgDB::Options* options) {
+    if (osgDB::getLowerCaseFileExtension(file) == "bsvtf") {
+        // A streamed material, named by its tile set's index: the StreamingGroup above the node
+        // streams it and gives it to the node (its serializer, osgdb_osgbtf), not a
+        // file read here. Until then the node draws its children with their own state, quietly.
+        _material = nullptr;
+        _materialFile = file;
+        _materialError = file + ": a streamed material (its StreamingGroup provides it)";
+        updateMapState();
+        return false;
+    }
     const std::string path = osgDB::findDataFile(file, options);
     osg::ref_ptr<Material> material;
     std::string problem;

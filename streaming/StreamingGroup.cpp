@@ -114,6 +114,11 @@ StreamingGroup::StreamingGroup(const StreamingGroup& other, const osg::CopyOp& c
     setUp();
 }
 
+void StreamingGroup::setStreamer(TileStreamer* streamer) {
+    _streamer = streamer ? streamer : new TileStreamer;
+    _votes = _streamer->makeVotes();
+}
+
 void StreamingGroup::setUp() {
     if (!_streamer) _streamer = new TileStreamer;
     _votes = _streamer->makeVotes();

@@ -30,6 +30,9 @@ public:
         TileStreamer* streamer() const {
         return _streamer.get();
     }
+    /** Replaces the streamer (null: one of default options); for a group whose materials are
+     *  not shown yet (the serializer sets the cache size this way). */
+    void setStreamer(TileStreamer* streamer);
     /** Screen pixels per feedback pixel along each axis (default 4: seed-notes' quarter
      *  resolution); 1 renders the feedback at full resolution. */
     void setFeedbackScale(int scale);

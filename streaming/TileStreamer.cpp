@@ -222,7 +222,9 @@ osg::ref_ptr<StreamedFmfMaterial> TileStreamer::open(const std::string& location
     material->_streamer = this;
     material->_index = streamIndex;
     material->_location = stream->location;
-    material->sourceFile = stream->location;
+    // The name a MaterialNode of it writes into a scene file; a StreamingGroup's serializer
+    // gives the material back to the nodes naming it (plugins/osgbtf).
+    material->sourceFile = stream->location + "/index.bsvtf";
     material->_viewLookup = DirectionLookup(index.views);
     material->_lightLookup = DirectionLookup(index.lights);
     stream->material = material;

@@ -1,6 +1,7 @@
-// osgdb_bsvtf (plugins/bsvtf/ReaderWriterBSVTF.cpp): a BSVTF tile set read through osgDB by the
-// name of its index, from a folder and from nginx, is a StreamingGroup over a MaterialNode of the
-// streamed material; a wrong name, a missing or broken set and bad options fail with messages
+// osgdb_bsvtf (plugins/bsvtf/ReaderWriterBSVTF.cpp) and StreamingGroup's serializer
+// (plugins/osgbtf/StreamingGroupSerializer.cpp). A BSVTF tile set read through osgDB by
+// the name of its index, from a folder and from nginx, is a StreamingGroup over a MaterialNode of
+// the streamed material; a wrong name, a missing or broken set and bad options fail with messages
 // that name the file. Skips the URL case without nginx (CI installs it).
 #include <filesystem>
 #include <string>
@@ -10,6 +11,7 @@
 #include <osg/Geode>
 #include <osg/Shape>
 #include <osg/ShapeDrawable>
+#include <osgDB/ReadFile>
 #include <osgDB/WriteFile>
 
 #include "materials/fmf/Fmf.h"
@@ -18,6 +20,7 @@
 #include "streaming/StreamingGroup.h"
 #include "streaming/TileBuilder.h"
 #include "tests/NginxServer.h"
+#include "tests/NotifyCapture.h"
 #include "tests/PluginTestUtil.h"
 #include "tests/RandomFactors.h"
 #include "tests/TestUtil.h"
@@ -59,7 +62,8 @@ TEST(BsvtfPlugin, ReadsATileSetFolderByItsIndex) {
     ASSERT_NE(material, nullptr);
     EXPECT_EQ(material->width(), 16);
     EXPECT_EQ(material->height(), 16);
-    EXPECT_EQ(material->sourceFile, dir.file("set"));
+    EXPECT_EQ(material->sourceFile, dir.file("set") + "/index.bsvtf");
+    EXPECT_EQ(material->location(), dir.file("set"));
     auto* group = dynamic_cast<StreamingGroup*>(result.getNode());
     EXPECT_EQ(group->streamer()->materialCount(), 1);
     EXPECT_EQ(group->streamer()->options().cacheSize, 64);
@@ -120,7 +124,7 @@ TEST(BsvtfPlugin, ReadsATileSetFromAUrl) {
     ASSERT_TRUE(result.success()) << result.message();
     StreamedFmfMaterial* material = streamedMaterial(result);
     ASSERT_NE(material, nullptr);
-    EXPECT_EQ(material->sourceFile, server.url("/set"));
+    EXPECT_EQ(material->location(), server.url("/set"));
     EXPECT_EQ(server.requestCount("/set/index.bsvtf"), 1);
 
     const osgDB::ReaderWriter::ReadResult missing = readNode(server.url("/none/index.bsvtf"));
@@ -128,4 +132,57 @@ TEST(BsvtfPlugin, ReadsATileSetFromAUrl) {
     EXPECT_NE(missing.message().find(server.url("/none/index.bsvtf") + ": HTTP 404"),
               std::string::npos)
         << missing.message();
+}
+
+// A scene file holds streamed materials: the group's cache size, feedback scale and tile sets,
+// and the MaterialNodes that name a streamed material, written and read back (.osgt, .osgb)
+// without a warning; a tile set gone since is one warning naming it.
+TEST(BsvtfSerializer, AStreamingGroupRoundTripsThroughOsgtAndOsgb) {
+    usePluginsFromBuild();  // the wrapper is osgdb_osgbtf's
+    TempDir dir;
+    writeTileSet(dir.file("set"));
+    TileStreamerOptions options;
+    options.cacheSize = 64;
+    osg::ref_ptr<StreamingGroup> group = new StreamingGroup(new TileStreamer(options));
+    group->setFeedbackScale(2);
+    osg::ref_ptr<MaterialNode> node =
+        new MaterialNode(group->streamer()->open(dir.file("set")).get());
+    osg::ref_ptr<osg::Geode> box = new osg::Geode;
+    box->addDrawable(new osg::ShapeDrawable(new osg::Box(osg::Vec3(), 1.0f)));
+    node->addChild(box.get());
+    group->addChild(node.get());
+    EXPECT_EQ(node->getMaterialFile(), dir.file("set") + "/index.bsvtf");
+    for (const std::string ext : {"osgt", "osgb"}) {
+        SCOPED_TRACE(ext);
+        const std::string file = dir.file("scene." + ext);
+        ScopedNotifyCapture capture;
+        ASSERT_TRUE(osgDB::writeNodeFile(*group, file));
+        const osg::ref_ptr<osg::Node> read = osgDB::readRefNodeFile(file);
+        auto* back = dynamic_cast<StreamingGroup*>(read.get());
+        ASSERT_NE(back, nullptr);
+        EXPECT_EQ(back->streamer()->options().cacheSize, 64);
+        EXPECT_EQ(back->feedbackScale(), 2);
+        ASSERT_EQ(back->streamer()->materialCount(), 1);
+        EXPECT_EQ(back->streamer()->material(0)->location(), dir.file("set"));
+        ASSERT_EQ(back->getNumChildren(), 1u);
+        auto* backNode = dynamic_cast<MaterialNode*>(back->getChild(0));
+        ASSERT_NE(backNode, nullptr);
+        EXPECT_EQ(backNode->getMaterial(), back->streamer()->material(0));
+        EXPECT_EQ(backNode->getNumChildren(), 1u);
+        EXPECT_EQ(capture.text(), "");
+    }
+
+    std::filesystem::remove_all(dir.file("set"));
+    ScopedNotifyCapture capture;
+    const osg::ref_ptr<osg::Node> read = osgDB::readRefNodeFile(dir.file("scene.osgt"));
+    auto* back = dynamic_cast<StreamingGroup*>(read.get());
+    ASSERT_NE(back, nullptr);
+    EXPECT_EQ(back->streamer()->materialCount(), 0);
+    auto* backNode = dynamic_cast<MaterialNode*>(back->getChild(0));
+    ASSERT_NE(backNode, nullptr);
+    EXPECT_EQ(backNode->getMaterial(), nullptr);
+    EXPECT_NE(capture.text().find("osgBTF::StreamingGroup: " + dir.file("set")), std::string::npos)
+        << capture.text();
+    EXPECT_NE(capture.text().find("(its nodes draw their children without it)"), std::string::npos)
+        << capture.text();
 }

@@ -579,6 +579,7 @@ TEST(Install, PutsLibraryPluginsAndToolsWhereStockOsgFindsThem) {
                                  plugins / "osgdb_btfexr.so",
                                  plugins / "osgdb_serializers_osgbtf.so",
                                  plugins / "osgdb_bsvtf.so",
+                                 plugins / "osgdb_osgbtf.so",
                                  prefix.path() / "bin" / "btf",
                                  prefix.path() / "bin" / "btfviewer",
                                  prefix.path() / "bin" / "btf-examples",
