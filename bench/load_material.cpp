@@ -28,6 +28,7 @@ int measure(const std::string& file) {
     std::printf("%-10s %10.1f %10.1f %10.1f %10.1f %8.2f %8.2f  %s\n",
                 material->methodName().c_str(), bytes, before, peak, held,
                 (peak - before) / bytes, (held - before) / bytes, file.c_str());
+    std::fflush(stdout);  // the child ends with _Exit, which flushes nothing
     return 0;
 }
 

@@ -241,23 +241,31 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
     checkMemory(saturatedProduct({std::uint64_t(t.width), std::uint64_t(t.height),
                                   std::uint64_t(t.depth), std::uint64_t(t.channels), 8}),
                 path + ": " + what);
-    std::vector<float> fileRows(t.valueCount());
-    const std::size_t xStride = sizeof(float) * std::size_t(t.channels);
-    Imf::FrameBuffer frameBuffer;
-    for (std::size_t c = 0; c < expected.size(); ++c)
-        frameBuffer.insert(expected[c], Imf::Slice::Make(Imf::FLOAT, fileRows.data() + c, dw,
-                                                         xStride, xStride * std::size_t(t.width)));
-    Imf::InputPart input(file, part);
-    input.setFrameBuffer(frameBuffer);
-    input.readPixels(dw.min.y, dw.max.y);
-
+    // Slice by slice through a buffer of one slice, so that the texture is held once while it
+    // is read (a whole-texture buffer doubled the peak: 8x the bytes of an 8-bit texture).
     t.data.resize(t.valueCount());
     const std::size_t rowValues = std::size_t(t.width) * std::size_t(t.channels);
-    for (int z = 0; z < t.depth; ++z)
+    std::vector<float> sliceRows(rowValues * std::size_t(t.height));
+    const std::size_t xStride = sizeof(float) * std::size_t(t.channels);
+    Imf::InputPart input(file, part);
+    for (int z = 0; z < t.depth; ++z) {
+        const int first = dw.min.y + z * t.height;  // the file's rows of slice z
+        const Imath::Box2i window(Imath::V2i(dw.min.x, first),
+                                  Imath::V2i(dw.max.x, first + t.height - 1));
+        Imf::FrameBuffer frameBuffer;
+        for (std::size_t c = 0; c < expected.size(); ++c)
+            frameBuffer.insert(expected[c],
+                               Imf::Slice::Make(Imf::FLOAT, sliceRows.data() + c, window, xStride,
+                                                xStride * std::size_t(t.width)));
+        input.setFrameBuffer(frameBuffer);
+        input.readPixels(window.min.y, window.max.y);
+        const std::size_t firstRow = std::size_t(z) * std::size_t(t.height);
         for (int y = 0; y < t.height; ++y)
             std::copy_n(
-                fileRows.begin() + std::ptrdiff_t(fileRow(t, z, y) * rowValues), rowValues,
-                t.data.begin() + std::ptrdiff_t((std::size_t(z) * t.height + y) * rowValues));
+                sliceRows.begin() + std::ptrdiff_t((fileRow(t, z, y) - firstRow) * rowValues),
+                rowValues,
+                t.data.begin() + std::ptrdiff_t((firstRow + std::size_t(y)) * rowValues));
+    }
     if (t.kind == MaterialTexture::UNorm8)
         for (float& v : t.data) {
             if (!(v >= 0.0f && v <= 255.0f) || v != std::round(v))
