@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <mutex>
 
 #include <osg/BufferObject>
 #include <osg/GLExtensions>
@@ -41,8 +43,9 @@ struct UpdateStreaming : osg::NodeCallback {
 /** Reads the feedback pass back without waiting for it (Schwartz et al. 2013: the feedback is "read
  * back asynchronously"): after the pass, glGetTexImage of its texture into one of two pixel-pack
  *  buffers, and a map of the other one, which the pass of the previous frame filled. The GPU
- *  copies while the frame goes on; the update sees feedback one frame old. Draw thread, the
- *  one graphics context a TileStreamer serves. */
+ *  copies while the frame goes on; the update sees feedback one frame old. Draw thread of each
+ *  context that draws the group, with buffers of its own (the update takes the latest image
+ *  any of them read). */
 struct FeedbackReadBack : osg::Camera::DrawCallback {
     explicit FeedbackReadBack(StreamingGroup* group) : _group(group) {}
     void operator()(osg::RenderInfo& renderInfo) const override {
@@ -54,12 +57,17 @@ struct FeedbackReadBack : osg::Camera::DrawCallback {
         if (!ext || !ext->isBufferObjectSupported ||
             !texture->getTextureObject(state.getContextID()))
             return;
-        if (!_buffers[0]) ext->glGenBuffers(2, _buffers);
+        // Buffers are objects of one context: each context that draws the group has its own.
+        PerContext& c = [&]() -> PerContext& {
+            std::lock_guard<std::mutex> lock(_contextsMutex);
+            return _contexts[state.getContextID()];
+        }();
+        if (!c.buffers[0]) ext->glGenBuffers(2, c.buffers);
         const int w = texture->getTextureWidth(), h = texture->getTextureHeight();
         const GLsizeiptr bytes = GLsizeiptr(w) * h * 4;
         // Issue this frame's copy.
-        Slot& issue = _slots[_next];
-        ext->glBindBuffer(GL_PIXEL_PACK_BUFFER_ARB, _buffers[_next]);
+        Slot& issue = c.slots[c.next];
+        ext->glBindBuffer(GL_PIXEL_PACK_BUFFER_ARB, c.buffers[c.next]);
         if (issue.bytes != bytes)
             ext->glBufferData(GL_PIXEL_PACK_BUFFER_ARB, bytes, nullptr, GL_STREAM_READ_ARB);
         state.applyTextureAttribute(0, texture);
@@ -67,10 +75,10 @@ struct FeedbackReadBack : osg::Camera::DrawCallback {
         glGetTexImage(GL_TEXTURE_2D, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
         issue = {w, h, bytes, true};
         // Take the previous frame's.
-        const int other = 1 - _next;
-        Slot& ready = _slots[other];
+        const int other = 1 - c.next;
+        Slot& ready = c.slots[other];
         if (ready.pending) {
-            ext->glBindBuffer(GL_PIXEL_PACK_BUFFER_ARB, _buffers[other]);
+            ext->glBindBuffer(GL_PIXEL_PACK_BUFFER_ARB, c.buffers[other]);
             if (const void* data = ext->glMapBuffer(GL_PIXEL_PACK_BUFFER_ARB, GL_READ_ONLY_ARB)) {
                 osg::ref_ptr<osg::Image> copy = new osg::Image;
                 copy->allocateImage(ready.width, ready.height, 1, GL_RGBA, GL_UNSIGNED_BYTE);
@@ -83,17 +91,21 @@ struct FeedbackReadBack : osg::Camera::DrawCallback {
             ready.pending = false;
         }
         ext->glBindBuffer(GL_PIXEL_PACK_BUFFER_ARB, 0);
-        _next = other;
+        c.next = other;
     }
     struct Slot {
         int width = 0, height = 0;
         GLsizeiptr bytes = 0;
         bool pending = false;
     };
+    struct PerContext {
+        GLuint buffers[2] = {0, 0};
+        Slot slots[2];
+        int next = 0;
+    };
     osg::observer_ptr<StreamingGroup> _group;
-    mutable GLuint _buffers[2] = {0, 0};
-    mutable Slot _slots[2];
-    mutable int _next = 0;
+    mutable std::mutex _contextsMutex;
+    mutable std::map<unsigned, PerContext> _contexts;  ///< by context ID
 };
 
 namespace {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <list>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include <osg/GL>
@@ -43,26 +44,41 @@ constexpr double kFirst = 1e30;
 
 }  // namespace
 
-/** The tiles waiting for the cache texture, uploaded by the draw thread when it applies it. */
+/** The cache texture's content, uploaded by the draw thread of each context that applies it.
+ *  Every context has its own texture object, so the callback keeps each slot's current tile and,
+ *  per context, the slots that context has not uploaded yet: a context that creates the texture
+ *  later (a second view's, or one whose objects were released) gets every slot, not only what
+ *  arrived since. The tiles are the ones the streamer keeps decoded for its resident slots. */
 struct TileStreamer::CacheUploads : osg::Texture2D::SubloadCallback {
     int size = 0, padded = 0, slotsPerRow = 0;
     mutable std::mutex mutex;
-    mutable std::vector<std::pair<int, std::shared_ptr<const HalfTile>>> pending;
+    std::map<int, std::shared_ptr<const HalfTile>> slots;  ///< what each slot holds now
+    mutable std::map<unsigned, std::set<int>> stale;       ///< per context ID
 
-    void load(const osg::Texture2D&, osg::State&) const override {
+    void load(const osg::Texture2D&, osg::State& state) const override {
         // Undefined texels are never read: the LUTs point at uploaded slots only.
         glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F_ARB, size, size, 0, GL_RGBA, GL_HALF_FLOAT,
                      nullptr);
-        flush();
+        {
+            std::lock_guard<std::mutex> lock(mutex);
+            std::set<int>& all = stale[state.getContextID()];
+            all.clear();
+            for (const auto& slot : slots) all.insert(slot.first);
+        }
+        flush(state.getContextID());
     }
-    void subload(const osg::Texture2D&, osg::State&) const override { flush(); }
-    void flush() const {
+    void subload(const osg::Texture2D&, osg::State& state) const override {
+        flush(state.getContextID());
+    }
+    void flush(unsigned context) const {
         std::vector<std::pair<int, std::shared_ptr<const HalfTile>>> uploads;
         {
             std::lock_guard<std::mutex> lock(mutex);
-            uploads.swap(pending);
+            const auto it = stale.find(context);
+            if (it == stale.end() || it->second.empty()) return;
+            for (int slot : it->second) uploads.emplace_back(slot, slots.at(slot));
+            it->second.clear();
         }
-        if (uploads.empty()) return;
         glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
         glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
         for (const auto& upload : uploads) {
@@ -74,7 +90,8 @@ struct TileStreamer::CacheUploads : osg::Texture2D::SubloadCallback {
     }
     void queue(int slot, std::shared_ptr<const HalfTile> tile) {
         std::lock_guard<std::mutex> lock(mutex);
-        pending.emplace_back(slot, std::move(tile));
+        slots[slot] = std::move(tile);
+        for (auto& context : stale) context.second.insert(slot);
     }
 };
 

@@ -169,6 +169,55 @@ TEST_F(BsvtfGpu, RendersWhatHasArrivedEveryFrameAndConvergesToTheFmfMaterial) {
     EXPECT_LT(gpuVsCpu(*fmfImage, *original(), view, light), 1e-4);
 }
 
+// Two contexts (two viewers, as two windows of one application) render one StreamingGroup: each
+// context's texture object of the cache gets every tile, also a context that joins after the
+// first converged (the cache gives a new texture object every slot, not only what arrives
+// after it), and both render what has arrived, frames alternating while a second group streams
+// from scratch.
+TEST_F(BsvtfGpu, TwoContextsRenderOneStreamingGroup) {
+    const glm::vec3 view = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    const glm::vec3 light = glm::normalize(glm::vec3(-0.4f, 0.1f, 0.8f));
+    const auto streamedGroup = [&](osg::ref_ptr<StreamedFmfMaterial>& streamed) {
+        osg::ref_ptr<StreamingGroup> group =
+            new StreamingGroup(new TileStreamer(streamerOptions(7)));
+        group->setFeedbackScale(1);
+        streamed = group->streamer()->open(dir.file("tiles"));
+        group->addChild(patch(*streamed, view, light));
+        return group;
+    };
+    HeadlessRenderer& first = sharedRenderer();
+    HeadlessRenderer second(glTestBackend());
+    osg::ref_ptr<StreamedFmfMaterial> streamed;
+    osg::ref_ptr<StreamingGroup> group = streamedGroup(streamed);
+    first.setScene(group.get());
+    first.setCamera(orthoUnitSquare(kWidth, kHeight));
+    for (int frames = 0; !group->settled() && frames < 200; ++frames) first.render();
+    ASSERT_TRUE(group->settled());
+    second.setScene(group.get());
+    second.setCamera(orthoUnitSquare(kWidth, kHeight));
+    EXPECT_LT(gpuVsCpu(*second.render(), *streamed, view, light), 1e-4) << "the late context";
+    EXPECT_LT(gpuVsCpu(*first.render(), *streamed, view, light), 1e-4);
+
+    group = streamedGroup(streamed);
+    first.setScene(group.get());
+    second.setScene(group.get());
+    int frames = 0;
+    for (; !group->settled() && frames < 400; ++frames) {
+        HeadlessRenderer& renderer = frames % 2 == 0 ? first : second;
+        ASSERT_LT(gpuVsCpu(*renderer.render(), *streamed, view, light), 1e-4)
+            << (frames % 2 == 0 ? "first" : "second") << " context, frame " << frames;
+    }
+    ASSERT_TRUE(group->settled()) << "not converged after " << frames << " frames";
+    EXPECT_LT(gpuVsCpu(*second.render(), *streamed, view, light), 1e-4);
+    EXPECT_LT(gpuVsCpu(*first.render(), *streamed, view, light), 1e-4);
+    EXPECT_LT(gpuVsCpu(*first.render(patch(*original(), view, light).get(),
+                                     orthoUnitSquare(kWidth, kHeight)),
+                       *original(), view, light),
+              1e-4);
+    second.setScene(nullptr);
+    first.setScene(nullptr);
+}
+
 TEST_F(BsvtfGpu, ConvergedMagnifiedRenderIsFilteredAsTheFmfMaterialAcrossTileAndWrapEdges) {
     // Every finest tile resident (as above), then magnified views: 4 x 4 texels over 64 x 64
     // pixels, so every pixel centre lies between texel centres (at odd multiples of 1/32 texel).
