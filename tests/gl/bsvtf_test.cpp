@@ -14,8 +14,12 @@
 #include <glm/geometric.hpp>
 #include <osg/Geode>
 #include <osg/Uniform>
+#include <osgViewer/CompositeViewer>
+#include <osgViewer/View>
 
 #include "harness/MaterialImage.h"
+#include "harness/headless/HeadlessContext.h"
+#include "materials/MaterialState.h"
 #include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/MaterialNode.h"
@@ -216,6 +220,63 @@ TEST_F(BsvtfGpu, TwoContextsRenderOneStreamingGroup) {
               1e-4);
     second.setScene(nullptr);
     first.setScene(nullptr);
+}
+
+// A CompositeViewer with two views on one shared context (two cameras, as two viewports of one
+// window), both showing one StreamingGroup: the group's feedback pass and read-back run once per
+// view and frame; both views converge, each frame equal to the CPU reference.
+TEST_F(BsvtfGpu, TwoViewsOnOneContextRenderOneStreamingGroup) {
+    const glm::vec3 view = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    const glm::vec3 light = glm::normalize(glm::vec3(-0.4f, 0.1f, 0.8f));
+    osg::ref_ptr<StreamingGroup> group = new StreamingGroup(new TileStreamer(streamerOptions(7)));
+    group->setFeedbackScale(1);
+    const osg::ref_ptr<StreamedFmfMaterial> streamed = group->streamer()->open(dir.file("tiles"));
+    group->addChild(patch(*streamed, view, light));
+
+    osg::ref_ptr<HeadlessContext> context = createHeadlessContext(glTestBackend(), 64, 64);
+    ASSERT_TRUE(context.valid());
+    osg::ref_ptr<osgViewer::CompositeViewer> viewer = new osgViewer::CompositeViewer;
+    viewer->setThreadingModel(osgViewer::ViewerBase::SingleThreaded);
+    std::vector<osg::ref_ptr<osg::Image>> images;
+    const CameraSetup setup = orthoUnitSquare(kWidth, kHeight);
+    for (int i = 0; i < 2; ++i) {
+        osg::ref_ptr<osgViewer::View> v = new osgViewer::View;
+        osg::Camera* camera = v->getCamera();
+        camera->setGraphicsContext(context.get());
+        camera->setViewport(0, 0, kWidth, kHeight);
+        camera->setViewMatrix(setup.view);
+        camera->setProjectionMatrix(setup.projection);
+        camera->setReferenceFrame(osg::Transform::ABSOLUTE_RF);
+        camera->setComputeNearFarMode(osg::CullSettings::DO_NOT_COMPUTE_NEAR_FAR);
+        camera->setClearColor(osg::Vec4(0, 0, 0, 0));
+        camera->setRenderTargetImplementation(osg::Camera::FRAME_BUFFER_OBJECT);
+        osg::ref_ptr<osg::Image> image = new osg::Image;
+        image->allocateImage(kWidth, kHeight, 1, GL_RGBA, GL_FLOAT);
+        image->setInternalTextureFormat(GL_RGBA32F_ARB);
+        camera->attach(osg::Camera::COLOR_BUFFER0, image.get());
+        camera->attach(osg::Camera::DEPTH_BUFFER, GL_DEPTH_COMPONENT24);
+        v->setSceneData(group.get());
+        viewer->addView(v.get());
+        images.push_back(image);
+    }
+    viewer->realize();
+    ASSERT_TRUE(viewer->isRealized());
+    int frames = 0;
+    for (; frames < 200 && !(frames > 0 && group->settled()); ++frames) {
+        viewer->frame();
+        for (int i = 0; i < 2; ++i)
+            ASSERT_LT(gpuVsCpu(*images[std::size_t(i)], *streamed, view, light), 1e-4)
+                << "view " << i << ", frame " << frames;
+    }
+    ASSERT_TRUE(group->settled()) << "not converged after " << frames << " frames";
+    EXPECT_EQ(group->streamer()->stats().residentTiles, 48);
+    viewer->frame();
+    for (int i = 0; i < 2; ++i)
+        EXPECT_LT(gpuVsCpu(*images[std::size_t(i)], *original(), view, light), 1e-4) << i;
+    if (context->makeCurrent()) {
+        releaseCachedPrograms(context->getState());
+        context->releaseContext();
+    }
 }
 
 TEST_F(BsvtfGpu, ConvergedMagnifiedRenderIsFilteredAsTheFmfMaterialAcrossTileAndWrapEdges) {
