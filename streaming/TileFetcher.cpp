@@ -456,10 +456,13 @@ void TileFetcher::work() {
         if (_stop) return;
         queueDueRetries();
         if (_paused || _queue.empty()) {
-            if (_waiting.empty())
+            if (_waiting.empty()) {
                 _wake.wait(lock);
-            else
-                _wake.wait_until(lock, _waiting.begin()->first);
+            } else {
+                // A copy: another worker may erase the entry while this one waits unlocked.
+                const Clock::time_point due = _waiting.begin()->first;
+                _wake.wait_until(lock, due);
+            }
             continue;
         }
 
