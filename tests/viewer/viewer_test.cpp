@@ -739,6 +739,34 @@ TEST(StockOsgviewer, ShowsAModelUnderAUbo2014FileAsStored) {
     EXPECT_TRUE(notBlank(run.stats)) << describe(run.stats) << "\n" << run.output;
 }
 
+TEST(StockOsgviewer, ShowsAModelUnderAStreamedTileSet) {
+    // A BSVTF tile set (btf tiles of an fmf fit of the built-in sample) under a model through
+    // the pseudo-loader: osgdb_bsvtf's StreamingGroup streams it from the folder while osgviewer
+    // runs its update and feedback passes, until the sample's colours show.
+    REQUIRE_XVFB();
+    TempDir dir;
+    const std::string btf = builtTool("btf") + " --no-progress ";
+    for (const std::string& command :
+         {btf + "sample -o " + shellQuote(dir.file("s.zip")) + " --size 32",
+          btf + "fit " + shellQuote(dir.file("s.zip")) + " -m fmf --no-mipmap -o " +
+              shellQuote(dir.file("f.btfmat")),
+          btf + "tiles " + shellQuote(dir.file("f.btfmat")) + " -o " + shellQuote(dir.file("set")) +
+              " --tile-size 16"}) {
+        const CommandResult result = runCommand(command);
+        ASSERT_EQ(result.exitCode, 0) << command << "\n" << result.output;
+    }
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    const OsgviewerRun run = runOsgviewer(
+        xvfb, {"vase.osgt.(" + dir.file("set") + "/index.bsvtf,scale=4).btfmaterial"}, kExamplesDir,
+        [](const ScreenStats& s) { return notBlank(s) && materialColoured(s); });
+    keepScreenshot(run.screen, "osgviewer-streamed");
+    EXPECT_FALSE(run.exitedEarly) << run.output;
+    EXPECT_TRUE(notBlank(run.stats)) << describe(run.stats) << "\n" << run.output;
+    EXPECT_TRUE(materialColoured(run.stats)) << describe(run.stats) << "\n" << run.output;
+    EXPECT_EQ(run.output.find("osgBTF"), std::string::npos) << run.output;
+}
+
 // ---- btfviewer ---------------------------------------------------------------------------
 
 const std::string kBtfviewer = builtTool("btfviewer");
