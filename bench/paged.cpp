@@ -16,14 +16,10 @@
 #include <iostream>
 #include <string>
 
-#include <osgDB/Registry>
-
 #include "bench/ProcessUsage.h"
+#include "bench/SampleMaterials.h"
 #include "harness/PagedScene.h"
 #include "harness/headless/HeadlessRenderer.h"
-#include "harness/sample/SampleBtf.h"
-#include "materials/Material.h"
-#include "materials/MethodRegistry.h"
 
 namespace fs = std::filesystem;
 
@@ -57,21 +53,8 @@ int main(int argc, char** argv) {
     const fs::path folder =
         fs::temp_directory_path() / ("osgbtf-paged-" + std::to_string(getpid()));
     try {
-        // The plugins of this build (bin/../lib) before any installed ones.
-        const fs::path lib = fs::canonical("/proc/self/exe").parent_path().parent_path() / "lib";
-        osgDB::Registry::instance()->getLibraryFilePathList().push_front(lib.string());
-        fs::create_directories(folder);
-        osgBTF::SampleOptions sample;
-        sample.width = sample.height = texels;
-        const osgBTF::MeasuredBtf btf = osgBTF::makeSampleBtf(sample);
-        std::vector<std::string> files;
-        for (const char* method : {"lambert", "pca", "laf"}) {
-            const osgBTF::MethodInfo& info = osgBTF::findMethod(method);
-            const std::string file = (folder / (std::string(method) + ".btfmat")).string();
-            osgBTF::saveMaterial(*info.fit(btf, osgBTF::FitOptions::parse(info.quickFitOptions)),
-                                 file);
-            files.push_back(file);
-        }
+        osgBTF::bench::useBuildPlugins();
+        const std::vector<std::string> files = osgBTF::bench::writeSampleMaterials(folder, texels);
         const std::string tiles = (folder / "tiles").string();
         osgBTF::writePagedTiles(tiles, files, options.grid);
         osgBTF::HeadlessRenderer renderer;

@@ -14,14 +14,11 @@
 #include <iostream>
 #include <string>
 
-#include <osgDB/Registry>
-
 #include "bench/ProcessUsage.h"
+#include "bench/SampleMaterials.h"
 #include "core/Error.h"
 #include "harness/Soak.h"
 #include "harness/headless/HeadlessRenderer.h"
-#include "harness/sample/SampleBtf.h"
-#include "materials/Material.h"
 
 namespace fs = std::filesystem;
 
@@ -49,21 +46,8 @@ int main(int argc, char** argv) {
     }
     const fs::path folder = fs::temp_directory_path() / ("osgbtf-soak-" + std::to_string(getpid()));
     try {
-        // The plugins of this build (bin/../lib) before any installed ones.
-        const fs::path lib = fs::canonical("/proc/self/exe").parent_path().parent_path() / "lib";
-        osgDB::Registry::instance()->getLibraryFilePathList().push_front(lib.string());
-        fs::create_directories(folder);
-        osgBTF::SampleOptions sample;
-        sample.width = sample.height = texels;
-        const osgBTF::MeasuredBtf btf = osgBTF::makeSampleBtf(sample);
-        std::vector<std::string> files;
-        for (const char* method : {"lambert", "pca", "laf"}) {
-            const osgBTF::MethodInfo& info = osgBTF::findMethod(method);
-            const std::string file = (folder / (std::string(method) + ".btfmat")).string();
-            osgBTF::saveMaterial(*info.fit(btf, osgBTF::FitOptions::parse(info.quickFitOptions)),
-                                 file);
-            files.push_back(file);
-        }
+        osgBTF::bench::useBuildPlugins();
+        const std::vector<std::string> files = osgBTF::bench::writeSampleMaterials(folder, texels);
         osgBTF::HeadlessRenderer renderer;
         std::cout << "GL_RENDERER: " << renderer.glRenderer() << "\n";
         const double cpu0 = cpuSeconds();

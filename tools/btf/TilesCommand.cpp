@@ -94,10 +94,11 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
                      "decoded values, streamed from its factors; the conversion's error is "
                      "printed); default: its largest rank")
         ->check(CLI::PositiveNumber);
-    command->add_option(
-        "--error-texels", options->errorTexels,
-        "DFMF input: texels the conversion's error covers (every (view, light) pair "
-        "each; 0 = all; default 4096)");
+    command
+        ->add_option("--error-texels", options->errorTexels,
+                     "DFMF input: texels the conversion's error covers (every (view, light) pair "
+                     "each; 0 = all; default 4096)")
+        ->check(CLI::NonNegativeNumber);
     command->add_option("--quality", options->build.quality, "JPEG-like quality of dct, 1..100")
         ->check(CLI::Range(1, 100))
         ->capture_default_str();
