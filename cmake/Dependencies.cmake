@@ -31,6 +31,18 @@ foreach(prop INTERFACE_INCLUDE_DIRECTORIES INTERFACE_SYSTEM_INCLUDE_DIRECTORIES)
 endforeach()
 find_package(Eigen3 3.4 CONFIG REQUIRED)
 find_package(Ceres CONFIG REQUIRED)
+# The neural method's training (materials/neural/NeuralFit.cpp, libosgBTFFit only): Debian's
+# libtorch-dev 1.13. Optional: without it every other method builds and the neural fit says
+# what is missing; rendering a fitted neural material never needs it.
+option(OSGBTF_NEURAL_FIT "Train the neural method with libtorch when it is found" ON)
+if(OSGBTF_NEURAL_FIT)
+  find_package(Torch QUIET)
+  if(Torch_FOUND)
+    message(STATUS "libtorch found: the neural method can fit")
+  else()
+    message(STATUS "libtorch not found (apt-get install libtorch-dev): the neural method cannot fit")
+  endif()
+endif()
 find_package(TBB CONFIG REQUIRED)
 # Per-vertex environment visibility (scene/VertexEnvironment.h, libosgBTFEnvironment only):
 # Debian's libembree-dev 3.13.

@@ -175,7 +175,8 @@ TEST(BtfSource, SubsampledErrorIsTheFullErrorAtThoseTexels) {
 
 // Every method fitted from factors gives the same error as its fit of the decoded data (within
 // 1 %: the two differ only by the rounding of differently shaped decoding GEMMs, which iterative
-// fits may follow along slightly different paths).
+// fits may follow along slightly different paths; 5 % for a method trained by stochastic gradient
+// descent, one with a `seed` option, where such differences grow along the steps).
 class FitFromFactors : public ::testing::TestWithParam<std::string> {
 protected:
     static const FactoredBtf& factors() {
@@ -199,8 +200,11 @@ protected:
 TEST_P(FitFromFactors, GivesTheErrorOfTheFitOfTheDecodedData) {
     const MethodInfo& method = findMethod(GetParam());
     FitOptions options;
-    for (const auto& [key, value] : std::map<std::string, std::string>{
-             {"components", "3"}, {"clusters", "4"}, {"lobes", "1"}, {"iterations", "10"}}) {
+    for (const auto& [key, value] : std::map<std::string, std::string>{{"components", "3"},
+                                                                       {"clusters", "4"},
+                                                                       {"lobes", "1"},
+                                                                       {"iterations", "10"},
+                                                                       {"steps", "400"}}) {
         for (const OptionSpec& spec : method.options)
             if (spec.name == key) options.set(key, value);
     }
@@ -214,8 +218,10 @@ TEST_P(FitFromFactors, GivesTheErrorOfTheFitOfTheDecodedData) {
             .average;
     };
     const double a = error(*fromFactors), b = error(*fromDecoded);
+    const bool stochastic = std::any_of(method.options.begin(), method.options.end(),
+                                        [](const OptionSpec& s) { return s.name == "seed"; });
     EXPECT_GT(b, 0.0);
-    EXPECT_NEAR(a, b, 0.01 * b + 1e-7) << method.name;
+    EXPECT_NEAR(a, b, (stochastic ? 0.05 : 0.01) * b + 1e-7) << method.name;
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, FitFromFactors, ::testing::ValuesIn(methodNamesInOrder()),

@@ -12,6 +12,7 @@ PACKAGES=(
   libopenexr-dev openexr libopenimageio-dev openimageio-tools   # float images, exrheader, oiiotool
   libglm-dev libeigen3-dev libceres-dev libtbb-dev libzip-dev zip unzip
   libembree-dev               # ray-cast environment visibility (libosgBTFEnvironment)
+  libtorch-dev                # the neural method's training (libosgBTFFit; ~52 MB to download)
   zlib1g-dev libcurl4-openssl-dev nginx-light  # BSVTF: tile codec, HTTP streaming, serve-tiles.sh
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)

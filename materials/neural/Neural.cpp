@@ -1,0 +1,218 @@
+#include "materials/neural/Neural.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "core/Error.h"
+#include "materials/CoordinateMapRendering.h"
+#include "materials/MaterialState.h"
+
+namespace osgBTF {
+
+namespace {
+
+/** The neuron's weighted sum: bias, then each group of 4 inputs as ((w.x x.x + w.y x.y) + w.z x.z)
+ *  + w.w x.w added on; the shader's `sum += dot(w, x)` in the same order. */
+float neuron(const float* row, const float* inputs, int count) {
+    float sum = row[0];
+    for (int c = 0; c < count; c += 4) {
+        const float* w = row + 4 + c;
+        sum +=
+            w[0] * inputs[c] + w[1] * inputs[c + 1] + w[2] * inputs[c + 2] + w[3] * inputs[c + 3];
+    }
+    return sum;
+}
+
+}  // namespace
+
+void NeuralMaterial::directionFeatures(const glm::vec3& view, const glm::vec3& light, float* out) {
+    const glm::vec3 h = glm::normalize(view + light);
+    out[0] = view.x;
+    out[1] = view.y;
+    out[2] = light.x;
+    out[3] = light.y;
+    out[4] = h.x;
+    out[5] = h.y;
+    out[6] = h.z;
+    out[7] = light.z;
+}
+
+void NeuralMaterial::setShape(int width, int height, const DirectionSet& views,
+                              const DirectionSet& lights, int latentSize, int hiddenLayers,
+                              int units) {
+    setGeometry(width, height, views, lights);
+    setNetworkShape(latentSize, hiddenLayers, units);
+}
+
+void NeuralMaterial::setNetworkShape(int latentSize, int hiddenLayers, int units) {
+    if (latentSize < 4 || latentSize > kMaxLatent || latentSize % 4 != 0)
+        throw Error("neural: the latent size must be a multiple of 4 in 4.." +
+                    std::to_string(kMaxLatent) + ", got " + std::to_string(latentSize));
+    if (hiddenLayers < 1 || hiddenLayers > kMaxHiddenLayers)
+        throw Error("neural: the hidden layers must be 1.." + std::to_string(kMaxHiddenLayers) +
+                    ", got " + std::to_string(hiddenLayers));
+    if (units < 4 || units > kMaxUnits || units % 4 != 0)
+        throw Error("neural: the units per layer must be a multiple of 4 in 4.." +
+                    std::to_string(kMaxUnits) + ", got " + std::to_string(units));
+    _latentSize = latentSize;
+    _hiddenLayers = hiddenLayers;
+    _units = units;
+    latent = {"latent", _width, _height, latentSize / 4, 4, MaterialTexture::Half, {}};
+    latent.data.assign(latent.valueCount(), 0.0f);
+    const int columns = 1 + std::max(inputs(), units) / 4;
+    decoder = {"decoder", columns, hiddenLayers * units + 3, 1, 4, MaterialTexture::Float, {}};
+    decoder.data.assign(decoder.valueCount(), 0.0f);
+}
+
+glm::vec3 NeuralMaterial::decode(const float* inputs) const {
+    float buffers[2][kMaxUnits];
+    const float* in = inputs;
+    for (int k = 0; k < _hiddenLayers; ++k) {
+        float* out = buffers[k % 2];
+        for (int j = 0; j < _units; ++j)
+            out[j] =
+                std::max(neuron(&decoder.data[std::size_t(decoderRow(k, j)) * decoder.width * 4],
+                                in, layerInputs(k)),
+                         0.0f);
+        in = out;
+    }
+    glm::vec3 rgb;
+    for (int j = 0; j < 3; ++j)
+        rgb[j] =
+            neuron(&decoder.data[std::size_t(decoderRow(_hiddenLayers, j)) * decoder.width * 4], in,
+                   _units);
+    return rgb;
+}
+
+glm::vec3 NeuralMaterial::evaluate(int x, int y, const glm::vec3& view,
+                                   const glm::vec3& light) const {
+    float in[kMaxLatent + kDirectionFeatures];
+    for (int i = 0; i < _latentSize; ++i) in[i] = latent.data[latentIndex(x, y, i)];
+    directionFeatures(view, light, in + _latentSize);
+    return decode(in) * light.z;
+}
+
+MemoryFootprint NeuralMaterial::memory() const {
+    const double texels = double(_width) * _height;
+    const std::uint64_t shared = std::uint64_t(decoder.valueCount()) * 4;
+    const std::uint64_t perTexel = std::uint64_t(latent.valueCount()) * 2;
+    return {double(_latentSize) + double(decoder.valueCount()) / texels,
+            2.0 * _latentSize + double(shared) / texels, perTexel + shared, shared};
+}
+
+FittedMaterial NeuralMaterial::toFittedMaterial() const {
+    FittedMaterial file = writeCommon();
+    file.parameters["latent"] = std::to_string(_latentSize);
+    file.parameters["layers"] = std::to_string(_hiddenLayers);
+    file.parameters["units"] = std::to_string(_units);
+    file.textures.push_back(latent);
+    file.textures.push_back(decoder);
+    return file;
+}
+
+osg::ref_ptr<NeuralMaterial> NeuralMaterial::fromFile(const FittedMaterial& file) {
+    osg::ref_ptr<NeuralMaterial> m = new NeuralMaterial;
+    m->readCommon(file);
+    int shape[3];
+    const char* keys[3] = {"latent", "layers", "units"};
+    for (int i = 0; i < 3; ++i) {
+        try {
+            std::size_t used = 0;
+            shape[i] = std::stoi(file.parameter(keys[i]), &used);
+            if (used != file.parameter(keys[i]).size()) throw std::invalid_argument(keys[i]);
+        } catch (const std::logic_error&) {
+            fail(file.source, std::string("parameter '") + keys[i] + "' is not an integer");
+        }
+    }
+    try {
+        m->setNetworkShape(shape[0], shape[1], shape[2]);
+    } catch (const Error& e) {
+        fail(file.source, e.what());
+    }
+    for (MaterialTexture* expected : {&m->latent, &m->decoder}) {
+        const MaterialTexture& got = file.texture(expected->name);
+        if (got.width != expected->width || got.height != expected->height ||
+            got.depth != expected->depth || got.channels != expected->channels ||
+            got.kind != expected->kind || got.storedCount() != expected->valueCount())
+            fail(file.source, "texture '" + expected->name + "' must be " +
+                                  std::to_string(expected->width) + "x" +
+                                  std::to_string(expected->height) + "x" +
+                                  std::to_string(expected->depth) + " RGBA " +
+                                  (expected->kind == MaterialTexture::Half ? "half" : "float") +
+                                  " for latent " + std::to_string(shape[0]) + ", layers " +
+                                  std::to_string(shape[1]) + ", units " + std::to_string(shape[2]));
+        expected->data = got.data;
+    }
+    for (float v : m->decoder.data)
+        if (!std::isfinite(v))
+            fail(file.source, "texture 'decoder' holds a value that is not finite");
+    for (float v : m->latent.data)
+        if (!std::isfinite(v))
+            fail(file.source, "texture 'latent' holds a value that is not finite");
+    return m;
+}
+
+osg::ref_ptr<osg::StateSet> NeuralMaterial::createStateSet() const {
+    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
+    addCommonState(*stateSet, *this);
+    addTexture(*stateSet, createFloatTextureArray(latent).get(), "neuralLatent", 0);
+    addTexture(*stateSet, createFloatTexture(decoder).get(), "neuralDecoder", 1);
+    stateSet->addUniform(new osg::Uniform("neuralLatentGroups", _latentSize / 4));
+    stateSet->addUniform(new osg::Uniform("neuralHiddenLayers", _hiddenLayers));
+    stateSet->addUniform(new osg::Uniform("neuralUnits", _units));
+    return stateSet;
+}
+
+namespace {
+const bool registered = registerMethodClass<NeuralMaterial>([] {
+    MethodInfo m;
+    m.description =
+        "neural BTF (Rainer et al. 2019): a latent texture (L half values per texel) decoded with "
+        "the light and view directions by one small MLP per material";
+    m.options = {
+        OptionSpec::integer("latent", 8, 4, NeuralMaterial::kMaxLatent,
+                            "latent values per texel (a multiple of 4; 2 bytes each)"),
+        OptionSpec::integer("layers", 2, 1, NeuralMaterial::kMaxHiddenLayers,
+                            "hidden layers of the decoder"),
+        OptionSpec::integer("units", 32, 4, NeuralMaterial::kMaxUnits,
+                            "units per hidden layer (a multiple of 4)"),
+        OptionSpec::integer("steps", 4000, 1, OptionSpec::kNoLimit,
+                            "Adam steps (the last tenth trains the decoder on the latents as "
+                            "stored)"),
+        OptionSpec::integer("batch", 4096, 16, 65536, "(texel, view, light) samples per step"),
+        OptionSpec::integer("seed", 1, 0, OptionSpec::kNoLimit,
+                            "initial weights and sample order; the same seed fits the same "
+                            "material on the same machine")};
+    m.shaderCost = [](const Material& material) {
+        // Per neuron of a layer with n inputs: the bias fetch and n/4 weight fetches; a dot product
+        // and an add per group (counted as 4 ALU + 1), the ReLU 1. Features: normalize 6, rest 2.
+        const NeuralMaterial& n = static_cast<const NeuralMaterial&>(material);
+        int alu = 8, tex = n.latentSize() / 4;
+        for (int k = 0; k <= n.hiddenLayers(); ++k) {
+            const int groups = n.layerInputs(k) / 4;
+            alu += n.layerOutputs(k) * (groups * 5 + 1);
+            tex += n.layerOutputs(k) * (groups + 1);
+        }
+        alu += 3;  // times l_z
+        return ShaderCost::ofEvaluate(alu, tex,
+                                      "ALU ~1.25 x weights, TEX weights / 4 + neurons + L/4 (L " +
+                                          std::to_string(n.latentSize()) + ", " +
+                                          std::to_string(n.hiddenLayers()) + " x " +
+                                          std::to_string(n.units()) + " units)");
+    };
+    m.order = 90;
+    m.quickFitOptions = "latent=4 units=16 layers=1 steps=300 batch=512";
+    // The fit holds the latents and a block of ABRDFs (at most 256 MiB) beyond the input.
+    m.fitWorkingSet = 0.25;
+    m.fitWorkingSetFullSizeGiB = 1;
+    return m;
+}());
+}  // namespace
+
+// The decoder is every texel's; only the latents are per texel (remapMaterial).
+[[maybe_unused]] const bool sharedTexturesDeclared =
+    declareSharedTextures(NeuralMaterial::kMethod, {"decoder"});
+
+}  // namespace osgBTF

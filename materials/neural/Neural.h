@@ -1,0 +1,97 @@
+// osgBTF method "neural": a latent texture and one small decoder network per material, after
+// Rainer, Jakob, Ghosh, Weyrich 2019 ("Neural BTF Compression and Interpolation") and the
+// real-time neural materials of Zeltner et al. 2024 (latents decoded by a small MLP in the shader).
+//
+//   BTF(x, v, l) ~ l_z * D(z(x), f(v, l))
+//
+// z(x): L latent values per texel (L a multiple of 4, stored half); f: 8 features of the local view
+// and light directions (NeuralMaterial::directionFeatures); D: H hidden layers of W ReLU units and
+// a linear RGB output, one network for the whole material. The fit (NeuralFit.cpp, libtorch)
+// trains z and D together by Adam on the measured values (an "auto-decoder": no encoder, the
+// latents are free parameters). Memory per texel: L values, 2L bytes; the decoder's float weights
+// are shared by all texels.
+#pragma once
+
+#include <vector>
+
+#include "materials/MethodMaterial.h"
+
+namespace osgBTF {
+
+/** NeuralMaterial's members (materials/MethodMaterial.h). */
+struct NeuralData {
+    /** Latent codes: L/4 layers of RGBA half values, latent k of a texel in layer k / 4, channel
+     *  k % 4 (rows bottom-up). Held as the floats the halves are. */
+    MaterialTexture latent;
+    /** The decoder, one row per neuron (the hidden layers' W each, then the 3 outputs), RGBA float:
+     *  texel 0 of a row is (bias, 0, 0, 0), texels 1.. the neuron's input weights in groups of 4.
+     */
+    MaterialTexture decoder;
+
+protected:
+    int _latentSize = 0;    ///< L
+    int _hiddenLayers = 0;  ///< H
+    int _units = 0;         ///< W
+};
+
+class NeuralMaterial : public MethodMaterial<NeuralMaterial, NeuralData> {
+public:
+    static constexpr const char* kMethod = "neural";
+    /** Direction features the decoder reads after the latents (directionFeatures). */
+    static constexpr int kDirectionFeatures = 8;
+    static constexpr int kMaxLatent = 32, kMaxUnits = 64, kMaxHiddenLayers = 4;
+
+    NeuralMaterial() = default;
+    NeuralMaterial(const NeuralMaterial& other,
+                   const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
+        : MethodMaterial(other, copyop) {}
+    META_Object(osgBTF, NeuralMaterial)
+
+        /** Options: latent, layers, units, steps, batch, seed (the README's table). Throws Error
+         * for an empty BTF, unknown or out-of-range options, latent or units not a multiple of 4,
+         * and a build without libtorch. */
+        static osg::ref_ptr<NeuralMaterial> fit(const BtfSource& btf, const FitOptions& options);
+    static osg::ref_ptr<NeuralMaterial> fromFile(const FittedMaterial& file);
+
+    /** Sets the texel size and directions, then setNetworkShape. */
+    void setShape(int width, int height, const DirectionSet& views, const DirectionSet& lights,
+                  int latentSize, int hiddenLayers, int units);
+    /** Sets the network's shape and sizes both textures (zero-filled) for the material's texels.
+     *  Throws Error for a shape outside the limits above. */
+    void setNetworkShape(int latentSize, int hiddenLayers, int units);
+
+    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+    MemoryFootprint memory() const override;
+    FittedMaterial toFittedMaterial() const override;
+    osg::ref_ptr<osg::StateSet> createStateSet() const override;
+
+    int latentSize() const { return _latentSize; }
+    int hiddenLayers() const { return _hiddenLayers; }
+    int units() const { return _units; }
+    /** Inputs of the first layer: the latents, then the direction features. */
+    int inputs() const { return _latentSize + kDirectionFeatures; }
+    /** Inputs of layer k (0 .. hiddenLayers(); the last is the output layer). */
+    int layerInputs(int k) const { return k == 0 ? inputs() : _units; }
+    /** Outputs of layer k: units(), 3 for the output layer. */
+    int layerOutputs(int k) const { return k == _hiddenLayers ? 3 : _units; }
+    /** The decoder row of neuron j of layer k. */
+    int decoderRow(int k, int j) const { return k * _units + j; }
+    /** Latent i of texel (x, y) in latent.data. */
+    std::size_t latentIndex(int x, int y, int i) const {
+        return ((std::size_t(i / 4) * _height + y) * _width + x) * 4 + std::size_t(i % 4);
+    }
+
+    /** f(v, l) = (v.x, v.y, l.x, l.y, h.x, h.y, h.z, l.z), h = normalize(v + l): the projected
+     *  directions (what Rainer et al. 2019 feed their decoder) plus the half vector and the
+     *  light's cosine, on which specular lobes and shading depend most directly, so that a small
+     *  ReLU network needs fewer units to bend along them. */
+    static void directionFeatures(const glm::vec3& view, const glm::vec3& light, float* out);
+    /** D(inputs): the network on one input vector (inputs() values), in the shader's order of
+     *  operations. */
+    glm::vec3 decode(const float* inputs) const;
+
+protected:
+    ~NeuralMaterial() override = default;
+};
+
+}  // namespace osgBTF
