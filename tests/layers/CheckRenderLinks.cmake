@@ -1,9 +1,9 @@
 # ctest layers.render_links: rendering a fitted material loads no fitter, no HTTP client and no
 # ray tracer of osgBTF's (libosgBTFStreaming; libcurl neither in NEEDED nor used: no curl_ symbol.
 # Debian's OpenImageIO brings libcurl into the closure through GDAL, which is not osgBTF's to
-# change, so ldd is not asked about libcurl). The render library
-# (libosgBTF) and the render plugin (osgdb_btfmat) must not need Ceres or glog, not even through
-# another library (ldd: the whole closure), and must not need libosgBTFFit (readelf: NEEDED);
+# change, so ldd is not asked about libcurl). The render library (libosgBTF) and the render
+# plugin (osgdb_btfmat) must not need Ceres, glog or libtorch, not even through another library
+# (ldd: the whole closure), and must not need libosgBTFFit (readelf: NEEDED);
 # libosgBTF must not use a symbol libosgBTFFit defines (the fitting code lives there only) nor
 # export Ceres code (Debian's CMake package links Ceres statically: its code would be inside, and
 # only glog in NEEDED). Nor a ray tracer: neither needs libembree or libosgBTFEnvironment (NEEDED
@@ -16,7 +16,9 @@
 #         -DSTREAMING_LIBRARY=<libosgBTFStreaming>
 #         -DENVIRONMENT_LIBRARY=<libosgBTFEnvironment> -P CheckRenderLinks.cmake
 cmake_minimum_required(VERSION 3.22)
-set(fitting_pattern "ceres|glog|osgBTFFit|osgBTFStreaming|embree|osgBTFEnvironment")  # NEEDED, ldd
+# libtorch, libc10: the neural method's training (materials/neural/NeuralFit.cpp, libosgBTFFit).
+set(fitting_pattern
+    "ceres|glog|osgBTFFit|osgBTFStreaming|embree|osgBTFEnvironment|libtorch|libc10")  # NEEDED, ldd
 set(direct_pattern "${fitting_pattern}|curl")                   # NEEDED only
 set(RENDER ${RENDER_LIBRARY} ${RENDER_PLUGIN})
 
