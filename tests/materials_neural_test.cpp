@@ -192,6 +192,10 @@ TEST(Neural, AMemoryLimitSplitsTheMeasuredDataIntoBlocks) {
     setMemoryLimit(8ull * 16 * 81 * 81 * 3 * 4);
     const osg::ref_ptr<NeuralMaterial> m = fit(btf, "latent=4 units=16 steps=2000 batch=1024");
     EXPECT_EQ(m->fitInfo.at("blocks"), "4");
+    EXPECT_EQ(m->fitInfo.at("blocksRead"), "4");
+    // Three steps reach three blocks, one step each; the fourth's texels keep their start.
+    EXPECT_EQ(fit(btf, "latent=4 units=8 layers=1 steps=3 batch=64")->fitInfo.at("blocksRead"),
+              "3");
     setMemoryLimit(guard.saved);
     const ErrorSummary neural = errorOfMaterial(btf, *m);
     const ErrorSummary lambert = errorOfMaterial(btf, *LambertMaterial::fit(btf, FitOptions()));

@@ -36,7 +36,8 @@ void requireMultipleOf4(const char* option, int value) {
 /** Measured values held at once, one block of texels' ABRDFs: at most this, and an eighth of the
  *  memory limit. */
 constexpr std::uint64_t kBlockBytes = 256ull << 20;
-/** Adam steps on one block before the next is read, when the BTF needs several blocks. */
+/** Adam steps on one block before the next is read, when the BTF needs several blocks; fewer when
+ *  the steps would not reach every block that way (a full-size UBO2014 file has 164 blocks). */
 constexpr int kStepsPerBlock = 25;
 /** Learning rates: latents move faster than the shared decoder, which every sample pulls on. */
 constexpr double kLatentRate = 0.02, kDecoderRate = 0.005;
@@ -77,6 +78,8 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
     const std::size_t blockTexels = std::size_t(std::clamp<std::uint64_t>(
         std::min(kBlockBytes, memoryLimit() / 8) / texelBytes, 1, texels));
     const std::size_t blocks = (texels + blockTexels - 1) / blockTexels;
+    const int stepsPerBlock = int(
+        std::clamp<std::int64_t>(std::int64_t(steps) / std::int64_t(blocks), 1, kStepsPerBlock));
     checkMemory(blockTexels * texelBytes + std::uint64_t(texels) * latentSize * 4 * 4,
                 "neural: a block of ABRDFs and the latents");
 
@@ -143,7 +146,7 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
         double segmentLoss = 0;
         int segmentCount = 0;
         for (; step < segmentEnd; ++step) {
-            if (step % kStepsPerBlock == 0 || blockCount == 0) {
+            if (step % stepsPerBlock == 0 || blockCount == 0) {
                 if (visit % blocks == 0) std::shuffle(order.begin(), order.end(), random);
                 loadBlock(order[visit++ % blocks]);
             }
@@ -213,6 +216,8 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
     std::snprintf(loss, sizeof loss, "%.6g", runningLoss);
     m.fitInfo["loss"] = loss;  // mean squared error of the last tenth's batches
     m.fitInfo["blocks"] = std::to_string(blocks);
+    // Fewer steps than blocks leave some blocks' texels at their initial latents.
+    m.fitInfo["blocksRead"] = std::to_string(std::min<std::size_t>(visit, blocks));
 }
 
 #endif  // OSGBTF_HAVE_TORCH
