@@ -89,6 +89,11 @@ add_dependencies(osgbtf_sdk_check osgbtf_sdk_headers)
 
 # ---- install -----------------------------------------------------------------------------
 set(OSGBTF_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/osgBTF)
+# The neural method's training module (materials/CMakeLists.txt), loaded by libosgBTFFit from its
+# own folder.
+if(TARGET osgBTFNeuralTraining)
+  install(TARGETS osgBTFNeuralTraining LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+endif()
 install(TARGETS osgBTF osgBTFFit osgBTFStreaming osgBTFEnvironment EXPORT osgBTFTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${OSGBTF_SDK_DIR}/include/osgBTF DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
