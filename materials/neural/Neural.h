@@ -6,10 +6,10 @@
 //
 // z(x): L latent values per texel (L a multiple of 4, stored half); f: 8 features of the local view
 // and light directions (NeuralMaterial::directionFeatures); D: H hidden layers of W ReLU units and
-// a linear RGB output, one network for the whole material. The fit (NeuralFit.cpp, libtorch)
-// trains z and D together by Adam on the measured values (an "auto-decoder": no encoder, the
-// latents are free parameters). Memory per texel: L values, 2L bytes; the decoder's float weights
-// are shared by all texels.
+// a linear RGB output, one network for the whole material. The fit (NeuralFit.cpp; the training
+// in NeuralTraining.cpp, with libtorch) trains z and D together by Adam on the measured values
+// (an "auto-decoder": no encoder, the latents are free parameters). Memory per texel: L values,
+// 2L bytes; the decoder's float weights are shared by all texels.
 #pragma once
 
 #include <vector>

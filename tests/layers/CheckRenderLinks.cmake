@@ -16,7 +16,7 @@
 #         -DSTREAMING_LIBRARY=<libosgBTFStreaming>
 #         -DENVIRONMENT_LIBRARY=<libosgBTFEnvironment> -P CheckRenderLinks.cmake
 cmake_minimum_required(VERSION 3.22)
-# libtorch, libc10: the neural method's training (materials/neural/NeuralFit.cpp, libosgBTFFit).
+# libtorch, libc10: the neural method's training (materials/neural/NeuralTraining.cpp, a module).
 set(fitting_pattern
     "ceres|glog|osgBTFFit|osgBTFStreaming|embree|osgBTFEnvironment|libtorch|libc10")  # NEEDED, ldd
 set(direct_pattern "${fitting_pattern}|curl")                   # NEEDED only
