@@ -94,6 +94,8 @@ set(OSGBTF_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/osgBTF)
 if(TARGET osgBTFNeuralTraining)
   install(TARGETS osgBTFNeuralTraining LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 endif()
+# The image codecs module (core/CMakeLists.txt), loaded by libosgBTF from its own folder.
+install(TARGETS osgBTFImageCodecs LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(TARGETS osgBTF osgBTFFit osgBTFStreaming osgBTFEnvironment EXPORT osgBTFTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${OSGBTF_SDK_DIR}/include/osgBTF DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})

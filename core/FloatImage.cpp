@@ -11,6 +11,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -24,9 +25,9 @@
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfVersion.h>
-#include <OpenImageIO/imageio.h>
 
 #include "core/Error.h"
+#include "core/ImageCodecs.h"
 #include "core/MeasuredBtf.h"
 #include "core/SizeGuard.h"
 
@@ -188,33 +189,25 @@ auto withExrErrors(const std::string& path, Body body) -> decltype(body()) {
     }
 }
 
-FloatImage readWithOiio(const std::string& path, int part) {
-    // Without this the PNG reader premultiplies by alpha, so values would not be the stored ones.
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    auto input = OIIO::ImageInput::open(path, &config);
-    if (!input) {
-        std::string message = OIIO::geterror();
-        fail(path, message.empty() ? "unknown or unsupported image format" : message);
-    }
-    if (part != 0 && !input->seek_subimage(part, 0))
-        fail(path, "has no image " + std::to_string(part));
-    const OIIO::ImageSpec spec = input->spec();
-    if (spec.deep) fail(path, "deep images are not supported");
-    if (spec.depth > 1)
-        fail(path, "volume images (depth " + std::to_string(spec.depth) + ") are not supported");
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+FloatImage readWithCodecs(const std::string& path, int part) {
+    std::string error;
+    const std::unique_ptr<ImageReader> input = imageCodecs().openFile(path, part, error);
+    if (!input) fail(path, error.empty() ? "unknown or unsupported image format" : error);
+    const ImageHeader& header = input->header();
+    if (header.deep) fail(path, "deep images are not supported");
+    if (header.depth > 1)
+        fail(path, "volume images (depth " + std::to_string(header.depth) + ") are not supported");
+    if (header.width <= 0 || header.height <= 0 || header.channels <= 0)
         fail(path, "image has no pixels");
-    checkMemory(saturatedProduct({std::uint64_t(spec.width), std::uint64_t(spec.height),
-                                  std::uint64_t(spec.nchannels), 4}),
-                path + ": " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                    " pixels x " + std::to_string(spec.nchannels) + " channels");
-    FloatImage image(spec.width, spec.height, spec.nchannels);
-    image.channelNames = spec.channelnames;
-    image.channelNames.resize(std::size_t(spec.nchannels));
-    if (!input->read_image(part, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT,
-                           image.pixels.data())) {
-        std::string message = input->geterror();
+    checkMemory(saturatedProduct({std::uint64_t(header.width), std::uint64_t(header.height),
+                                  std::uint64_t(header.channels), 4}),
+                path + ": " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                    " pixels x " + std::to_string(header.channels) + " channels");
+    FloatImage image(header.width, header.height, header.channels);
+    image.channelNames = header.channelNames;
+    image.channelNames.resize(std::size_t(header.channels));
+    if (!input->readFloats(header.channels, image.pixels.data())) {
+        const std::string message = input->error();
         fail(path, message.empty() ? "cannot read the pixels" : message);
     }
     return image;
@@ -249,44 +242,6 @@ void writeExr(const FloatImage& image, const std::vector<std::string>& names,
     });
 }
 
-void writeWithOiio(const FloatImage& image, const std::vector<std::string>& names,
-                   std::vector<float> pixels, const std::string& path,
-                   const std::string& temporaryPath, bool half) {
-    const std::string ext = lowerExtension(path);
-    static const std::set<std::string> kEightBit = {"png", "jpg", "jpeg", "bmp", "tga",
-                                                    "ppm", "pgm", "pnm",  "gif", "webp"};
-    const bool eightBit = kEightBit.count(ext) > 0;
-    OIIO::TypeDesc format = OIIO::TypeDesc::FLOAT;
-    if (eightBit)
-        format = OIIO::TypeDesc::UINT8;
-    else if (half && (ext == "tif" || ext == "tiff"))
-        format = OIIO::TypeDesc::HALF;
-    if (eightBit)  // Done here so NaN handling does not depend on the OIIO version.
-        for (float& v : pixels) v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-
-    // Chosen by the real name: the temporary name's extension would pick the wrong writer.
-    auto output = OIIO::ImageOutput::create(path);
-    if (!output) fail(path, "no image writer for extension '." + ext + "': " + OIIO::geterror());
-    if ((image.channels == 2 || image.channels == 4) && !output->supports("alpha"))
-        fail(path, std::string(output->format_name()) +
-                       " files store no alpha channel; the image has " +
-                       std::to_string(image.channels) + " channels");
-    OIIO::ImageSpec spec(image.width, image.height, image.channels, format);
-    spec.channelnames = names;
-    spec.alpha_channel = -1;
-    for (int c = 0; c < image.channels; ++c)
-        if (channelKey(names[std::size_t(c)]).base == "A") spec.alpha_channel = c;
-    // The pixels are not premultiplied; without this PNG output divides by alpha.
-    spec.attribute("oiio:UnassociatedAlpha", 1);
-    if (!output->open(temporaryPath, spec)) fail(path, output->geterror());
-    if (!output->write_image(OIIO::TypeDesc::FLOAT, pixels.data())) {
-        const std::string message = output->geterror();
-        output->close();
-        fail(path, message);
-    }
-    if (!output->close()) fail(path, output->geterror());
-}
-
 }  // namespace
 
 FloatImage::FloatImage(int width_, int height_, int channels_)
@@ -318,7 +273,7 @@ FloatImage readFloatImage(const std::string& path, int part) {
     }
     if (lowerExtension(path) == "exr") fail(path, "not an OpenEXR file (wrong magic number)");
     try {
-        return readWithOiio(path, part);
+        return readWithCodecs(path, part);
     } catch (const Error&) {
         throw;
     } catch (const std::exception& e) {
@@ -391,8 +346,11 @@ void writeFloatImage(const FloatImage& image, const std::string& path, bool half
     writeFileAtomically(path, [&](const std::string& temporaryPath) {
         if (ext == "exr")
             writeExr(image, names, pixels, path, temporaryPath, half);
-        else
-            writeWithOiio(image, names, std::move(pixels), path, temporaryPath, half);
+        else if (const std::string problem =
+                     imageCodecs().writeFile(image.width, image.height, names, std::move(pixels),
+                                             path, temporaryPath, half);
+                 !problem.empty())
+            fail(path, problem);
     });
 }
 

@@ -5,11 +5,11 @@
 #include <iomanip>
 #include <sstream>
 
-#include <OpenImageIO/imagebufalgo.h>
 #include <osg/Geode>
 #include <osg/Uniform>
 
 #include "core/Error.h"
+#include "core/ImageCodecs.h"
 #include "harness/PassCost.h"
 
 namespace osgBTF {
@@ -158,16 +158,7 @@ FloatImage addTopBand(const FloatImage& image, int height, float fill) {
 }
 
 bool drawText(FloatImage& image, int x, int y, const std::string& text, int size, float value) {
-    OIIO::ImageBuf buffer(
-        OIIO::ImageSpec(image.width, image.height, image.channels, OIIO::TypeDesc::FLOAT),
-        image.pixels.data());
-    const std::vector<float> colour(std::size_t(image.channels), value);
-    for (const char* font : {"DejaVuSans", ""}) {
-        // OIIO reports a missing font through the buffer's error state; it must be cleared.
-        if (OIIO::ImageBufAlgo::render_text(buffer, x, y, text, size, font, colour)) return true;
-        (void)buffer.geterror();
-    }
-    return false;
+    return imageCodecs().drawText(image, x, y, text, size, value);
 }
 
 glm::vec3 colourMap(float t) {

@@ -49,7 +49,8 @@ FloatImage stackImages(const FloatImage& top, const FloatImage& bottom, int gap,
 /** Adds a band of `height` pixels above the image (filled with `fill`). */
 FloatImage addTopBand(const FloatImage& image, int height, float fill);
 
-/** Draws text through OIIO's render_text (FreeType with a system font such as DejaVu Sans).
+/** Draws text through OpenImageIO's render_text (FreeType with a system font such as DejaVu
+ *  Sans; core/ImageCodecs.h).
  *  Returns false, drawing nothing, when no font is found. */
 bool drawText(FloatImage& image, int x, int y, const std::string& text, int size,
               float value = 1.0f);

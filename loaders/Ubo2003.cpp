@@ -17,14 +17,13 @@
 #include <vector>
 
 #include <Imath/half.h>
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 #include <zip.h>
 
 #include "core/Error.h"
+#include "core/ImageCodecs.h"
 #include "core/Progress.h"
 #include "core/SizeGuard.h"
 
@@ -57,14 +56,6 @@ bool isJunk(const std::string& memberPath) {
 bool looksLikeBtfName(const std::string& basename) {
     static const std::regex tokens(R"(tl\d{3} pl\d{3} tv\d{3} pv\d{3})", std::regex::icase);
     return std::regex_search(basename, tokens);
-}
-
-/** OIIO's plugin name for an image extension (creating a reader from a file name that does not
- *  exist fails in OIIO 2.4). */
-std::string oiioFormat(const std::string& extension) {
-    if (extension == "jpg" || extension == "jpeg") return "jpeg";
-    if (extension == "exr") return "openexr";
-    return extension;
 }
 
 struct Member {
@@ -336,70 +327,25 @@ std::vector<float> upright(const std::vector<float>& stored, int sw, int sh, int
     return out;
 }
 
-/** OIIO messages name the file it was given and may span lines; name the member instead. */
-std::string tidyMessage(std::string text, const std::string& fakeName, const Member& member) {
-    if (text.empty()) return "unknown error";
-    for (std::size_t at; (at = text.find(fakeName)) != std::string::npos;)
-        text.replace(at, fakeName.size(), basenameOf(member.name));
-    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-    for (std::size_t at; (at = text.find('\n')) != std::string::npos;) text.replace(at, 1, "; ");
-    return text;
-}
-
 /** Decodes an image (the bytes of a file) into bottom-up RGB. destination receives the decoded
  *  size and returns where to write; it throws when the size is wrong, before pixels are decoded. */
 void decodeImage(const std::string& archive, const Member& member,
-                 const std::vector<unsigned char>& bytes, bool useProxy, const Curve& curve,
+                 const std::vector<unsigned char>& bytes, const Curve& curve,
                  DecodeScratch& scratch, const std::function<Target(int, int)>& destination) {
     const std::string where = "member '" + member.name + "'";
-    // OpenEXR's C++ reader (OIIO's) allocates chunk offset tables sized from the header as it
-    // opens a file; the headers are checked against the member's size first.
+    // OpenEXR's C++ reader (OpenImageIO's) allocates chunk offset tables sized from the header as
+    // it opens a file; the headers are checked against the member's size first.
     if (member.parsed.extension == "exr")
         readExrPartSizes(archive + ": " + where, bytes.data(), bytes.size());
-    OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
-    std::string tempFile;
-    struct TempRemover {
-        std::string* path;
-        ~TempRemover() {
-            std::error_code ignored;
-            if (!path->empty()) fs::remove(*path, ignored);
-        }
-    } remover{&tempFile};
-    OIIO::ImageSpec config;
-    // Keep colour values of PNGs with alpha as stored instead of premultiplying them.
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    std::unique_ptr<OIIO::ImageInput> input;
-    const std::string fakeName = "image." + member.parsed.extension;
-    if (useProxy) {
-        // ImageInput::open(name, config, proxy) looks for the file on disk in OIIO 2.4; creating
-        // the reader by format name and attaching the proxy does not.
-        input = OIIO::ImageInput::create(oiioFormat(member.parsed.extension));
-        OIIO::ImageSpec opened;
-        if (input && !(input->set_ioproxy(&proxy) && input->open(fakeName, opened, config)))
-            fail(archive, where + ": not a decodable image: " +
-                              tidyMessage(input->geterror(), fakeName, member));
-    } else {
-        static std::atomic<unsigned> counter{0};
-        tempFile = (fs::temp_directory_path() /
-                    ("osgbtf-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) +
-                     "." + member.parsed.extension))
-                       .string();
-        {
-            std::ofstream out(tempFile, std::ios::binary);
-            out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-            if (!out) fail(archive, where + ": cannot write temporary file " + tempFile);
-        }
-        input = OIIO::ImageInput::open(tempFile, &config);
-    }
-    if (!input)
-        fail(archive,
-             where + ": not a decodable image: " +
-                 tidyMessage(OIIO::geterror(), tempFile.empty() ? fakeName : tempFile, member));
-    input->threads(1);  // parallelism comes from decoding many images at once
-    const OIIO::ImageSpec& spec = input->spec();
-    if (spec.nchannels < 1 || spec.width <= 0 || spec.height <= 0 || spec.depth > 1)
+    std::string error;
+    const std::unique_ptr<ImageReader> input = imageCodecs().openBytes(
+        bytes.data(), bytes.size(), member.parsed.extension, basenameOf(member.name), error);
+    if (!input) fail(archive, where + ": not a decodable image: " + error);
+    input->singleThreaded();  // parallelism comes from decoding many images at once
+    const ImageHeader& spec = input->header();
+    if (spec.channels < 1 || spec.width <= 0 || spec.height <= 0 || spec.depth > 1)
         fail(archive, where + ": unsupported image layout");
-    int orientation = spec.get_int_attribute("Orientation", 1);
+    int orientation = spec.orientation;
     if (orientation < 1 || orientation > 8) orientation = 1;
     const bool swapsAxes = orientation >= 5 && orientation <= 8;
     const int width = swapsAxes ? spec.height : spec.width;
@@ -407,18 +353,17 @@ void decodeImage(const std::string& archive, const Member& member,
     const Target target = destination(width, height);
 
     const int storedW = spec.width, storedH = spec.height;
-    const int channels = std::min(spec.nchannels, 3);
+    const int channels = std::min(spec.channels, 3);
     const std::size_t pixels = std::size_t(storedW) * storedH;
-    const bool is8bit = spec.format == OIIO::TypeDesc::UINT8;
-    const bool isFloat = spec.format.is_floating_point();
+    const bool is8bit = spec.eightBit;
+    const bool isFloat = spec.floating;
     bool ok;
     if (is8bit && orientation == 1) {
-        // Native reads of all channels: OIIO 2.4's converting read_image allocates a 64 MiB
+        // Native reads of all channels: OpenImageIO 2.4's converting read allocates a 64 MiB
         // scanline buffer per call, which dominated small-image loads (and crawled under ASan).
-        const int fileChannels = spec.nchannels;
+        const int fileChannels = spec.channels;
         scratch.bytes8.resize(pixels * fileChannels);
-        ok = input->read_native_scanlines(0, 0, 0, storedH, 0, 0, fileChannels,
-                                          scratch.bytes8.data());
+        ok = input->readBytes(scratch.bytes8.data());
         if (ok && fileChannels != channels) {
             for (std::size_t p = 0; p < pixels; ++p)
                 for (int c = 0; c < channels; ++c)
@@ -433,7 +378,7 @@ void decodeImage(const std::string& archive, const Member& member,
                       [&](unsigned char v) { return curve.byteHalf(v); });
     } else {
         scratch.floats.resize(pixels * channels);
-        ok = input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, scratch.floats.data());
+        ok = input->readFloats(channels, scratch.floats.data());
         if (ok && !isFloat)
             for (float& v : scratch.floats) v = curve.apply(v);
         if (ok && orientation != 1)
@@ -442,10 +387,7 @@ void decodeImage(const std::string& archive, const Member& member,
             storeRows(scratch.floats.data(), width, height, channels, target,
                       [](float v) { return v; });
     }
-    if (!ok)
-        fail(archive,
-             where + ": corrupt image: " +
-                 tidyMessage(input->geterror(), tempFile.empty() ? fakeName : tempFile, member));
+    if (!ok) fail(archive, where + ": corrupt image: " + input->error());
 }
 
 DirectionSet buildSet(const std::set<std::pair<int, int>>& found, const std::string& name) {
@@ -574,32 +516,23 @@ MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options) {
                        " view directions)");
     }
 
-    // Formats whose reader cannot decode from memory go through a temporary file.
-    std::map<std::string, bool> proxyOk;
-    for (const Member& m : members)
-        if (!proxyOk.count(m.parsed.extension)) {
-            auto probe = OIIO::ImageInput::create(oiioFormat(m.parsed.extension));
-            proxyOk[m.parsed.extension] = probe && probe->supports("ioproxy");
-        }
-
     const Curve curve(options.curve);
     DecodeScratch firstScratch;
     const Member& firstMember = members[std::size_t(slots.begin()->second)];
     int width = 0, height = 0;
-    decodeImage(path, firstMember, source.read(firstMember), proxyOk[firstMember.parsed.extension],
-                curve, firstScratch, [&](int w, int h) {
-                    width = w;
-                    height = h;
-                    // The first header's size decides everything: checked before its pixels
-                    // are decoded, so an image claiming 100000x100000 pixels allocates nothing.
-                    std::ostringstream what;
-                    what << path << ": BTF of " << w << "x" << h << " texels x " << nV
-                         << " views x " << nL << " lights";
-                    checkMemory(MeasuredBtf::bytesNeeded(w, h, nV, nL, options.storage),
-                                what.str());
-                    firstScratch.image.resize(std::size_t(w) * h * 3);
-                    return Target{firstScratch.image.data(), nullptr};
-                });
+    decodeImage(
+        path, firstMember, source.read(firstMember), curve, firstScratch, [&](int w, int h) {
+            width = w;
+            height = h;
+            // The first header's size decides everything: checked before its pixels
+            // are decoded, so an image claiming 100000x100000 pixels allocates nothing.
+            std::ostringstream what;
+            what << path << ": BTF of " << w << "x" << h << " texels x " << nV << " views x " << nL
+                 << " lights";
+            checkMemory(MeasuredBtf::bytesNeeded(w, h, nV, nL, options.storage), what.str());
+            firstScratch.image.resize(std::size_t(w) * h * 3);
+            return Target{firstScratch.image.data(), nullptr};
+        });
     // An encoded image of width x height pixels is never larger than twice its raw RGBA float
     // pixels plus 16 MiB of metadata; larger members are refused before they are read, so the
     // members in flight stay bounded by the image size.
@@ -649,19 +582,17 @@ MeasuredBtf loadUbo2003(const std::string& path, const LoadOptions& options) {
                 tbb::filter_mode::parallel, [&](const std::shared_ptr<Job>& job) {
                     const Member& m = *job->member;
                     DecodeScratch& scratch = scratches.local();
-                    decodeImage(path, m, job->bytes, proxyOk.at(m.parsed.extension), curve, scratch,
-                                [&](int w, int h) {
-                                    if (w != width || h != height)
-                                        fail(path, "member '" + m.name + "' is " +
-                                                       std::to_string(w) + "x" + std::to_string(h) +
-                                                       " pixels but '" + firstMember.name +
-                                                       "' is " + std::to_string(width) + "x" +
-                                                       std::to_string(height));
-                                    // Straight into the BTF: each image is a disjoint block.
-                                    const std::size_t at = btf.index(m.view, m.light, 0);
-                                    return btf.floatData() ? Target{btf.floatData() + at, nullptr}
-                                                           : Target{nullptr, btf.halfData() + at};
-                                });
+                    decodeImage(path, m, job->bytes, curve, scratch, [&](int w, int h) {
+                        if (w != width || h != height)
+                            fail(path, "member '" + m.name + "' is " + std::to_string(w) + "x" +
+                                           std::to_string(h) + " pixels but '" + firstMember.name +
+                                           "' is " + std::to_string(width) + "x" +
+                                           std::to_string(height));
+                        // Straight into the BTF: each image is a disjoint block.
+                        const std::size_t at = btf.index(m.view, m.light, 0);
+                        return btf.floatData() ? Target{btf.floatData() + at, nullptr}
+                                               : Target{nullptr, btf.halfData() + at};
+                    });
                     progress.advance();
                 }));
     progress.finish();

@@ -2,7 +2,6 @@
 
 #include <unistd.h>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -11,32 +10,17 @@
 #include <sstream>
 #include <vector>
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <tbb/parallel_for.h>
 #include <zip.h>
 
 #include "core/Error.h"
+#include "core/ImageCodecs.h"
 
 namespace osgBTF {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-const char* oiioFormat(Ubo2003ImageFormat format) {
-    switch (format) {
-        case Ubo2003ImageFormat::Png:
-            return "png";
-        case Ubo2003ImageFormat::Hdr:
-            return "hdr";
-        case Ubo2003ImageFormat::Exr:
-            return "openexr";
-        case Ubo2003ImageFormat::Jpeg:
-            break;
-    }
-    return "jpeg";
-}
 
 const char* extensionOf(Ubo2003ImageFormat format) {
     switch (format) {
@@ -79,13 +63,10 @@ void checkIntegerDirections(const MeasuredBtf& btf, const std::string& path) {
 /** Encodes one image to the bytes of a file; path is only for messages. */
 std::vector<unsigned char> encode(const MeasuredBtf& btf, std::size_t view, std::size_t light,
                                   Ubo2003ImageFormat format, int jpegQuality,
-                                  const std::string& path, bool useProxy) {
+                                  const std::string& path) {
     const int w = btf.width(), h = btf.height();
     const std::vector<float> image = btf.image(view, light);
     const bool eightBit = format == Ubo2003ImageFormat::Jpeg || format == Ubo2003ImageFormat::Png;
-    OIIO::ImageSpec spec(w, h, 3, eightBit ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
-    if (format == Ubo2003ImageFormat::Jpeg)
-        spec.attribute("Compression", "jpeg:" + std::to_string(std::clamp(jpegQuality, 1, 100)));
     // Image files are top row first; MeasuredBtf rows are bottom-up.
     std::vector<unsigned char> bytes8;
     std::vector<float> floats;
@@ -103,43 +84,12 @@ std::vector<unsigned char> encode(const MeasuredBtf& btf, std::size_t view, std:
             std::copy_n(image.data() + std::size_t(h - 1 - y) * w * 3, w * 3,
                         floats.data() + std::size_t(y) * w * 3);
     }
-    const void* pixels = eightBit ? static_cast<const void*>(bytes8.data()) : floats.data();
-
     std::vector<unsigned char> encoded;
-    const std::string fakeName = std::string("image.") + extensionOf(format);
-    std::string tempFile;
-    std::unique_ptr<OIIO::ImageOutput> out;
-    OIIO::Filesystem::IOVecOutput proxy(encoded);
-    if (useProxy) {
-        out = OIIO::ImageOutput::create(oiioFormat(format));
-        if (out && !(out->set_ioproxy(&proxy) && out->open(fakeName, spec))) out.reset();
-    } else {
-        static std::atomic<unsigned> counter{0};
-        tempFile =
-            (fs::temp_directory_path() / ("osgbtf-w" + std::to_string(::getpid()) + "-" +
-                                          std::to_string(counter++) + "." + extensionOf(format)))
-                .string();
-        out = OIIO::ImageOutput::create(tempFile);
-        if (out && !out->open(tempFile, spec)) out.reset();
-    }
-    if (!out)
-        fail(path, std::string("cannot encode ") + extensionOf(format) + ": " + OIIO::geterror());
-    const bool ok = out->write_image(spec.format, pixels) && out->close();
-    if (!ok)
-        fail(path, std::string("cannot encode ") + extensionOf(format) + ": " + out->geterror());
-    out.reset();
-    if (!tempFile.empty()) {
-        std::ifstream in(tempFile, std::ios::binary);
-        encoded.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-        std::error_code ignored;
-        fs::remove(tempFile, ignored);
-    }
+    std::string error;
+    if (!imageCodecs().encode(w, h, eightBit ? bytes8.data() : nullptr, floats.data(),
+                              extensionOf(format), jpegQuality, encoded, error))
+        fail(path, std::string("cannot encode ") + extensionOf(format) + ": " + error);
     return encoded;
-}
-
-bool outputSupportsProxy(Ubo2003ImageFormat format) {
-    auto probe = OIIO::ImageOutput::create(oiioFormat(format));
-    return probe && probe->supports("ioproxy");
 }
 
 std::uint64_t rawImageBytes(const MeasuredBtf& btf, Ubo2003ImageFormat format) {
@@ -174,10 +124,9 @@ void writeUbo2003Zip(const MeasuredBtf& btf, const std::string& zipPath, Ubo2003
     // libzip reads the buffers only in zip_close, so all encoded images are alive at once; the raw
     // size bounds the encoded one for every format used here.
     checkMemory(rawImageBytes(btf, format) * count, zipPath + ": encoded images");
-    const bool useProxy = outputSupportsProxy(format);
     std::vector<std::vector<unsigned char>> encoded(count);
     tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
-        encoded[i] = encode(btf, i % nV, i / nV, format, jpegQuality, zipPath, useProxy);
+        encoded[i] = encode(btf, i % nV, i / nV, format, jpegQuality, zipPath);
     });
 
     // Per process: two writers of one archive never share (and truncate) one temporary.
@@ -225,12 +174,11 @@ void writeUbo2003Folder(const MeasuredBtf& btf, const std::string& folder,
     if (!fs::create_directories(tmp, ec) || ec)
         fail(folder, "cannot create " + tmp.string() + ": " + ec.message());
     const std::size_t nL = btf.lightCount(), nV = btf.viewCount(), count = nL * nV;
-    const bool useProxy = outputSupportsProxy(format);
     try {
         tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
             const std::size_t light = i / nV, view = i % nV;
             const std::vector<unsigned char> bytes =
-                encode(btf, view, light, format, jpegQuality, folder, useProxy);
+                encode(btf, view, light, format, jpegQuality, folder);
             const fs::path file =
                 tmp / ubo2003MemberName(int(i), btf.lights()[light], btf.views()[view], format);
             std::ofstream out(file, std::ios::binary);

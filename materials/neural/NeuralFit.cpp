@@ -3,12 +3,11 @@
 // libtorch; without it the fit says what is missing).
 #include "materials/neural/Neural.h"
 
-#include <dlfcn.h>
-
 #include <chrono>
 #include <string>
 
 #include "core/Error.h"
+#include "core/Modules.h"
 
 namespace osgBTF {
 
@@ -16,27 +15,19 @@ namespace {
 
 using TrainFunction = void (*)(const BtfSource&, const OptionValues&, NeuralMaterial&);
 
-/** osgbtfTrainNeural from libosgBTFNeuralTraining.so in this library's own folder (the build
- *  tree's lib/, or the installed libdir), loaded once. */
+/** osgbtfTrainNeural from libosgBTFNeuralTraining.so, next to this library (core/Modules.h),
+ *  loaded once. */
 TrainFunction trainer() {
     static const TrainFunction function = [] {
-        Dl_info self{};
-        std::string folder = ".";
-        if (dladdr(reinterpret_cast<void*>(&trainer), &self) && self.dli_fname) {
-            folder = self.dli_fname;
-            const auto slash = folder.rfind('/');
-            folder = slash == std::string::npos ? "." : folder.substr(0, slash);
-        }
-        const std::string path = folder + "/libosgBTFNeuralTraining.so";
-        void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-        if (!module)
+        std::string error;
+        void* symbol = loadModuleSymbol(reinterpret_cast<const void*>(&trainer),
+                                        "libosgBTFNeuralTraining.so", "osgbtfTrainNeural", error);
+        if (!symbol)
             throw Error(
                 "neural: fitting needs libtorch, and this osgBTF was built without it "
                 "(install libtorch-dev and configure again); rendering a fitted neural "
                 "material does not (" +
-                std::string(dlerror()) + ")");
-        void* symbol = dlsym(module, "osgbtfTrainNeural");
-        if (!symbol) throw Error("neural: " + path + " has no osgbtfTrainNeural");
+                error + ")");
         return reinterpret_cast<TrainFunction>(symbol);
     }();
     return function;

@@ -1,25 +1,24 @@
-# ctest layers.render_links: rendering a fitted material loads no fitter, no HTTP client and no
-# ray tracer of osgBTF's (libosgBTFStreaming; libcurl neither in NEEDED nor used: no curl_ symbol.
-# Debian's OpenImageIO brings libcurl into the closure through GDAL, which is not osgBTF's to
-# change, so ldd is not asked about libcurl). The render library (libosgBTF) and the render
-# plugin (osgdb_btfmat) must not need Ceres, glog or libtorch, not even through another library
-# (ldd: the whole closure), and must not need libosgBTFFit (readelf: NEEDED);
-# libosgBTF must not use a symbol libosgBTFFit defines (the fitting code lives there only) nor
-# export Ceres code (Debian's CMake package links Ceres statically: its code would be inside, and
-# only glog in NEEDED). Nor a ray tracer: neither needs libembree or libosgBTFEnvironment (NEEDED
-# and ldd), and libosgBTF calls no Embree function (rtc*) and no function libosgBTFEnvironment
-# defines. So that the check can fail, the same probes must find glog or Ceres behind
-# libosgBTFFit, Ceres code in it, libosgBTFFit in a plugin that fits on load (osgdb_btf), and
-# libembree and its rtc* functions in libosgBTFEnvironment.
+# ctest layers.render_links: rendering a fitted material loads no fitter, no HTTP client, no ray
+# tracer and no OpenImageIO. The render library (libosgBTF) and the render plugin (osgdb_btfmat)
+# must not need Ceres, glog, libtorch, libcurl, libembree or OpenImageIO, not even through another
+# library (ldd: the whole closure), nor libosgBTFFit, libosgBTFStreaming or libosgBTFEnvironment
+# (readelf: NEEDED, and ldd); OpenImageIO (whose closure brings ~260 libraries, libcurl through
+# GDAL among them) is a module the library loads on first use, libosgBTFImageCodecs.
+# libosgBTF must not use a symbol the upper libraries define (the fitting code lives there only),
+# no curl_ or rtc* (Embree) function, and must not export Ceres code (Debian's CMake package links
+# Ceres statically: its code would be inside, and only glog in NEEDED). So that the check can
+# fail, the same probes must find glog or Ceres behind libosgBTFFit, Ceres code in it, libosgBTFFit
+# in a plugin that fits on load (osgdb_btf), libcurl and curl_ functions in libosgBTFStreaming,
+# libembree and its rtc* functions in libosgBTFEnvironment, and OpenImageIO in the module.
 #   cmake -DRENDER_LIBRARY=<libosgBTF> -DRENDER_PLUGIN=<osgdb_btfmat>
 #         -DFIT_LIBRARY=<libosgBTFFit> -DFIT_PLUGIN=<osgdb_btf>
 #         -DSTREAMING_LIBRARY=<libosgBTFStreaming>
-#         -DENVIRONMENT_LIBRARY=<libosgBTFEnvironment> -P CheckRenderLinks.cmake
+#         -DENVIRONMENT_LIBRARY=<libosgBTFEnvironment>
+#         -DIMAGE_CODECS_MODULE=<libosgBTFImageCodecs.so> -P CheckRenderLinks.cmake
 cmake_minimum_required(VERSION 3.22)
 # libtorch, libc10: the neural method's training (materials/neural/NeuralTraining.cpp, a module).
 set(fitting_pattern
-    "ceres|glog|osgBTFFit|osgBTFStreaming|embree|osgBTFEnvironment|libtorch|libc10")  # NEEDED, ldd
-set(direct_pattern "${fitting_pattern}|curl")                   # NEEDED only
+    "ceres|glog|osgBTFFit|osgBTFStreaming|embree|osgBTFEnvironment|libtorch|libc10|curl|OpenImageIO")
 set(RENDER ${RENDER_LIBRARY} ${RENDER_PLUGIN})
 
 function(needed file out)  # the DT_NEEDED entries of `file`
@@ -57,15 +56,15 @@ foreach(file IN LISTS RENDER)
   needed(${file} direct)
   closure(${file} all)
   foreach(library IN LISTS direct)
-    if(library MATCHES "${direct_pattern}")
+    if(library MATCHES "${fitting_pattern}")
       list(APPEND problems "${name} needs ${library}: rendering must not load a fitter, an "
-                           "HTTP client or a ray tracer")
+                           "HTTP client, a ray tracer or OpenImageIO")
     endif()
   endforeach()
   foreach(library IN LISTS all)
     if(library MATCHES "${fitting_pattern}")
-      list(APPEND problems "${name} needs ${library}: rendering must not load a fitter, an "
-                           "HTTP client or a ray tracer")
+      list(APPEND problems "${name} loads ${library}: rendering must not load a fitter, an "
+                           "HTTP client, a ray tracer or OpenImageIO")
     endif()
   endforeach()
 endforeach()
@@ -147,10 +146,16 @@ dynamic_symbols(${ENVIRONMENT_LIBRARY} --undefined-only environment_undefined)
 if(NOT environment_undefined MATCHES "(^|;)rtc[A-Z]")
   list(APPEND problems "nm finds no rtc* (Embree) symbol used by ${ENVIRONMENT_LIBRARY}")
 endif()
+needed(${IMAGE_CODECS_MODULE} codecs_direct)
+if(NOT codecs_direct MATCHES "OpenImageIO")
+  list(APPEND problems "readelf finds no OpenImageIO in ${IMAGE_CODECS_MODULE}'s NEEDED "
+                       "(${codecs_direct})")
+endif()
 
 if(problems)
   list(REMOVE_DUPLICATES problems)
   list(JOIN problems "\n  " text)
   message(FATAL_ERROR "render link check failed:\n  ${text}")
 endif()
-message(STATUS "render library and render plugin load no fitter, no HTTP client and no ray tracer")
+message(STATUS "render library and render plugin load no fitter, no HTTP client, no ray tracer "
+               "and no OpenImageIO")
