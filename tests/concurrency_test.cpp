@@ -65,7 +65,7 @@ struct Files {
         writeUbo2003Zip(sample, zip, Ubo2003ImageFormat::Png);
         saveMaterial(*findMethod("lambert").fit(sample, {}), btfmat);
         const osg::ref_ptr<Material> fmf = findMethod("fmf").fit(sample, {});
-        writeFactorsAsUbo2014(dynamic_cast<const FmfMaterial&>(*fmf).factors(), btf, 2);
+        writeFactorsAsUbo2014(dynamic_cast<const FmfMaterial&>(*fmf).completeFactors(), btf, 2);
     }
     std::vector<std::string> all() const { return {btfmat, zip, btf}; }
     /** The option string each file is read with: the zip fitted (lambert) into a fresh cache. */

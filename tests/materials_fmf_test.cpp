@@ -175,7 +175,11 @@ TEST(Fmf, RendersEveryFactorVariantAsStoredAtMeasuredDirections) {
         test::setDecoding(f, variant.colorModel, variant.drr, variant.cosine);
         for (auto storage : {MaterialTexture::Float, MaterialTexture::Half}) {
             osg::ref_ptr<FmfMaterial> m = FmfMaterial::fromFactors(f, storage);
-            const FactoredBtf& stored = m->factors();
+            const FactoredBtf stored = m->completeFactors();
+            // Half storage keeps SxV as halves only: no float copy stays in the factors.
+            for (const BtfFactor& kept : m->factors().factors)
+                EXPECT_EQ(kept.SxV.size(),
+                          storage == MaterialTexture::Half ? 0 : 20 * kept.U.cols());
             EXPECT_EQ(m->width(), 5);
             EXPECT_EQ(m->height(), 4);
             EXPECT_EQ(stored.components(2),
@@ -184,6 +188,8 @@ TEST(Fmf, RendersEveryFactorVariantAsStoredAtMeasuredDirections) {
             for (std::size_t i = 0; i < f.factors.size(); ++i) {
                 const float d = (stored.factors[i].U - f.factors[i].U).cwiseAbs().maxCoeff();
                 EXPECT_LE(d, storage == MaterialTexture::Half ? 0.5f / 2048 : 0.0f);
+                ASSERT_EQ(stored.factors[i].SxV.rows(), 20);
+                EXPECT_EQ(stored.factors[i].SxV.cols(), stored.factors[i].U.cols());
                 if (storage == MaterialTexture::Half)
                     for (Eigen::Index j = 0; j < stored.factors[i].SxV.size(); ++j) {
                         const float x = stored.factors[i].SxV.data()[j];
@@ -222,7 +228,7 @@ TEST(Fmf, BlendsFactorSumsBeforeDecodingAtUnmeasuredDirections) {
     f.cosine = true;
     osg::ref_ptr<FmfMaterial> m = FmfMaterial::fromFactors(f, MaterialTexture::Float);
     // The raw sums: the same factors read as RGB without the cosine.
-    FactoredBtf raw = m->factors();
+    FactoredBtf raw = m->completeFactors();
     raw.colorModel = 0;
     raw.cosine = false;
     const DirectionInterpolator interpolator(f.views);
@@ -292,7 +298,7 @@ TEST(Fmf, SaveLoadRoundTripIsExact) {
         osg::ref_ptr<Material> loaded = loadMaterial(path);
         ASSERT_EQ(loaded->methodName(), "fmf");
         const FmfMaterial& back = static_cast<const FmfMaterial&>(*loaded);
-        const FactoredBtf &a = m.factors(), &b = back.factors();
+        const FactoredBtf a = m.completeFactors(), b = back.completeFactors();
         EXPECT_EQ(back.storage(), m.storage());
         EXPECT_EQ(b.model, a.model);
         EXPECT_EQ(b.colorModel, a.colorModel);
@@ -317,7 +323,8 @@ TEST(Fmf, SaveLoadRoundTripIsExact) {
     EXPECT_EQ(copy->factors().factors[1].U, materials[0]->factors().factors[1].U);
     osg::ref_ptr<FmfMaterial> cloned =
         static_cast<FmfMaterial*>(materials[1]->clone(osg::CopyOp::SHALLOW_COPY));
-    EXPECT_EQ(cloned->factors().factors[0].SxV, materials[1]->factors().factors[0].SxV);
+    EXPECT_EQ(cloned->completeFactors().factors[0].SxV,
+              materials[1]->completeFactors().factors[0].SxV);
 }
 
 TEST(Fmf, FileWithMismatchedTexturesIsRefused) {

@@ -315,7 +315,7 @@ TEST(Ubo2014Write, FittedFmfMaterialWritesExactlyItsFactors) {
         const int scalarSize = m->storage() == MaterialTexture::Float ? 4 : 2;
         EXPECT_EQ(scalarSize, std::string(storage) == "float" ? 4 : 2);
         const std::string path = dir.file(std::string(storage) + ".btf");
-        writeFactorsAsUbo2014(m->factors(), path, scalarSize);
+        writeFactorsAsUbo2014(m->completeFactors(), path, scalarSize);
         std::unique_ptr<ParsedBtf> p;
         try {
             p = std::make_unique<ParsedBtf>(readTextFile(path));
@@ -332,7 +332,7 @@ TEST(Ubo2014Write, FittedFmfMaterialWritesExactlyItsFactors) {
         EXPECT_EQ(p->factors[0].cols, 24u);
         // Half storage: the material's factors are already rounded to half, so they are stored
         // exactly in either case.
-        expectFactorsEqual(*p, m->factors(), scalarSize);
+        expectFactorsEqual(*p, m->completeFactors(), scalarSize);
         // The file's own formula (formats.md 2.6, FMF without DRR: U . SxV) at a measured pair
         // equals the material there; texel (x, y) from the bottom is file row height - 1 - y.
         const auto& f = p->factors[0];

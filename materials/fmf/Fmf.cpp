@@ -44,15 +44,43 @@ std::string floatList(const float* v, int n) {
     return text;
 }
 
+void checkHalfRange(float value, const std::string& source, const char* name) {
+    if (std::abs(value) > kHalfMax)
+        fail(source, std::string("fmf: ") + name + " value " + floatText(value) +
+                         " exceeds the half range (65504); use storage=float");
+}
+
 /** Rounds every value to half in place; throws when one does not fit. */
 void roundToHalf(FactorMatrix& m, const std::string& source, const char* name) {
     float* data = m.data();
     for (Eigen::Index i = 0; i < m.size(); ++i) {
-        if (std::abs(data[i]) > kHalfMax)
-            fail(source, std::string("fmf: ") + name + " value " + floatText(data[i]) +
-                             " exceeds the half range (65504); use storage=float");
+        checkHalfRange(data[i], source, name);
         data[i] = float(Imath::half(data[i]));
     }
+}
+
+/** The values of `m` as halves (row-major, as m); throws when one does not fit. */
+std::vector<Imath::half> toHalves(const FactorMatrix& m, const std::string& source,
+                                  const char* name) {
+    std::vector<Imath::half> halves(std::size_t(m.size()));
+    const float* data = m.data();
+    for (std::size_t i = 0; i < halves.size(); ++i) {
+        checkHalfRange(data[i], source, name);
+        halves[i] = Imath::half(data[i]);
+    }
+    return halves;
+}
+
+/** Factor f's SxV row `row`: from the halves when the material keeps them, else from the
+ *  factors' matrix. */
+template <typename Visit>
+void withSxvRow(const FactoredBtf& factors, const std::vector<std::vector<Imath::half>>* halves,
+                std::size_t f, std::size_t row, Visit visit) {
+    const std::size_t k = std::size_t(factors.factors[f].U.cols());
+    if (halves)
+        visit((*halves)[f].data() + row * k);
+    else
+        visit(factors.factors[f].SxV.data() + row * k);
 }
 
 }  // namespace
@@ -91,13 +119,18 @@ void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind sto
                  " Eigen-Texture layers exceed the GPU's texture limits (" +
                  std::to_string(kMaxTextureSize) + " texels, " + std::to_string(kMaxArrayLayers) +
                  " array layers)");
-    if (storage == MaterialTexture::Half)
+    std::shared_ptr<std::vector<std::vector<Imath::half>>> halves;
+    if (storage == MaterialTexture::Half) {
+        halves = std::make_shared<std::vector<std::vector<Imath::half>>>();
         for (BtfFactor& f : factors.factors) {
             roundToHalf(f.U, source, "U");
-            roundToHalf(f.SxV, source, "SxV");
+            halves->push_back(toHalves(f.SxV, source, "SxV"));
+            f.SxV.resize(0, f.SxV.cols());  // frees the floats, factor by factor
         }
+    }
     setGeometry(factors.width, factors.height, factors.views, factors.lights);
     _factors = std::make_shared<const FactoredBtf>(std::move(factors));
+    _sxvHalves = std::move(halves);
     _storage = storage;
     try {
         _viewLookup = DirectionLookup(_views);
@@ -106,6 +139,24 @@ void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind sto
         // A direction set the interpolation cannot triangulate is the file's problem: name it.
         fail(_factors->source, e.what());
     }
+}
+
+FactoredBtf FmfMaterial::completeFactors() const {
+    FactoredBtf complete = *_factors;
+    if (_sxvHalves)
+        for (std::size_t f = 0; f < complete.factors.size(); ++f) {
+            FactorMatrix& sxv = complete.factors[f].SxV;
+            sxv.resize(Eigen::Index(complete.texelCount()), complete.factors[f].U.cols());
+            const std::vector<Imath::half>& halves = (*_sxvHalves)[f];
+            std::copy(halves.begin(), halves.end(), sxv.data());
+        }
+    return complete;
+}
+
+void FmfMaterial::sxvRow(std::size_t factor, std::size_t row, float* out) const {
+    withSxvRow(*_factors, _sxvHalves.get(), factor, row, [&](const auto* values) {
+        std::copy_n(values, _factors->factors[factor].U.cols(), out);
+    });
 }
 
 osg::ref_ptr<FmfMaterial> FmfMaterial::fromFactors(FactoredBtf factors,
@@ -142,21 +193,23 @@ void FmfMaterial::factorSums(std::size_t row, const std::size_t* images, const f
     // then one dot product with the texel's SxV (the same order of operations as the GPU).
     const bool fmf = _factors->model == FactorModel::Fmf;
     for (int c = 0; c < 3; ++c) {
-        const BtfFactor& f = _factors->factors[fmf ? 0 : std::size_t(c)];
+        const std::size_t factor = fmf ? 0 : std::size_t(c);
+        const BtfFactor& f = _factors->factors[factor];
         const int k = int(f.U.cols());
-        const float* sxv = f.SxV.data() + row * std::size_t(k);
-        float sum = 0.0f;
-        for (int g = 0; g < k; g += 4) {
-            float blended[4] = {0, 0, 0, 0};
-            const int n = std::min(4, k - g);
-            for (int i = 0; i < count; ++i) {
-                const std::size_t uRow = fmf ? images[i] * 3 + std::size_t(c) : images[i];
-                const float* u = f.U.data() + uRow * std::size_t(k) + std::size_t(g);
-                for (int j = 0; j < n; ++j) blended[j] += weights[i] * u[j];
+        withSxvRow(*_factors, _sxvHalves.get(), factor, row, [&](const auto* sxv) {
+            float sum = 0.0f;
+            for (int g = 0; g < k; g += 4) {
+                float blended[4] = {0, 0, 0, 0};
+                const int n = std::min(4, k - g);
+                for (int i = 0; i < count; ++i) {
+                    const std::size_t uRow = fmf ? images[i] * 3 + std::size_t(c) : images[i];
+                    const float* u = f.U.data() + uRow * std::size_t(k) + std::size_t(g);
+                    for (int j = 0; j < n; ++j) blended[j] += weights[i] * u[j];
+                }
+                for (int j = 0; j < n; ++j) sum += blended[j] * float(sxv[g + j]);
             }
-            for (int j = 0; j < n; ++j) sum += blended[j] * sxv[g + j];
-        }
-        sums[c] = sum;
+            sums[c] = sum;
+        });
     }
 }
 
@@ -192,9 +245,12 @@ void FmfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
     const std::size_t row = _factors->factorRow(x, y), images = _factors->imageCount();
     const bool fmf = _factors->model == FactorModel::Fmf;
     Eigen::VectorXf products[3];
+    Eigen::VectorXf sxv;
     for (std::size_t f = 0; f < _factors->factors.size(); ++f) {
         const BtfFactor& factor = _factors->factors[f];
-        products[f].noalias() = factor.U * factor.SxV.row(Eigen::Index(row)).transpose();
+        sxv.resize(factor.U.cols());
+        sxvRow(f, row, sxv.data());
+        products[f].noalias() = factor.U * sxv;
     }
     for (std::size_t i = 0; i < images; ++i) {
         float sums[3];
@@ -230,21 +286,23 @@ void writeULayer(const FactoredBtf& factors, int maxGroups, std::size_t view, fl
 
 /** SxV's layer `layer`: components 4g..4g+3 of one factor (the factors' groups one after the
  *  other) for every texel, rows bottom-up, zero beyond the factor's rank. */
-void writeSxvLayer(const FactoredBtf& factors, int layer, float* out) {
+void writeSxvLayer(const FactoredBtf& factors, const std::vector<std::vector<Imath::half>>* halves,
+                   int layer, float* out) {
     const std::size_t texels = factors.texelCount();
     std::fill_n(out, texels * 4, 0.0f);
     std::size_t f = 0;
     while (layer >= groupsOf(factors.components(int(f))))
         layer -= groupsOf(factors.components(int(f++)));
-    const FactorMatrix& sxv = factors.factors[f].SxV;
-    const Eigen::Index first = Eigen::Index(layer) * 4;
-    const Eigen::Index count = std::min<Eigen::Index>(4, sxv.cols() - first);
+    const std::size_t first = std::size_t(layer) * 4;
+    const std::size_t count =
+        std::min<std::size_t>(4, std::size_t(factors.components(int(f))) - first);
     for (int y = 0; y < factors.height; ++y)
-        for (int x = 0; x < factors.width; ++x) {
-            const float* src = sxv.row(Eigen::Index(factors.factorRow(x, y))).data() + first;
-            std::copy_n(src, count,
-                        out + (std::size_t(y) * std::size_t(factors.width) + std::size_t(x)) * 4);
-        }
+        for (int x = 0; x < factors.width; ++x)
+            withSxvRow(factors, halves, f, factors.factorRow(x, y), [&](const auto* row) {
+                std::copy_n(
+                    row + first, count,
+                    out + (std::size_t(y) * std::size_t(factors.width) + std::size_t(x)) * 4);
+            });
 }
 
 }  // namespace
@@ -274,7 +332,7 @@ MaterialTexture FmfMaterial::sxvTexture() const {
     t.data.resize(t.valueCount());
     const std::size_t layerValues = std::size_t(t.width) * std::size_t(t.height) * 4;
     for (int layer = 0; layer < t.depth; ++layer)
-        writeSxvLayer(*_factors, layer, t.data.data() + layer * layerValues);
+        writeSxvLayer(*_factors, _sxvHalves.get(), layer, t.data.data() + layer * layerValues);
     return t;
 }
 
@@ -458,14 +516,15 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
                                     })
             .get(),
         "fmfU", 0);
-    addTexture(
-        *stateSet,
-        createGeneratedTextureArray(
-            sxvShape(),
-            [factors = _factors](int layer, float* out) { writeSxvLayer(*factors, layer, out); },
-            filtersParameters())
-            .get(),
-        "fmfSxV", 1);
+    addTexture(*stateSet,
+               createGeneratedTextureArray(
+                   sxvShape(),
+                   [factors = _factors, halves = _sxvHalves](int layer, float* out) {
+                       writeSxvLayer(*factors, halves.get(), layer, out);
+                   },
+                   filtersParameters())
+                   .get(),
+               "fmfSxV", 1);
     _viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
     _lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
     const bool fmf = _factors->model == FactorModel::Fmf;

@@ -22,6 +22,9 @@
 
 #include <array>
 #include <memory>
+#include <vector>
+
+#include <Imath/half.h>
 
 #include "core/FactoredBtf.h"
 #include "materials/DirectionLookup.h"
@@ -41,6 +44,10 @@ protected:
      *  (createGeneratedTextureArray), so the factors are held once, by the material and its
      *  textures together, and copies of the material share them. */
     std::shared_ptr<const FactoredBtf> _factors = std::make_shared<const FactoredBtf>();
+    /** Half storage keeps SxV, the bulk (a row per texel), here as halves, one array per factor
+     *  with SxV's rows, and leaves the factors' SxV matrices empty: a full-size UBO2014 file's
+     *  183 MiB of floats become 92. Null under float storage. Shared like _factors. */
+    std::shared_ptr<const std::vector<std::vector<Imath::half>>> _sxvHalves;
     MaterialTexture::PixelKind _storage = MaterialTexture::Half;
     DirectionLookup _viewLookup, _lightLookup;
 };
@@ -68,8 +75,14 @@ public:
     static osg::ref_ptr<FmfMaterial> fit(const BtfSource& btf, const FitOptions& options);
     static osg::ref_ptr<FmfMaterial> fromFile(const FittedMaterial& file);
 
-    /** The factors as rendered (half storage: the rounded values). */
+    /** The factors as rendered (half storage: the rounded values): their description, U and S.
+     *  Under half storage each factor's SxV matrix is empty (the material keeps SxV as halves):
+     *  sxvRow() reads it, completeFactors() gives everything. */
     const FactoredBtf& factors() const { return *_factors; }
+    /** A copy of the factors with SxV (as floats), e.g. to write them or fit from them. */
+    FactoredBtf completeFactors() const;
+    /** Factor f's SxV row `row` (FactoredBtf::factorRow) as floats: components(f) values. */
+    void sxvRow(std::size_t factor, std::size_t row, float* out) const;
     MaterialTexture::PixelKind storage() const { return _storage; }
 
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;

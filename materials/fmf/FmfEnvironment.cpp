@@ -51,11 +51,11 @@ std::vector<float> foldFmf(const FmfMaterial& material, const std::vector<glm::v
 glm::vec3 evaluateFoldedFmf(const FmfMaterial& material, const std::vector<float>& folded, int x,
                             int y, const glm::vec3& view) {
     const FactoredBtf& f = material.factors();
-    const FactorMatrix& sxv = f.factors[0].SxV;
-    const std::size_t k = std::size_t(sxv.cols());
+    const std::size_t k = std::size_t(f.components(0));
     if (folded.size() != material.views().size() * k * 3)
         throw Error("environment: folded fmf data of the wrong size");
-    const float* s = sxv.data() + f.factorRow(x, y) * k;
+    std::vector<float> s(k);
+    material.sxvRow(0, f.factorRow(x, y), s.data());
     const InterpolationWeights wv = material.viewLookup().weights(view);
     glm::vec3 sum(0.0f);
     for (int m = 0; m < 3; ++m) {

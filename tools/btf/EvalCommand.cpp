@@ -85,29 +85,35 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
             if (!environment->hasMap()) throw Error("--env: " + environment->getError());
             environment->setRotation(options->rotation);
         }
-        osg::ref_ptr<Material> material =
-            openMaterial(options->input, options->storage == "float" ? MaterialTexture::Float
-                                                                     : MaterialTexture::Half);
-        HeadlessRenderer renderer;
         FloatImage cpu, gpu;
-        if (environment) {
-            const std::vector<glm::vec3> g =
-                projectPatchEnvironment(*material, environment->projectionMap());
-            cpu = evaluateEnvironmentImage(*material, g, view, options->exposure);
-            gpu = renderEnvironmentImage(renderer, *material, g, view, options->exposure);
-        } else {
-            cpu = evaluateMaterialImage(*material, view, light);
-            gpu = renderMaterialImage(renderer, *material, view, light);
+        std::string method, levels, glRenderer;
+        {
+            // Scoped: the material and the GL context are released before the image is written,
+            // so that the image codecs (loaded for PNG and the like) do not add to their peak.
+            osg::ref_ptr<Material> material =
+                openMaterial(options->input, options->storage == "float" ? MaterialTexture::Float
+                                                                         : MaterialTexture::Half);
+            HeadlessRenderer renderer;
+            if (environment) {
+                const std::vector<glm::vec3> g =
+                    projectPatchEnvironment(*material, environment->projectionMap());
+                cpu = evaluateEnvironmentImage(*material, g, view, options->exposure);
+                gpu = renderEnvironmentImage(renderer, *material, g, view, options->exposure);
+            } else {
+                cpu = evaluateMaterialImage(*material, view, light);
+                gpu = renderMaterialImage(renderer, *material, view, light);
+            }
+            method = material->methodName();
+            if (material->mipLayout().mipMapped())
+                levels = " base of " + std::to_string(material->mipLayout().levelCount()) +
+                         " mip levels";
+            glRenderer = renderer.glRenderer();
         }
         writeFloatImage(options->cpu ? cpu : gpu, options->output);
-        std::cout << "wrote " << options->output << " (" << material->methodName() << ", "
-                  << cpu.width << "x" << cpu.height
-                  << (material->mipLayout().mipMapped()
-                          ? " base of " + std::to_string(material->mipLayout().levelCount()) +
-                                " mip levels"
-                          : std::string())
-                  << ", " << (environment ? "environment " + options->env + ", " : "")
-                  << (options->cpu ? "CPU reference" : "GPU: " + renderer.glRenderer())
+        std::cout << "wrote " << options->output << " (" << method << ", " << cpu.width << "x"
+                  << cpu.height << levels << ", "
+                  << (environment ? "environment " + options->env + ", " : "")
+                  << (options->cpu ? "CPU reference" : "GPU: " + glRenderer)
                   << "); largest GPU-CPU difference " << maxAbsDifference(gpu, cpu) << "\n";
     };
 }

@@ -143,7 +143,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         if (btfOutput) {
             const auto* fmf = dynamic_cast<const FmfMaterial*>(material.get());
             if (!fmf) fail(options->output, "method fmf did not give an FmfMaterial");
-            writeFactorsAsUbo2014(fmf->factors(), options->output,
+            writeFactorsAsUbo2014(fmf->completeFactors(), options->output,
                                   fmf->storage() == MaterialTexture::Float ? 4 : 2, meta.get());
         } else {
             saveFittedMaterial(material->releaseFittedMaterial(), options->output);

@@ -32,7 +32,7 @@ namespace {
  *  its error against those values over `errorTexels` texels at every (view, light) pair. */
 osg::ref_ptr<FmfMaterial> convertDfmf(const FmfMaterial& dfmf, int components,
                                       long long errorTexels) {
-    const FactoredBtf& factors = dfmf.factors();
+    const FactoredBtf factors = dfmf.completeFactors();
     const int ranks[3] = {factors.components(0), factors.components(1), factors.components(2)};
     if (components == 0) components = std::max({ranks[0], ranks[1], ranks[2]});
     const FactoredBtfSource source(factors);
