@@ -192,7 +192,8 @@ void writeTexture(Imf::MultiPartOutputFile& file, int part, const MaterialTextur
     }
 }
 
-MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::string& path) {
+MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::string& path,
+                            EightBitTextures eightBit) {
     const Imf::Header& header = file.header(part);
     if (!header.hasName()) fail(path, "part " + std::to_string(part) + " has no name");
     MaterialTexture t;
@@ -243,7 +244,11 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
                 path + ": " + what);
     // Slice by slice through a buffer of one slice, so that the texture is held once while it
     // is read (a whole-texture buffer doubled the peak: 8x the bytes of an 8-bit texture).
-    t.data.resize(t.valueCount());
+    const bool asBytes = t.kind == MaterialTexture::UNorm8 && eightBit == EightBitTextures::AsBytes;
+    if (asBytes)
+        t.bytes.resize(t.valueCount());
+    else
+        t.data.resize(t.valueCount());
     const std::size_t rowValues = std::size_t(t.width) * std::size_t(t.channels);
     std::vector<float> sliceRows(rowValues * std::size_t(t.height));
     const std::size_t xStride = sizeof(float) * std::size_t(t.channels);
@@ -260,18 +265,24 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
         input.setFrameBuffer(frameBuffer);
         input.readPixels(window.min.y, window.max.y);
         const std::size_t firstRow = std::size_t(z) * std::size_t(t.height);
-        for (int y = 0; y < t.height; ++y)
-            std::copy_n(
-                sliceRows.begin() + std::ptrdiff_t((fileRow(t, z, y) - firstRow) * rowValues),
-                rowValues,
-                t.data.begin() + std::ptrdiff_t((firstRow + std::size_t(y)) * rowValues));
-    }
-    if (t.kind == MaterialTexture::UNorm8)
-        for (float& v : t.data) {
-            if (!(v >= 0.0f && v <= 255.0f) || v != std::round(v))
-                fail(path, what + " is 8-bit but holds " + std::to_string(v));
-            v /= 255.0f;
+        if (t.kind == MaterialTexture::UNorm8)
+            for (float v : sliceRows)
+                if (!(v >= 0.0f && v <= 255.0f) || v != std::round(v))
+                    fail(path, what + " is 8-bit but holds " + std::to_string(v));
+        for (int y = 0; y < t.height; ++y) {
+            const auto from =
+                sliceRows.begin() + std::ptrdiff_t((fileRow(t, z, y) - firstRow) * rowValues);
+            const std::size_t to = (firstRow + std::size_t(y)) * rowValues;
+            if (asBytes)
+                std::transform(from, from + std::ptrdiff_t(rowValues),
+                               t.bytes.begin() + std::ptrdiff_t(to),
+                               [](float v) { return std::uint8_t(v); });
+            else
+                std::copy_n(from, rowValues, t.data.begin() + std::ptrdiff_t(to));
         }
+    }
+    if (t.kind == MaterialTexture::UNorm8 && !asBytes)
+        for (float& v : t.data) v /= 255.0f;
     return t;
 }
 
@@ -305,7 +316,7 @@ void checkMaterialSize(const std::string& path) {
                            std::to_string(big.channels) + " channels");
 }
 
-FittedMaterial readMaterial(const std::string& path) {
+FittedMaterial readMaterial(const std::string& path, EightBitTextures eightBit) {
     checkMaterialSize(path);
     Imf::MultiPartInputFile file(path.c_str());
     const Imf::Header& header = file.header(0);
@@ -332,7 +343,7 @@ FittedMaterial readMaterial(const std::string& path) {
     material.views = readDirections(header, kViewsAttribute, path);
     material.lights = readDirections(header, kLightsAttribute, path);
     for (int part = 0; part < file.parts(); ++part)
-        material.textures.push_back(readTexture(file, part, path));
+        material.textures.push_back(readTexture(file, part, path, eightBit));
     return material;
 }
 
@@ -386,7 +397,7 @@ void saveFittedMaterial(const FittedMaterial& material, const std::string& path)
     });
 }
 
-FittedMaterial loadFittedMaterial(const std::string& path) {
+FittedMaterial loadFittedMaterial(const std::string& path, EightBitTextures eightBit) {
     std::error_code ec;
     if (!fs::exists(path, ec)) fail(path, "no such file");
     if (fs::is_directory(path, ec)) fail(path, "is a folder, not a fitted-material file");
@@ -398,7 +409,7 @@ FittedMaterial loadFittedMaterial(const std::string& path) {
             fail(path, "not an OpenEXR file (wrong magic number), so not a fitted-material file");
     }
     try {
-        return readMaterial(path);
+        return readMaterial(path, eightBit);
     } catch (const Error&) {
         throw;
     } catch (const std::exception& e) {

@@ -45,9 +45,10 @@ struct MaterialTexture {
     PixelKind kind = Float;
     std::vector<float> data;
     /** A UNorm8 texture may hold its values here instead, as the integers 0..255 (value = byte /
-     *  255.0f, what loadFittedMaterial gives in `data`): a quarter of the memory, for models of
-     *  gigabytes (PCA of a full-size UBO2014 file holds 1.2 GB instead of 4.6). At most one of
-     *  `data` and `bytes` is non-empty; saveFittedMaterial and the GPU upload take either. */
+     *  255.0f): a quarter of the memory, for models of gigabytes (PCA of a full-size UBO2014
+     *  file holds 1.2 GB instead of 4.6). At most one of `data` and `bytes` is non-empty;
+     *  saveFittedMaterial and the GPU upload take either; loadFittedMaterial fills `data` or,
+     *  with EightBitTextures::AsBytes, this. */
     std::vector<std::uint8_t> bytes = {};  // "= {}": aggregate initialisers may leave it out
 
     std::size_t valueCount() const {
@@ -58,6 +59,13 @@ struct MaterialTexture {
     std::size_t storedCount() const { return bytes.empty() ? data.size() : bytes.size(); }
     /** Value i, from `data` or `bytes`. */
     float value(std::size_t i) const { return bytes.empty() ? data[i] : float(bytes[i]) / 255.0f; }
+    /** Turns `bytes`, if any, into `data` (value = byte / 255.0f). */
+    void unpackBytes() {
+        if (bytes.empty()) return;
+        data.resize(bytes.size());
+        for (std::size_t i = 0; i < bytes.size(); ++i) data[i] = float(bytes[i]) / 255.0f;
+        std::vector<std::uint8_t>().swap(bytes);
+    }
 };
 
 /** Everything a compression method fitted for one material. */
@@ -86,11 +94,17 @@ struct FittedMaterial {
  *  not match width*height*depth*channels, and half textures with finite values beyond 65504. */
 void saveFittedMaterial(const FittedMaterial& material, const std::string& path);
 
+/** Where loadFittedMaterial puts a UNorm8 texture's values: in `data` as floats (byte / 255), or
+ *  in `bytes`, a quarter of the memory (what loadMaterial asks for: a method that takes the bytes
+ *  holds them without a copy). */
+enum class EightBitTextures { AsValues, AsBytes };
+
 /** Reads a file written by saveFittedMaterial. Float textures come back bit-exact, half ones as
- *  the half values. Throws Error "PATH: problem" for a missing, empty, corrupt or truncated file,
- *  a file that is not OpenEXR, "PATH: not an osgBTF fitted-material file (no osgBTF.method
- *  attribute)", an unsupported "osgBTF.version", or a part whose channels do not follow the
- *  layout above. */
-FittedMaterial loadFittedMaterial(const std::string& path);
+ *  the half values, 8-bit ones as `eightBit` says. Throws Error "PATH: problem" for a missing,
+ *  empty, corrupt or truncated file, a file that is not OpenEXR, "PATH: not an osgBTF
+ *  fitted-material file (no osgBTF.method attribute)", an unsupported "osgBTF.version", or a
+ *  part whose channels do not follow the layout above. */
+FittedMaterial loadFittedMaterial(const std::string& path,
+                                  EightBitTextures eightBit = EightBitTextures::AsValues);
 
 }  // namespace osgBTF

@@ -94,7 +94,7 @@ bool readFittedData(osgDB::InputStream& is, Material& material) {
     try {
         FittedMaterial fitted;
         if (!readFittedMaterial(is, fitted)) return false;
-        material.assignFrom(*materialFromFile(fitted));
+        material.assignFrom(*materialFromFile(std::move(fitted)));
     } catch (const std::exception& e) {
         OSGBTF_NOTIFY(osg::WARN, "osgBTF::" << material.className() << ": " << e.what());
     }

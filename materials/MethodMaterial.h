@@ -9,6 +9,7 @@
 #pragma once
 
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include <osg/CopyOp>
@@ -59,14 +60,23 @@ protected:
     ~MethodMaterial() override = default;
 };
 
+/** Whether M::fromFile takes 8-bit textures in MaterialTexture::bytes: M declares
+ *  `static constexpr bool kLoadsBytes = true;` (otherwise they come as values in `data`). */
+template <class M, class = void>
+struct LoadsBytes : std::false_type {};
+template <class M>
+struct LoadsBytes<M, std::void_t<decltype(M::kLoadsBytes)>> : std::bool_constant<M::kLoadsBytes> {};
+
 /** registerMethod for material class M: the registry name is M::kMethod, the loader
- *  M::fromFile(const FittedMaterial&), and createInstance makes an M, so that a method states
- *  its name and class once; `info` brings the rest. */
+ *  M::fromFile(FittedMaterial) (or const FittedMaterial&), and createInstance makes an M, so
+ *  that a method states its name and class once; `info` brings the rest. */
 template <class M>
 bool registerMethodClass(MethodInfo info) {
     info.name = M::kMethod;
-    info.load = [](const FittedMaterial& file) -> osg::ref_ptr<Material> {
-        return M::fromFile(file);
+    info.load = [](FittedMaterial&& file) -> osg::ref_ptr<Material> {
+        if constexpr (!LoadsBytes<M>::value)
+            for (MaterialTexture& texture : file.textures) texture.unpackBytes();
+        return M::fromFile(std::move(file));
     };
     info.createInstance = []() -> osg::Object* { return new M; };
     return registerMethod(std::move(info));

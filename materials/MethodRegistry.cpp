@@ -100,7 +100,7 @@ void saveMaterial(const Material& material, const std::string& path) {
     saveFittedMaterial(material.toFittedMaterial(), path);
 }
 
-osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file) {
+osg::ref_ptr<Material> materialFromFile(FittedMaterial file) {
     const auto it = registry().find(file.method);
     if (it == registry().end())
         fail(
@@ -109,11 +109,12 @@ osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file) {
                 for (const auto& n : methodNames()) known += (known.empty() ? "" : ", ") + n;
                 return known;
             }() + ")");
-    return it->second.load(file);
+    return it->second.load(std::move(file));
 }
 
 osg::ref_ptr<Material> loadMaterial(const std::string& path) {
-    osg::ref_ptr<Material> material = materialFromFile(loadFittedMaterial(path));
+    osg::ref_ptr<Material> material =
+        materialFromFile(loadFittedMaterial(path, EightBitTextures::AsBytes));
     material->sourceFile = path;
     return material;
 }

@@ -50,7 +50,11 @@ struct MethodInfo {
      *  registerFitter when it is loaded; without it, fit throws Error "method 'X': fitting
      *  needs libosgBTFFit ...". */
     std::function<osg::ref_ptr<Material>(const BtfSource&, const FitOptions&)> fit;
-    std::function<osg::ref_ptr<Material>(const FittedMaterial&)> load;
+    /** Makes the method's material from its file, and may take the file's textures (no copy:
+     *  loading a material of gigabytes holds it once). 8-bit textures may come in `bytes`
+     *  (loadMaterial asks for them so); registerMethodClass unpacks them for methods that do not
+     *  declare kLoadsBytes. */
+    std::function<osg::ref_ptr<Material>(FittedMaterial&&)> load;
     /** A new empty material of the method's class (e.g. `[]() -> osg::Object* { return new
      *  LafMaterial; }`): registerMethod adds an osgDB object wrapper for that class, named by its
      *  libraryName()::className(), so .osgt/.osgb read and write the material (property
@@ -117,7 +121,8 @@ std::vector<std::string> methodNamesInOrder();
 void saveMaterial(const Material& material, const std::string& path);
 /** Loads any registered method's file; throws Error naming the file and the problem. */
 osg::ref_ptr<Material> loadMaterial(const std::string& path);
-osg::ref_ptr<Material> materialFromFile(const FittedMaterial& file);
+/** Any registered method's material from its file, which the method may take apart. */
+osg::ref_ptr<Material> materialFromFile(FittedMaterial file);
 
 /** The method's shared program: common/btf.vert + <method>.frag (materials/<method>/, or the
  *  method's MethodInfo::fragmentShader), the tangent bound to shader::kTangentAttribute. Compiled

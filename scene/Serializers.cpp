@@ -56,7 +56,7 @@ bool readEmbeddedMaterial(osgDB::InputStream& is, osgBTF::MaterialNode& node) {
     try {
         osgBTF::FittedMaterial fitted;
         if (!osgBTF::readFittedMaterial(is, fitted)) return false;
-        node.setMaterial(osgBTF::materialFromFile(fitted).get());
+        node.setMaterial(osgBTF::materialFromFile(std::move(fitted)).get());
     } catch (const std::exception& e) {
         OSGBTF_NOTIFY(osg::WARN, "osgBTF::MaterialNode: "
                                      << e.what()

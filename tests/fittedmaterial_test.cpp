@@ -232,6 +232,10 @@ TEST(FittedMaterial, EightBitTextureHeldAsBytesIsWrittenAsItsIntegers) {
         EXPECT_EQ(q.data[i], float(t.bytes[i]) / 255.0f) << i;
         EXPECT_EQ(q.value(i), t.value(i)) << i;
     }
+    // As loadMaterial reads it: the integers themselves, a quarter of the memory.
+    const FittedMaterial asBytes = loadFittedMaterial(path, EightBitTextures::AsBytes);
+    EXPECT_EQ(asBytes.texture("q").bytes, t.bytes);
+    EXPECT_TRUE(asBytes.texture("q").data.empty());
 
     const std::string bad = dir.file("bad.exr");
     m.textures[0].data.assign(t.valueCount(), 0.0f);

@@ -143,7 +143,7 @@ FittedMaterial PcaMaterial::releaseFittedMaterial() {
     return file;
 }
 
-osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<PcaMaterial> m = new PcaMaterial;
     m->readCommon(file);
     int components = 0;
@@ -176,15 +176,21 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(const FittedMaterial& file) {
             fail(file.source, "texture '" + t->name + "' holds " +
                                   std::to_string(t->storedCount()) + " values, " +
                                   std::to_string(t->valueCount()) + " expected");
-    if (eigen.kind == MaterialTexture::UNorm8) {
-        // Held as bytes like a fit's (the loader gives k / 255.0f: exact).
+    // The file is this function's own: its arrays are taken, not copied.
+    const auto own = [&](const MaterialTexture& t) -> MaterialTexture& {
+        return file.textures[std::size_t(&t - file.textures.data())];
+    };
+    if (eigen.kind == MaterialTexture::UNorm8 && eigen.bytes.empty()) {
+        // Held as bytes like a fit's (values k / 255.0f: exact).
         m->eigenTextures.bytes.resize(eigen.valueCount());
         for (std::size_t i = 0; i < eigen.valueCount(); ++i)
             m->eigenTextures.bytes[i] = std::uint8_t(std::lround(eigen.value(i) * 255.0f));
+    } else if (eigen.kind == MaterialTexture::UNorm8) {
+        m->eigenTextures.bytes = std::move(own(eigen).bytes);
     } else {
-        m->eigenTextures.data = eigen.data;
+        m->eigenTextures.data = std::move(own(eigen).data);
     }
-    m->weights.data = w.data;
+    m->weights.data = std::move(own(w).data);
     m->prepareLookups();
     return m;
 }

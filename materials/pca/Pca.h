@@ -63,7 +63,10 @@ public:
          * texels), an unknown storage, or a texel size whose tiled Eigen-Textures exceed 16384
          * texels. */
         static osg::ref_ptr<PcaMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<PcaMaterial> fromFile(const FittedMaterial& file);
+    /** Takes the file's textures (8-bit Eigen-Textures as bytes, kLoadsBytes): loading holds
+     *  them once. */
+    static osg::ref_ptr<PcaMaterial> fromFile(FittedMaterial file);
+    static constexpr bool kLoadsBytes = true;
 
     /** Sets size, directions, component count and storage and sizes the two textures' dimensions
      *  WITHOUT allocating their data (memory() only needs the shape; fit() allocates). */
