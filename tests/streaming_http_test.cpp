@@ -609,13 +609,16 @@ TEST_F(StreamingHttp, AServerThatComesBackIsUsedAgain) {
     ScopedNotifyCapture capture;
     streamer->open(url());
     const TileVotes votes = finestVotes(*streamer);
-    server.stop();  // before anything but the index arrived
+    // open() has already requested U packet 0 and the level-0 tiles: they may arrive before the
+    // server goes down (a race the fetcher threads win now and then on a busy machine); every
+    // other file is requested while it is down.
+    server.stop();
     const auto start = Clock::now();
     while (secondsSince(start) < 0.4) {
         streamer->update(votes);
         std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
-    EXPECT_EQ(streamer->stats().uPacketsReceived, 0);
+    EXPECT_LE(streamer->stats().uPacketsReceived, 1);
     ASSERT_EQ(server.restart(), "");
     int updates = 0;
     ASSERT_NO_THROW(updates = driveUntilSettled(*streamer, votes, kSettleDeadlineSeconds));
