@@ -28,6 +28,28 @@ inline double peakResidentMiB() {
     return peakResidentGiB() * 1024.0;
 }
 
+/** Starts the peak of resident memory again from the present (Linux: "5" to
+ *  /proc/self/clear_refs); peakResidentSinceResetMiB() reads it. False where unsupported. */
+inline bool resetPeakResident() {
+    std::FILE* f = std::fopen("/proc/self/clear_refs", "w");
+    if (!f) return false;
+    const bool written = std::fputs("5", f) >= 0;
+    return std::fclose(f) == 0 && written;
+}
+
+/** Peak resident memory since the last resetPeakResident() (or the start), in MiB (VmHWM of
+ *  /proc/self/status; 0 where unreadable). */
+inline double peakResidentSinceResetMiB() {
+    double kib = 0;
+    if (std::FILE* f = std::fopen("/proc/self/status", "r")) {
+        char line[256];
+        while (std::fgets(line, sizeof line, f))
+            if (std::sscanf(line, "VmHWM: %lf kB", &kib) == 1) break;
+        std::fclose(f);
+    }
+    return kib / 1024.0;
+}
+
 /** Resident memory of this process now, in MiB (/proc/self/statm; 0 where unreadable). */
 inline double residentMiB() {
     long pages = 0, resident = 0;

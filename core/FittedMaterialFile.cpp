@@ -93,10 +93,14 @@ void validate(const FittedMaterial& material, const std::string& path) {
         if (t.storedCount() != t.valueCount())
             fail(path, what + " has " + std::to_string(t.storedCount()) + " values, " +
                            std::to_string(t.valueCount()) + " expected");
-        if (!t.bytes.empty() && !t.data.empty())
-            fail(path, what + " holds both float values and bytes");
+        if (int(!t.bytes.empty()) + int(!t.halves.empty()) + int(!t.data.empty()) > 1)
+            fail(path, what +
+                           " holds its values twice (in more than one of floats, bytes and "
+                           "halves)");
         if (!t.bytes.empty() && t.kind != MaterialTexture::UNorm8)
             fail(path, what + " holds bytes but is not stored as 8-bit");
+        if (!t.halves.empty() && t.kind != MaterialTexture::Half)
+            fail(path, what + " holds halves but is not stored as half");
         if (t.kind == MaterialTexture::UNorm8) {
             const auto bad = std::find_if(t.data.begin(), t.data.end(), [](float v) {
                 return !(v >= 0.0f && v <= 1.0f) ||
@@ -170,6 +174,11 @@ void writeTexture(Imf::MultiPartOutputFile& file, int part, const MaterialTextur
                     halves[at + i] = Imath::half(float(t.bytes[row + i]));
                 continue;
             }
+            if (!t.halves.empty()) {
+                std::copy_n(t.halves.begin() + std::ptrdiff_t(row), rowValues,
+                            halves.begin() + std::ptrdiff_t(at));
+                continue;
+            }
             const float* source = t.data.data() + row;
             if (!half)
                 std::copy_n(source, rowValues, floats.data() + at);
@@ -193,7 +202,7 @@ void writeTexture(Imf::MultiPartOutputFile& file, int part, const MaterialTextur
 }
 
 MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::string& path,
-                            EightBitTextures eightBit) {
+                            CompactTextures compact) {
     const Imf::Header& header = file.header(part);
     if (!header.hasName()) fail(path, "part " + std::to_string(part) + " has no name");
     MaterialTexture t;
@@ -244,14 +253,23 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
                 path + ": " + what);
     // Slice by slice through a buffer of one slice, so that the texture is held once while it
     // is read (a whole-texture buffer doubled the peak: 8x the bytes of an 8-bit texture).
-    const bool asBytes = t.kind == MaterialTexture::UNorm8 && eightBit == EightBitTextures::AsBytes;
+    // Halves kept as halves are read as halves (exact); everything else as floats.
+    const bool asBytes = t.kind == MaterialTexture::UNorm8 && compact.bytes;
+    const bool asHalves = t.kind == MaterialTexture::Half && compact.halves;
     if (asBytes)
         t.bytes.resize(t.valueCount());
+    else if (asHalves)
+        t.halves.resize(t.valueCount());
     else
         t.data.resize(t.valueCount());
     const std::size_t rowValues = std::size_t(t.width) * std::size_t(t.channels);
-    std::vector<float> sliceRows(rowValues * std::size_t(t.height));
-    const std::size_t xStride = sizeof(float) * std::size_t(t.channels);
+    std::vector<float> sliceRows(asHalves ? 0 : rowValues * std::size_t(t.height));
+    std::vector<Imath::half> sliceHalves(asHalves ? rowValues * std::size_t(t.height) : 0);
+    const Imf::PixelType readType = asHalves ? Imf::HALF : Imf::FLOAT;
+    const std::size_t xStride =
+        (asHalves ? sizeof(Imath::half) : sizeof(float)) * std::size_t(t.channels);
+    char* const sliceBase = asHalves ? (char*)sliceHalves.data() : (char*)sliceRows.data();
+    const std::size_t valueSize = asHalves ? sizeof(Imath::half) : sizeof(float);
     Imf::InputPart input(file, part);
     for (int z = 0; z < t.depth; ++z) {
         const int first = dw.min.y + z * t.height;  // the file's rows of slice z
@@ -259,9 +277,9 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
                                   Imath::V2i(dw.max.x, first + t.height - 1));
         Imf::FrameBuffer frameBuffer;
         for (std::size_t c = 0; c < expected.size(); ++c)
-            frameBuffer.insert(expected[c],
-                               Imf::Slice::Make(Imf::FLOAT, sliceRows.data() + c, window, xStride,
-                                                xStride * std::size_t(t.width)));
+            frameBuffer.insert(
+                expected[c], Imf::Slice::Make(readType, sliceBase + c * valueSize, window, xStride,
+                                              xStride * std::size_t(t.width)));
         input.setFrameBuffer(frameBuffer);
         input.readPixels(window.min.y, window.max.y);
         const std::size_t firstRow = std::size_t(z) * std::size_t(t.height);
@@ -270,9 +288,14 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
                 if (!(v >= 0.0f && v <= 255.0f) || v != std::round(v))
                     fail(path, what + " is 8-bit but holds " + std::to_string(v));
         for (int y = 0; y < t.height; ++y) {
-            const auto from =
-                sliceRows.begin() + std::ptrdiff_t((fileRow(t, z, y) - firstRow) * rowValues);
+            const std::size_t fromRow = (fileRow(t, z, y) - firstRow) * rowValues;
             const std::size_t to = (firstRow + std::size_t(y)) * rowValues;
+            if (asHalves) {
+                std::copy_n(sliceHalves.begin() + std::ptrdiff_t(fromRow), rowValues,
+                            t.halves.begin() + std::ptrdiff_t(to));
+                continue;
+            }
+            const auto from = sliceRows.begin() + std::ptrdiff_t(fromRow);
             if (asBytes)
                 std::transform(from, from + std::ptrdiff_t(rowValues),
                                t.bytes.begin() + std::ptrdiff_t(to),
@@ -316,7 +339,9 @@ void checkMaterialSize(const std::string& path) {
                            std::to_string(big.channels) + " channels");
 }
 
-FittedMaterial readMaterial(const std::string& path, EightBitTextures eightBit) {
+FittedMaterial readMaterial(
+    const std::string& path,
+    const std::function<CompactTextures(const std::string& method)>& compactFor) {
     checkMaterialSize(path);
     Imf::MultiPartInputFile file(path.c_str());
     const Imf::Header& header = file.header(0);
@@ -342,8 +367,9 @@ FittedMaterial readMaterial(const std::string& path, EightBitTextures eightBit) 
     }
     material.views = readDirections(header, kViewsAttribute, path);
     material.lights = readDirections(header, kLightsAttribute, path);
+    const CompactTextures compact = compactFor(material.method);
     for (int part = 0; part < file.parts(); ++part)
-        material.textures.push_back(readTexture(file, part, path, eightBit));
+        material.textures.push_back(readTexture(file, part, path, compact));
     return material;
 }
 
@@ -397,7 +423,13 @@ void saveFittedMaterial(const FittedMaterial& material, const std::string& path)
     });
 }
 
-FittedMaterial loadFittedMaterial(const std::string& path, EightBitTextures eightBit) {
+FittedMaterial loadFittedMaterial(const std::string& path, CompactTextures compact) {
+    return loadFittedMaterial(path, [compact](const std::string&) { return compact; });
+}
+
+FittedMaterial loadFittedMaterial(
+    const std::string& path,
+    const std::function<CompactTextures(const std::string& method)>& compactFor) {
     std::error_code ec;
     if (!fs::exists(path, ec)) fail(path, "no such file");
     if (fs::is_directory(path, ec)) fail(path, "is a folder, not a fitted-material file");
@@ -409,7 +441,7 @@ FittedMaterial loadFittedMaterial(const std::string& path, EightBitTextures eigh
             fail(path, "not an OpenEXR file (wrong magic number), so not a fitted-material file");
     }
     try {
-        return readMaterial(path, eightBit);
+        return readMaterial(path, compactFor);
     } catch (const Error&) {
         throw;
     } catch (const std::exception& e) {

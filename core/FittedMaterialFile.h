@@ -14,9 +14,12 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
+
+#include <Imath/half.h>
 
 #include "core/Directions.h"
 
@@ -46,25 +49,35 @@ struct MaterialTexture {
     std::vector<float> data;
     /** A UNorm8 texture may hold its values here instead, as the integers 0..255 (value = byte /
      *  255.0f): a quarter of the memory, for models of gigabytes (PCA of a full-size UBO2014
-     *  file holds 1.2 GB instead of 4.6). At most one of `data` and `bytes` is non-empty;
-     *  saveFittedMaterial and the GPU upload take either; loadFittedMaterial fills `data` or,
-     *  with EightBitTextures::AsBytes, this. */
+     *  file holds 1.2 GB instead of 4.6). */
     std::vector<std::uint8_t> bytes = {};  // "= {}": aggregate initialisers may leave it out
+    /** A Half texture may hold its values here instead, as they are stored: half the memory
+     *  (fmf keeps a full-size UBO2014 file's Eigen-Textures this way, 92 MiB instead of 183).
+     *  At most one of `data`, `bytes` and `halves` is non-empty; saveFittedMaterial and the GPU
+     *  upload take any; loadFittedMaterial fills `data` or, as CompactTextures says, these. */
+    std::vector<Imath::half> halves = {};
 
     std::size_t valueCount() const {
         return std::size_t(width) * std::size_t(height) * std::size_t(depth) *
                std::size_t(channels);
     }
-    /** Values held, in `data` or in `bytes`. */
-    std::size_t storedCount() const { return bytes.empty() ? data.size() : bytes.size(); }
-    /** Value i, from `data` or `bytes`. */
-    float value(std::size_t i) const { return bytes.empty() ? data[i] : float(bytes[i]) / 255.0f; }
-    /** Turns `bytes`, if any, into `data` (value = byte / 255.0f). */
-    void unpackBytes() {
-        if (bytes.empty()) return;
-        data.resize(bytes.size());
-        for (std::size_t i = 0; i < bytes.size(); ++i) data[i] = float(bytes[i]) / 255.0f;
+    /** Values held, in `data`, `bytes` or `halves`. */
+    std::size_t storedCount() const {
+        return !bytes.empty() ? bytes.size() : !halves.empty() ? halves.size() : data.size();
+    }
+    /** Value i, from `data`, `bytes` or `halves`. */
+    float value(std::size_t i) const {
+        return !bytes.empty()    ? float(bytes[i]) / 255.0f
+               : !halves.empty() ? float(halves[i])
+                                 : data[i];
+    }
+    /** Turns `bytes` or `halves`, if any, into `data`. */
+    void unpack() {
+        if (bytes.empty() && halves.empty()) return;
+        data.resize(storedCount());
+        for (std::size_t i = 0; i < data.size(); ++i) data[i] = value(i);
         std::vector<std::uint8_t>().swap(bytes);
+        std::vector<Imath::half>().swap(halves);
     }
 };
 
@@ -94,17 +107,24 @@ struct FittedMaterial {
  *  not match width*height*depth*channels, and half textures with finite values beyond 65504. */
 void saveFittedMaterial(const FittedMaterial& material, const std::string& path);
 
-/** Where loadFittedMaterial puts a UNorm8 texture's values: in `data` as floats (byte / 255), or
- *  in `bytes`, a quarter of the memory (what loadMaterial asks for: a method that takes the bytes
- *  holds them without a copy). */
-enum class EightBitTextures { AsValues, AsBytes };
+/** Which textures loadFittedMaterial hands over as stored rather than as floats in `data`: a
+ *  method that keeps them so takes them without a copy (loadMaterial asks for what the file's
+ *  method takes, MethodInfo::compactTextures). */
+struct CompactTextures {
+    bool bytes = false;   ///< 8-bit textures in `bytes`: a quarter of the floats' memory
+    bool halves = false;  ///< half textures in `halves`: half of it
+};
 
 /** Reads a file written by saveFittedMaterial. Float textures come back bit-exact, half ones as
- *  the half values, 8-bit ones as `eightBit` says. Throws Error "PATH: problem" for a missing,
- *  empty, corrupt or truncated file, a file that is not OpenEXR, "PATH: not an osgBTF
- *  fitted-material file (no osgBTF.method attribute)", an unsupported "osgBTF.version", or a
- *  part whose channels do not follow the layout above. */
-FittedMaterial loadFittedMaterial(const std::string& path,
-                                  EightBitTextures eightBit = EightBitTextures::AsValues);
+ *  the half values, 8-bit ones as the byte / 255 values; in `data` unless `compact` says
+ *  otherwise. Throws Error "PATH: problem" for a missing, empty, corrupt or truncated file, a
+ *  file that is not OpenEXR, "PATH: not an osgBTF fitted-material file (no osgBTF.method
+ *  attribute)", an unsupported "osgBTF.version", or a part whose channels do not follow the
+ *  layout above. */
+FittedMaterial loadFittedMaterial(const std::string& path, CompactTextures compact = {});
+/** The same, with the forms chosen for the file's method (read before any texture). */
+FittedMaterial loadFittedMaterial(
+    const std::string& path,
+    const std::function<CompactTextures(const std::string& method)>& compactFor);
 
 }  // namespace osgBTF

@@ -192,10 +192,12 @@ bool writeFittedMaterial(osgDB::OutputStream& os, const FittedMaterial& fitted) 
         os.writeWrappedString(texture.name);
         os << texture.width << texture.height << texture.depth << texture.channels
            << int(texture.kind);
-        std::vector<float> fromBytes;  // 8-bit textures held as bytes are written as values
-        for (std::size_t i = 0; i < texture.bytes.size(); ++i)
-            fromBytes.push_back(texture.value(i));
-        os.writeWrappedString(toHex(texture.bytes.empty() ? texture.data : fromBytes));
+        // Textures held as bytes or halves are written as their values.
+        std::vector<float> values;
+        if (texture.data.empty())
+            for (std::size_t i = 0; i < texture.storedCount(); ++i)
+                values.push_back(texture.value(i));
+        os.writeWrappedString(toHex(texture.data.empty() ? values : texture.data));
         os << std::endl;
     }
     os << os.END_BRACKET << std::endl;

@@ -57,6 +57,10 @@ osg::ref_ptr<osg::Image> sliceImage(const MaterialTexture& t, int z, int depthFo
         std::copy_n(t.bytes.data() + first, count, image->data());
         return image;
     }
+    if (!t.halves.empty()) {
+        std::copy_n(t.halves.data() + first, count, reinterpret_cast<float*>(image->data()));
+        return image;
+    }
     const float* src = t.data.data() + first;
     if (bytes) {
         unsigned char* dst = image->data();

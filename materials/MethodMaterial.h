@@ -66,6 +66,12 @@ template <class M, class = void>
 struct LoadsBytes : std::false_type {};
 template <class M>
 struct LoadsBytes<M, std::void_t<decltype(M::kLoadsBytes)>> : std::bool_constant<M::kLoadsBytes> {};
+/** The same for half textures in MaterialTexture::halves (`kLoadsHalves`). */
+template <class M, class = void>
+struct LoadsHalves : std::false_type {};
+template <class M>
+struct LoadsHalves<M, std::void_t<decltype(M::kLoadsHalves)>>
+    : std::bool_constant<M::kLoadsHalves> {};
 
 /** registerMethod for material class M: the registry name is M::kMethod, the loader
  *  M::fromFile(FittedMaterial) (or const FittedMaterial&), and createInstance makes an M, so
@@ -73,9 +79,12 @@ struct LoadsBytes<M, std::void_t<decltype(M::kLoadsBytes)>> : std::bool_constant
 template <class M>
 bool registerMethodClass(MethodInfo info) {
     info.name = M::kMethod;
+    info.compactTextures = {LoadsBytes<M>::value, LoadsHalves<M>::value};
     info.load = [](FittedMaterial&& file) -> osg::ref_ptr<Material> {
-        if constexpr (!LoadsBytes<M>::value)
-            for (MaterialTexture& texture : file.textures) texture.unpackBytes();
+        for (MaterialTexture& texture : file.textures)
+            if ((!LoadsBytes<M>::value && !texture.bytes.empty()) ||
+                (!LoadsHalves<M>::value && !texture.halves.empty()))
+                texture.unpack();
         return M::fromFile(std::move(file));
     };
     info.createInstance = []() -> osg::Object* { return new M; };

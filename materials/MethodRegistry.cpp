@@ -114,7 +114,10 @@ osg::ref_ptr<Material> materialFromFile(FittedMaterial file) {
 
 osg::ref_ptr<Material> loadMaterial(const std::string& path) {
     osg::ref_ptr<Material> material =
-        materialFromFile(loadFittedMaterial(path, EightBitTextures::AsBytes));
+        materialFromFile(loadFittedMaterial(path, [](const std::string& method) {
+            const auto it = registry().find(method);
+            return it == registry().end() ? CompactTextures{} : it->second.compactTextures;
+        }));
     material->sourceFile = path;
     return material;
 }

@@ -51,10 +51,12 @@ struct MethodInfo {
      *  needs libosgBTFFit ...". */
     std::function<osg::ref_ptr<Material>(const BtfSource&, const FitOptions&)> fit;
     /** Makes the method's material from its file, and may take the file's textures (no copy:
-     *  loading a material of gigabytes holds it once). 8-bit textures may come in `bytes`
-     *  (loadMaterial asks for them so); registerMethodClass unpacks them for methods that do not
-     *  declare kLoadsBytes. */
+     *  loading a material of gigabytes holds it once). Textures in `bytes` or `halves` are
+     *  unpacked to `data` first unless the method takes them so (registerMethodClass: the
+     *  method's kLoadsBytes and kLoadsHalves, which also set compactTextures). */
     std::function<osg::ref_ptr<Material>(FittedMaterial&&)> load;
+    /** The textures `load` takes as stored: what loadMaterial asks loadFittedMaterial for. */
+    CompactTextures compactTextures;
     /** A new empty material of the method's class (e.g. `[]() -> osg::Object* { return new
      *  LafMaterial; }`): registerMethod adds an osgDB object wrapper for that class, named by its
      *  libraryName()::className(), so .osgt/.osgb read and write the material (property

@@ -325,7 +325,7 @@ osg::ref_ptr<FmfMaterial> TileSetIndex::material(std::vector<float> u, std::vect
                              MaterialTexture::Half, std::move(u)});
     file.textures.push_back(
         {"sxv", layout.width(), layout.height(), groups, 4, MaterialTexture::Half, std::move(sxv)});
-    return FmfMaterial::fromFile(file);
+    return FmfMaterial::fromFile(std::move(file));
 }
 
 std::uint32_t tileSetCrc(const std::vector<std::uint8_t>& data) {

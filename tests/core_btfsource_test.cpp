@@ -189,7 +189,7 @@ protected:
             fit.set("components", "24");
             fit.set("storage", "float");
             osg::ref_ptr<FmfMaterial> m = FmfMaterial::fit(sample, fit);
-            FactoredBtf factored = m->factors();
+            FactoredBtf factored = m->completeFactors();
             factored.source = "sample-fmf24";
             return factored;
         }();

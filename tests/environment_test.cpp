@@ -317,7 +317,7 @@ TEST(Environment, FoldedFmfAndLpcaEqualTheProjectedSum) {
     const MeasuredBtf btf = makeSampleBtf(options);
     const osg::ref_ptr<FmfMaterial> fmf =
         FmfMaterial::fit(btf, FitOptions::parse("components=6 storage=float"));
-    FactoredBtf withCosine = fmf->factors();
+    FactoredBtf withCosine = fmf->completeFactors();
     withCosine.cosine = true;
     const osg::ref_ptr<FmfMaterial> fmfCosine =
         FmfMaterial::fromFactors(withCosine, MaterialTexture::Float);
@@ -343,7 +343,7 @@ TEST(Environment, FoldedFmfAndLpcaEqualTheProjectedSum) {
                             1e-4);
             }
     }
-    FactoredBtf logValues = fmf->factors();
+    FactoredBtf logValues = fmf->completeFactors();
     logValues.dynamicRangeReduction = 1;
     EXPECT_EQ(errorOf([&] {
                   foldEnvironment(*FmfMaterial::fromFactors(logValues, MaterialTexture::Float),

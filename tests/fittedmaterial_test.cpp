@@ -233,14 +233,16 @@ TEST(FittedMaterial, EightBitTextureHeldAsBytesIsWrittenAsItsIntegers) {
         EXPECT_EQ(q.value(i), t.value(i)) << i;
     }
     // As loadMaterial reads it: the integers themselves, a quarter of the memory.
-    const FittedMaterial asBytes = loadFittedMaterial(path, EightBitTextures::AsBytes);
+    const FittedMaterial asBytes = loadFittedMaterial(path, CompactTextures{true, false});
     EXPECT_EQ(asBytes.texture("q").bytes, t.bytes);
     EXPECT_TRUE(asBytes.texture("q").data.empty());
 
     const std::string bad = dir.file("bad.exr");
     m.textures[0].data.assign(t.valueCount(), 0.0f);
     EXPECT_EQ(errorOf([&] { saveFittedMaterial(m, bad); }),
-              bad + ": texture 'q' holds both float values and bytes");
+              bad +
+                  ": texture 'q' holds its values twice (in more than one of floats, bytes and "
+                  "halves)");
     m.textures[0] = t;
     m.textures[0].kind = MaterialTexture::Half;
     EXPECT_EQ(errorOf([&] { saveFittedMaterial(m, bad); }),
@@ -249,6 +251,53 @@ TEST(FittedMaterial, EightBitTextureHeldAsBytesIsWrittenAsItsIntegers) {
     m.textures[0].bytes.pop_back();
     EXPECT_EQ(errorOf([&] { saveFittedMaterial(m, bad); }),
               bad + ": texture 'q' has 11 values, 12 expected");
+    EXPECT_FALSE(fs::exists(bad));
+}
+
+TEST(FittedMaterial, HalfTextureHeldAsHalvesIsWrittenAndReadAsItsHalves) {
+    TempDir dir;
+    FittedMaterial m;
+    m.method = "test";
+    MaterialTexture t = twoSlicesOfTwoByThree("h", MaterialTexture::Half);
+    // value = 1000 * slice + row + column / 3 rounded to half, rows counted from the bottom: the
+    // thirds are not exact in half, so a float path would show.
+    for (int z = 0; z < 2; ++z)
+        for (int y = 0; y < 3; ++y)
+            for (int x = 0; x < 2; ++x)
+                t.halves.push_back(Imath::half(1000.0f * float(z) + float(y) + float(x) / 3.0f));
+    m.textures.push_back(t);
+    const std::string path = dir.file("h.exr");
+    saveFittedMaterial(m, path);
+    // The file as any EXR reader sees it: slices one below the other, each upright.
+    const FloatImage file = readFloatImage(path);
+    ASSERT_EQ(file.height, 6);
+    for (int row = 0; row < 6; ++row)
+        EXPECT_EQ(file.at(1, row, 0),
+                  float(Imath::half(1000.0f * float(row / 3) + float(2 - row % 3) + 1.0f / 3.0f)))
+            << row;
+    // As floats by default, as the same halves when asked (what loadMaterial asks for fmf).
+    const FittedMaterial asFloats = loadFittedMaterial(path);
+    const FittedMaterial asHalves = loadFittedMaterial(path, CompactTextures{false, true});
+    EXPECT_TRUE(asFloats.texture("h").halves.empty());
+    EXPECT_TRUE(asHalves.texture("h").data.empty());
+    ASSERT_EQ(asHalves.texture("h").halves.size(), t.halves.size());
+    for (std::size_t i = 0; i < t.halves.size(); ++i) {
+        EXPECT_EQ(asHalves.texture("h").halves[i].bits(), t.halves[i].bits()) << i;
+        EXPECT_EQ(asFloats.texture("h").data[i], float(t.halves[i])) << i;
+    }
+    // A method's choice by name: only the file's method is asked for.
+    std::vector<std::string> asked;
+    const FittedMaterial chosen = loadFittedMaterial(path, [&](const std::string& method) {
+        asked.push_back(method);
+        return CompactTextures{false, true};
+    });
+    EXPECT_EQ(asked, std::vector<std::string>{"test"});
+    EXPECT_EQ(chosen.texture("h").halves.size(), t.halves.size());
+
+    const std::string bad = dir.file("bad.exr");
+    m.textures[0].kind = MaterialTexture::Float;
+    EXPECT_EQ(errorOf([&] { saveFittedMaterial(m, bad); }),
+              bad + ": texture 'h' holds halves but is not stored as half");
     EXPECT_FALSE(fs::exists(bad));
 }
 

@@ -108,7 +108,7 @@ TEST(Fmf, FitErrorIsTheOptimalRankCError) {
         // The factors follow the file convention: S = singular values, folded into SxV.
         for (int k = 0; k < c; ++k)
             EXPECT_NEAR(m->factors().factors[0].S(k), s(k), 1e-4 * s(0)) << k;
-        EXPECT_NEAR(m->factors().factors[0].SxV.col(0).norm(), s(0), 1e-4 * s(0));
+        EXPECT_NEAR(m->completeFactors().factors[0].SxV.col(0).norm(), s(0), 1e-4 * s(0));
     }
 }
 
@@ -176,10 +176,8 @@ TEST(Fmf, RendersEveryFactorVariantAsStoredAtMeasuredDirections) {
         for (auto storage : {MaterialTexture::Float, MaterialTexture::Half}) {
             osg::ref_ptr<FmfMaterial> m = FmfMaterial::fromFactors(f, storage);
             const FactoredBtf stored = m->completeFactors();
-            // Half storage keeps SxV as halves only: no float copy stays in the factors.
-            for (const BtfFactor& kept : m->factors().factors)
-                EXPECT_EQ(kept.SxV.size(),
-                          storage == MaterialTexture::Half ? 0 : 20 * kept.U.cols());
+            // SxV is kept once, as the GPU texture: no copy stays in the factors.
+            for (const BtfFactor& kept : m->factors().factors) EXPECT_EQ(kept.SxV.size(), 0);
             EXPECT_EQ(m->width(), 5);
             EXPECT_EQ(m->height(), 4);
             EXPECT_EQ(stored.components(2),
@@ -325,6 +323,40 @@ TEST(Fmf, SaveLoadRoundTripIsExact) {
         static_cast<FmfMaterial*>(materials[1]->clone(osg::CopyOp::SHALLOW_COPY));
     EXPECT_EQ(cloned->completeFactors().factors[0].SxV,
               materials[1]->completeFactors().factors[0].SxV);
+}
+
+TEST(Fmf, LoadingTakesTheFilesSxvTextureWithThePaddingZeroed) {
+    // What loadMaterial hands over: the sxv texture as halves, moved into the material (its
+    // padding beyond rank 3 is garbage here, which must not reach the renders).
+    FittedMaterial file =
+        FmfMaterial::fit(smallSample(4, 3), FitOptions::parse("components=3"))->toFittedMaterial();
+    for (MaterialTexture& t : file.textures)
+        if (t.kind == MaterialTexture::Half) {
+            t.halves.assign(t.data.begin(), t.data.end());
+            t.data.clear();
+        }
+    MaterialTexture* sxv = nullptr;
+    for (MaterialTexture& t : file.textures)
+        if (t.name == "sxv") sxv = &t;
+    ASSERT_NE(sxv, nullptr);
+    ASSERT_EQ(sxv->depth, 1);  // rank 3: one layer, component 3 is padding
+    const Imath::half* before = sxv->halves.data();
+    for (std::size_t texel = 0; texel < 12; ++texel) sxv->halves[texel * 4 + 3] = 7.0f;
+    const FittedMaterial copy = file;
+    osg::ref_ptr<FmfMaterial> m = FmfMaterial::fromFile(std::move(file));
+    const MaterialTexture kept = m->sxvTexture();
+    ASSERT_EQ(kept.data.size(), copy.texture("sxv").halves.size());
+    for (std::size_t i = 0; i < kept.data.size(); ++i)
+        EXPECT_EQ(kept.data[i], i % 4 == 3 ? 0.0f : float(copy.texture("sxv").halves[i])) << i;
+    // Held, not copied: the material's texture is the file's array.
+    EXPECT_EQ(m->sxv().halves.data(), before);
+    EXPECT_TRUE(m->sxv().data.empty());
+    FittedMaterial infinite = copy;
+    for (MaterialTexture& t : infinite.textures)
+        if (t.name == "sxv") t.halves[5] = std::numeric_limits<Imath::half>::infinity();
+    infinite.source = "inf.btfmat";
+    EXPECT_EQ(test::errorOf([&] { FmfMaterial::fromFile(infinite); }),
+              "inf.btfmat: fmf: SxV value inf exceeds the half range (65504); use storage=float");
 }
 
 TEST(Fmf, FileWithMismatchedTexturesIsRefused) {

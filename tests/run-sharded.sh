@@ -56,7 +56,8 @@ run_shard() {
   local status=0
   OSGBTF_TEST_TBB_THREADS=1 GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$1 \
     timeout --kill-after=30 "$timeout_s" \
-    "$executable" --gtest_shuffle --gtest_random_seed="$seed" --gtest_brief=1 "${test_arguments[@]}" \
+    "$executable" --gtest_shuffle --gtest_random_seed="$seed" --gtest_brief=1 \
+    --gtest_output="xml:$logs/shard-$1.xml" "${test_arguments[@]}" \
     >"$logs/shard-$1.log" 2>&1 || status=$?
   echo "$status" >"$logs/shard-$1.status"
 }
@@ -92,4 +93,9 @@ for ((i = 0; i < shards; ++i)); do
   echo "---"
 done
 echo "$(basename "$executable"): $shards shards, $jobs at a time, seed $seed, $(($(date +%s) - start)) s; logs in $logs"
+# Where the time goes (GoogleTest's XML reports): the slowest tests, for whoever shortens CI.
+echo "slowest tests (s):"
+cat "$logs"/shard-*.xml 2>/dev/null | grep -o '<testcase name="[^"]*".* time="[^"]*".* classname="[^"]*"' |
+  sed -E 's/<testcase name="([^"]*)".* time="([^"]*)".* classname="([^"]*)"/\2 \3.\1/' |
+  sort -rn | head -n 12 | sed 's/^/  /' || true
 exit "$failed"

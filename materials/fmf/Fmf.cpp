@@ -61,49 +61,8 @@ void roundToHalf(FactorMatrix& m, const std::string& source, const char* name) {
     }
 }
 
-/** The values of `m` as halves (row-major, as m); throws when one does not fit. */
-std::vector<Imath::half> toHalves(const FactorMatrix& m, const std::string& source,
-                                  const char* name) {
-    std::vector<Imath::half> halves(std::size_t(m.size()));
-    const float* data = m.data();
-    // In parallel: a full-size UBO2014 file has 48 million values to convert.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, halves.size(), 1 << 16),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                          for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                              checkHalfRange(data[i], source, name);
-                              halves[i] = Imath::half(data[i]);
-                          }
-                      });
-    return halves;
-}
-
-/** Factor f's SxV row `row`: from the halves when the material keeps them, else from the
- *  factors' matrix. */
-template <typename Visit>
-void withSxvRow(const FactoredBtf& factors, const std::vector<std::vector<Imath::half>>* halves,
-                std::size_t f, std::size_t row, Visit visit) {
-    const std::size_t k = std::size_t(factors.factors[f].U.cols());
-    if (halves)
-        visit((*halves)[f].data() + row * k);
-    else
-        visit(factors.factors[f].SxV.data() + row * k);
-}
-
-}  // namespace
-
-int FmfMaterial::groups(int channel) const {
-    return groupsOf(_factors->components(channel));
-}
-
-int FmfMaterial::layerOffset(int channel) const {
-    if (_factors->model == FactorModel::Fmf) return 0;
-    int offset = 0;
-    for (int c = 0; c < channel; ++c) offset += groups(c);
-    return offset;
-}
-
-void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage) {
-    factors.validate();
+/** Throws Error "<source>: fmf: ..." for unorm8 storage or a layout beyond the GPU's limits. */
+void checkLayout(const FactoredBtf& factors, MaterialTexture::PixelKind storage) {
     const std::string& source = factors.source;
     if (storage == MaterialTexture::UNorm8)
         fail(source, "fmf: storage must be half or float, got unorm8");
@@ -125,19 +84,100 @@ void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind sto
                  " Eigen-Texture layers exceed the GPU's texture limits (" +
                  std::to_string(kMaxTextureSize) + " texels, " + std::to_string(kMaxArrayLayers) +
                  " array layers)");
-    std::shared_ptr<std::vector<std::vector<Imath::half>>> halves;
-    if (storage == MaterialTexture::Half) {
-        halves = std::make_shared<std::vector<std::vector<Imath::half>>>();
-        for (BtfFactor& f : factors.factors) {
-            roundToHalf(f.U, source, "U");
-            halves->push_back(toHalves(f.SxV, source, "SxV"));
-            f.SxV.resize(0, f.SxV.cols());  // frees the floats, factor by factor
-        }
+}
+
+/** Calls visit with a pointer to the first value of `t`: its halves, else its floats. */
+template <typename Visit>
+void withValues(const MaterialTexture& t, Visit visit) {
+    if (!t.halves.empty())
+        visit(t.halves.data());
+    else
+        visit(t.data.data());
+}
+
+/** The SxV texture's size (no data): width x height texels, a layer per group of 4 components
+ *  of each factor in turn, RGBA. */
+MaterialTexture sxvShapeOf(const FactoredBtf& factors, MaterialTexture::PixelKind storage) {
+    int layers = 0;
+    for (std::size_t f = 0; f < factors.factors.size(); ++f)
+        layers += groupsOf(factors.components(int(f)));
+    return {"sxv", factors.width, factors.height, layers, 4, storage, {}};
+}
+
+/** SxV of `factors` as the GPU texture (sxvShapeOf): texels bottom-up, zero beyond a factor's
+ *  rank; half storage rounds to half (throws when a value does not fit) and fills `halves`.
+ *  Frees each factor's SxV matrix once copied. */
+MaterialTexture moveSxvToTexture(FactoredBtf& factors, MaterialTexture::PixelKind storage) {
+    MaterialTexture t = sxvShapeOf(factors, storage);
+    const bool half = storage == MaterialTexture::Half;
+    if (half)
+        t.halves.assign(t.valueCount(), Imath::half(0.0f));
+    else
+        t.data.assign(t.valueCount(), 0.0f);
+    const std::size_t texels = factors.texelCount(), width = std::size_t(factors.width);
+    int firstLayer = 0;
+    for (BtfFactor& factor : factors.factors) {
+        const int k = int(factor.U.cols()), layers = groupsOf(k);
+        // In parallel over rows: a full-size UBO2014 file has 48 million values to convert.
+        tbb::parallel_for(
+            tbb::blocked_range<std::size_t>(0, std::size_t(layers) * std::size_t(factors.height)),
+            [&](const tbb::blocked_range<std::size_t>& range) {
+                for (std::size_t r = range.begin(); r != range.end(); ++r) {
+                    const int layer = int(r / std::size_t(factors.height));
+                    const int y = int(r % std::size_t(factors.height));
+                    const int first = layer * 4, count = std::min(4, k - first);
+                    const std::size_t out =
+                        ((std::size_t(firstLayer + layer) * texels) + std::size_t(y) * width) * 4;
+                    for (int x = 0; x < factors.width; ++x) {
+                        const float* row = factor.SxV.data() +
+                                           factors.factorRow(x, y) * std::size_t(k) +
+                                           std::size_t(first);
+                        for (int j = 0; j < count; ++j) {
+                            const std::size_t at = out + std::size_t(x) * 4 + std::size_t(j);
+                            if (half) {
+                                checkHalfRange(row[j], factors.source, "SxV");
+                                t.halves[at] = Imath::half(row[j]);
+                            } else {
+                                t.data[at] = row[j];
+                            }
+                        }
+                    }
+                }
+            });
+        factor.SxV.resize(0, k);  // frees the floats, factor by factor
+        firstLayer += layers;
     }
+    return t;
+}
+
+}  // namespace
+
+int FmfMaterial::groups(int channel) const {
+    return groupsOf(_factors->components(channel));
+}
+
+int FmfMaterial::layerOffset(int channel) const {
+    if (_factors->model == FactorModel::Fmf) return 0;
+    int offset = 0;
+    for (int c = 0; c < channel; ++c) offset += groups(c);
+    return offset;
+}
+
+void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage) {
+    factors.validate();
+    checkLayout(factors, storage);
+    const std::string& source = factors.source;
+    if (storage == MaterialTexture::Half)
+        for (BtfFactor& f : factors.factors) roundToHalf(f.U, source, "U");
+    MaterialTexture sxv = moveSxvToTexture(factors, storage);
+    adopt(std::move(factors), std::move(sxv));
+}
+
+void FmfMaterial::adopt(FactoredBtf factors, MaterialTexture sxv) {
     setGeometry(factors.width, factors.height, factors.views, factors.lights);
+    _storage = sxv.kind;
     _factors = std::make_shared<const FactoredBtf>(std::move(factors));
-    _sxvHalves = std::move(halves);
-    _storage = storage;
+    _sxv = std::make_shared<const MaterialTexture>(std::move(sxv));
     try {
         _viewLookup = DirectionLookup(_views);
         _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
@@ -149,19 +189,27 @@ void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind sto
 
 FactoredBtf FmfMaterial::completeFactors() const {
     FactoredBtf complete = *_factors;
-    if (_sxvHalves)
-        for (std::size_t f = 0; f < complete.factors.size(); ++f) {
-            FactorMatrix& sxv = complete.factors[f].SxV;
-            sxv.resize(Eigen::Index(complete.texelCount()), complete.factors[f].U.cols());
-            const std::vector<Imath::half>& halves = (*_sxvHalves)[f];
-            std::copy(halves.begin(), halves.end(), sxv.data());
-        }
+    for (std::size_t f = 0; f < complete.factors.size(); ++f) {
+        FactorMatrix& sxv = complete.factors[f].SxV;
+        sxv.resize(Eigen::Index(complete.texelCount()), complete.factors[f].U.cols());
+        for (Eigen::Index row = 0; row < sxv.rows(); ++row)
+            sxvRow(f, std::size_t(row), sxv.row(row).data());
+    }
     return complete;
 }
 
 void FmfMaterial::sxvRow(std::size_t factor, std::size_t row, float* out) const {
-    withSxvRow(*_factors, _sxvHalves.get(), factor, row, [&](const auto* values) {
-        std::copy_n(values, _factors->factors[factor].U.cols(), out);
+    // Row `row` counts from the top image row (FactoredBtf::factorRow), the texture from the
+    // bottom.
+    const std::size_t width = std::size_t(_width), texels = texelCount();
+    const std::size_t texel = (std::size_t(_height) - 1 - row / width) * width + row % width;
+    int layer = 0;
+    for (std::size_t f = 0; f < factor; ++f) layer += groupsOf(_factors->components(int(f)));
+    const int k = int(_factors->factors[factor].U.cols());
+    withValues(*_sxv, [&](const auto* values) {
+        for (int j = 0; j < k; ++j)
+            out[j] = float(
+                values[(std::size_t(layer + j / 4) * texels + texel) * 4 + std::size_t(j % 4)]);
     });
 }
 
@@ -193,18 +241,21 @@ int FmfMaterial::directionCombinations(const glm::vec3& view, const glm::vec3& l
     return count;
 }
 
-void FmfMaterial::factorSums(std::size_t row, const std::size_t* images, const float* weights,
+void FmfMaterial::factorSums(std::size_t texel, const std::size_t* images, const float* weights,
                              int count, float sums[3]) const {
     // As fmf.frag: per group of 4 components, the U rows blended over the combinations,
     // then one dot product with the texel's SxV (the same order of operations as the GPU).
     const bool fmf = _factors->model == FactorModel::Fmf;
+    const std::size_t texels = texelCount();
     for (int c = 0; c < 3; ++c) {
         const std::size_t factor = fmf ? 0 : std::size_t(c);
         const BtfFactor& f = _factors->factors[factor];
         const int k = int(f.U.cols());
-        withSxvRow(*_factors, _sxvHalves.get(), factor, row, [&](const auto* sxv) {
+        withValues(*_sxv, [&](const auto* values) {
             float sum = 0.0f;
             for (int g = 0; g < k; g += 4) {
+                const auto* group =
+                    values + (std::size_t(layerOffset(c) + g / 4) * texels + texel) * 4;
                 float blended[4] = {0, 0, 0, 0};
                 const int n = std::min(4, k - g);
                 for (int i = 0; i < count; ++i) {
@@ -212,7 +263,7 @@ void FmfMaterial::factorSums(std::size_t row, const std::size_t* images, const f
                     const float* u = f.U.data() + uRow * std::size_t(k) + std::size_t(g);
                     for (int j = 0; j < n; ++j) blended[j] += weights[i] * u[j];
                 }
-                for (int j = 0; j < n; ++j) sum += blended[j] * float(sxv[g + j]);
+                for (int j = 0; j < n; ++j) sum += blended[j] * float(group[j]);
             }
             sums[c] = sum;
         });
@@ -233,7 +284,7 @@ glm::vec3 FmfMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
     std::array<float, 9> weights;
     const int count = directionCombinations(view, light, images, weights);
     float sums[3];
-    factorSums(_factors->factorRow(x, y), images.data(), weights.data(), count, sums);
+    factorSums(sxvTexel(x, y), images.data(), weights.data(), count, sums);
     return glm::vec3(sums[0], sums[1], sums[2]);
 }
 
@@ -290,25 +341,12 @@ void writeULayer(const FactoredBtf& factors, int maxGroups, std::size_t view, fl
     }
 }
 
-/** SxV's layer `layer`: components 4g..4g+3 of one factor (the factors' groups one after the
- *  other) for every texel, rows bottom-up, zero beyond the factor's rank. */
-void writeSxvLayer(const FactoredBtf& factors, const std::vector<std::vector<Imath::half>>* halves,
-                   int layer, float* out) {
-    const std::size_t texels = factors.texelCount();
-    std::fill_n(out, texels * 4, 0.0f);
-    std::size_t f = 0;
-    while (layer >= groupsOf(factors.components(int(f))))
-        layer -= groupsOf(factors.components(int(f++)));
-    const std::size_t first = std::size_t(layer) * 4;
-    const std::size_t count =
-        std::min<std::size_t>(4, std::size_t(factors.components(int(f))) - first);
-    for (int y = 0; y < factors.height; ++y)
-        for (int x = 0; x < factors.width; ++x)
-            withSxvRow(factors, halves, f, factors.factorRow(x, y), [&](const auto* row) {
-                std::copy_n(
-                    row + first, count,
-                    out + (std::size_t(y) * std::size_t(factors.width) + std::size_t(x)) * 4);
-            });
+/** Layer `layer` of the SxV texture `sxv` as floats. */
+void copySxvLayer(const MaterialTexture& sxv, int layer, float* out) {
+    const std::size_t values = std::size_t(sxv.width) * std::size_t(sxv.height) * 4;
+    withValues(sxv, [&](const auto* from) {
+        std::copy_n(from + std::size_t(layer) * values, values, out);
+    });
 }
 
 }  // namespace
@@ -319,9 +357,7 @@ MaterialTexture FmfMaterial::uShape() const {
 }
 
 MaterialTexture FmfMaterial::sxvShape() const {
-    const bool fmf = _factors->model == FactorModel::Fmf;
-    const int layers = fmf ? groups(0) : groups(0) + groups(1) + groups(2);
-    return {"sxv", _width, _height, layers, 4, _storage, {}};
+    return sxvShapeOf(*_factors, _storage);
 }
 
 MaterialTexture FmfMaterial::uTexture() const {
@@ -338,7 +374,7 @@ MaterialTexture FmfMaterial::sxvTexture() const {
     t.data.resize(t.valueCount());
     const std::size_t layerValues = std::size_t(t.width) * std::size_t(t.height) * 4;
     for (int layer = 0; layer < t.depth; ++layer)
-        writeSxvLayer(*_factors, _sxvHalves.get(), layer, t.data.data() + layer * layerValues);
+        copySxvLayer(*_sxv, layer, t.data.data() + layer * layerValues);
     return t;
 }
 
@@ -396,7 +432,7 @@ FittedMaterial FmfMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<FmfMaterial> m = new FmfMaterial;
     m->readCommon(file);
     FactoredBtf factors;
@@ -465,42 +501,72 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(const FittedMaterial& file) {
     };
     check(u, maxGroups, int(nL * 3), int(nV));
     check(sxv, factors.width, factors.height, layers);
+    for (const MaterialTexture* t : {&u, &sxv})
+        if (t->storedCount() != t->valueCount())
+            fail(file.source, "texture '" + t->name + "' holds " +
+                                  std::to_string(t->storedCount()) + " values, " +
+                                  std::to_string(t->valueCount()) + " expected");
 
     factors.factors.resize(fmf ? 1 : 3);
     const FactorMatrix::Index images = FactorMatrix::Index(nV * nL);
-    int layer = 0;
     for (std::size_t f = 0; f < factors.factors.size(); ++f) {
         BtfFactor& factor = factors.factors[f];
         const int k = int(ks[f]);
         factor.U.resize(fmf ? images * 3 : images, k);
-        factor.SxV.resize(Eigen::Index(texels), k);
+        factor.SxV.resize(0, k);  // SxV stays in the texture
         factor.S = Eigen::VectorXf::Zero(k);
         for (Eigen::Index row = 0; row < factor.U.rows(); ++row) {
             const std::size_t image = fmf ? std::size_t(row) / 3 : std::size_t(row);
             const std::size_t c = fmf ? std::size_t(row) % 3 : f;
             const std::size_t y = (image % nL) * 3 + c, view = image / nL;
-            const float* src = u.data.data() + (view * nL * 3 + y) * std::size_t(maxGroups) * 4;
-            for (int j = 0; j < k; ++j) factor.U(row, j) = src[j];
+            const std::size_t first = (view * nL * 3 + y) * std::size_t(maxGroups) * 4;
+            for (int j = 0; j < k; ++j) factor.U(row, j) = u.value(first + std::size_t(j));
         }
-        for (int y = 0; y < factors.height; ++y)
-            for (int x = 0; x < factors.width; ++x) {
-                const Eigen::Index row = Eigen::Index(factors.factorRow(x, y));
-                const std::size_t texel = std::size_t(y) * std::size_t(factors.width) + x;
-                for (int j = 0; j < k; ++j)
-                    factor.SxV(row, j) =
-                        sxv.data[((std::size_t(layer + j / 4)) * texels + texel) * 4 +
-                                 std::size_t(j % 4)];
-            }
-        layer += groupsOf(k);
     }
     if (const MaterialTexture* s = file.findTexture("singularValues"))
         if (s->channels == 1 && s->height == int(factors.factors.size()))
             for (std::size_t f = 0; f < factors.factors.size(); ++f)
                 for (Eigen::Index j = 0; j < factors.factors[f].S.size() && j < s->width; ++j)
-                    factors.factors[f].S(j) = s->data[f * std::size_t(s->width) + std::size_t(j)];
+                    factors.factors[f].S(j) = s->value(f * std::size_t(s->width) + std::size_t(j));
+    if (!fmf) FactoredBtf::checkColorModel(file.source, factors.colorModel);
+    // The file is this function's own: the SxV texture is taken, not copied, with the values
+    // beyond each factor's rank set to zero as a fit writes them (the GPU multiplies them by U's
+    // zeros, but not an infinity). A half file holds nothing beyond half's range but infinity.
+    MaterialTexture& own = file.textures[std::size_t(&sxv - file.textures.data())];
+    if (own.kind == MaterialTexture::Half) {
+        for (BtfFactor& factor : factors.factors) roundToHalf(factor.U, file.source, "U");
+        if (own.halves.empty()) {  // a FittedMaterial made in memory, with float values
+            own.halves.resize(own.data.size());
+            for (std::size_t i = 0; i < own.data.size(); ++i) {
+                checkHalfRange(own.data[i], file.source, "SxV");
+                own.halves[i] = Imath::half(own.data[i]);
+            }
+            std::vector<float>().swap(own.data);
+        }
+    }
+    int layer = 0;
+    for (float k : ks) {
+        const int padded = groupsOf(int(k)) * 4;
+        layer += groupsOf(int(k));
+        if (padded == int(k)) continue;
+        const std::size_t lastLayer = std::size_t(layer - 1) * texels * 4;
+        for (std::size_t texel = 0; texel < texels; ++texel)
+            for (int j = int(k) % 4; j < 4; ++j) {
+                const std::size_t at = lastLayer + texel * 4 + std::size_t(j);
+                if (own.halves.empty())
+                    own.data[at] = 0.0f;
+                else
+                    own.halves[at] = Imath::half(0.0f);
+            }
+    }
+    const auto infinite = std::find_if(own.halves.begin(), own.halves.end(),
+                                       [](Imath::half h) { return h.isInfinity(); });
+    if (infinite != own.halves.end())
+        fail(file.source, "fmf: SxV value " + floatText(float(*infinite)) +
+                              " exceeds the half range (65504); use storage=float");
     try {
-        // Half data are already halves: rounding again changes nothing.
-        m->setFactors(std::move(factors), u.kind);
+        checkLayout(factors, own.kind);
+        m->adopt(std::move(factors), std::move(own));
     } catch (const Error& e) {
         fail(file.source, e.what());
     }
@@ -522,15 +588,13 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
                                     })
             .get(),
         "fmfU", 0);
-    addTexture(*stateSet,
-               createGeneratedTextureArray(
-                   sxvShape(),
-                   [factors = _factors, halves = _sxvHalves](int layer, float* out) {
-                       writeSxvLayer(*factors, halves.get(), layer, out);
-                   },
-                   filtersParameters())
-                   .get(),
-               "fmfSxV", 1);
+    addTexture(
+        *stateSet,
+        createGeneratedTextureArray(
+            sxvShape(), [sxv = _sxv](int layer, float* out) { copySxvLayer(*sxv, layer, out); },
+            filtersParameters())
+            .get(),
+        "fmfSxV", 1);
     _viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
     _lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
     const bool fmf = _factors->model == FactorModel::Fmf;

@@ -24,8 +24,6 @@
 #include <memory>
 #include <vector>
 
-#include <Imath/half.h>
-
 #include "core/FactoredBtf.h"
 #include "materials/DirectionLookup.h"
 #include "materials/MethodMaterial.h"
@@ -44,10 +42,11 @@ protected:
      *  (createGeneratedTextureArray), so the factors are held once, by the material and its
      *  textures together, and copies of the material share them. */
     std::shared_ptr<const FactoredBtf> _factors = std::make_shared<const FactoredBtf>();
-    /** Half storage keeps SxV, the bulk (a row per texel), here as halves, one array per factor
-     *  with SxV's rows, and leaves the factors' SxV matrices empty: a full-size UBO2014 file's
-     *  183 MiB of floats become 92. Null under float storage. Shared like _factors. */
-    std::shared_ptr<const std::vector<std::vector<Imath::half>>> _sxvHalves;
+    /** SxV, the bulk (a row per texel), as the GPU gets it: the "sxv" texture (sxvShape()), in
+     *  `halves` under half storage (a full-size UBO2014 file's 183 MiB of floats are 92), in
+     *  `data` under float storage; the factors' SxV matrices stay empty (0 rows). A file's
+     *  texture is taken as it is: loading holds it once. Shared like _factors. */
+    std::shared_ptr<const MaterialTexture> _sxv = std::make_shared<const MaterialTexture>();
     MaterialTexture::PixelKind _storage = MaterialTexture::Half;
     DirectionLookup _viewLookup, _lightLookup;
 };
@@ -73,12 +72,16 @@ public:
      *  of the (view, light, channel) x texel matrix, blockwise against the BTF's own storage.
      *  Throws Error for an empty BTF, invalid options, or components above min(rows, texels). */
     static osg::ref_ptr<FmfMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<FmfMaterial> fromFile(const FittedMaterial& file);
+    /** Takes the file's "sxv" texture as it is (half textures as halves: kLoadsHalves). */
+    static osg::ref_ptr<FmfMaterial> fromFile(FittedMaterial file);
+    static constexpr bool kLoadsHalves = true;
 
     /** The factors as rendered (half storage: the rounded values): their description, U and S.
-     *  Under half storage each factor's SxV matrix is empty (the material keeps SxV as halves):
-     *  sxvRow() reads it, completeFactors() gives everything. */
+     *  Each factor's SxV matrix is empty (the material keeps SxV as the GPU texture): sxvRow()
+     *  reads it, completeFactors() gives everything. */
     const FactoredBtf& factors() const { return *_factors; }
+    /** SxV as kept: the GPU's texture (sxvTexture()'s layout), halves or floats as stored. */
+    const MaterialTexture& sxv() const { return *_sxv; }
     /** A copy of the factors with SxV (as floats), e.g. to write them or fit from them. */
     FactoredBtf completeFactors() const;
     /** Factor f's SxV row `row` (FactoredBtf::factorRow) as floats: components(f) values. */
@@ -126,8 +129,15 @@ private:
     /** The textures' sizes and storage (no data). */
     MaterialTexture uShape() const;
     MaterialTexture sxvShape() const;
-    /** Sets the factors after checks and rounding; prepares the direction lookups. */
+    /** Sets the factors after checks and rounding, SxV moved into the texture. */
     void setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage);
+    /** Sets factors whose SxV matrices are empty and the texture that holds SxV (checked by
+     *  the caller); prepares the direction lookups. */
+    void adopt(FactoredBtf factors, MaterialTexture sxv);
+    /** Index of texel (x, y) (y from the bottom) in the SxV texture's layers. */
+    std::size_t sxvTexel(int x, int y) const {
+        return std::size_t(y) * std::size_t(_width) + std::size_t(x);
+    }
     /** The up to 9 (image, weight) combinations for a query view and light. The one place that
      *  knows how directions are interpolated (DirectionLookup: exact, as the shader). */
     int directionCombinations(const glm::vec3& view, const glm::vec3& light,
