@@ -17,6 +17,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Imath/half.h>
@@ -97,6 +98,10 @@ struct FittedMaterial {
     /** The texture called `name`; throws Error "SOURCE: fitted material 'METHOD' has no texture
      *  'NAME' (textures: a, b)". */
     const MaterialTexture& texture(const std::string& name) const;
+    /** The same, to take its values (a method's fromFile owns the loaded file). */
+    MaterialTexture& texture(const std::string& name) {
+        return const_cast<MaterialTexture&>(std::as_const(*this).texture(name));
+    }
     /** The parameter `key`; throws Error naming the missing key. */
     const std::string& parameter(const std::string& key) const;
 };

@@ -532,7 +532,7 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(FittedMaterial file) {
     // The file is this function's own: the SxV texture is taken, not copied, with the values
     // beyond each factor's rank set to zero as a fit writes them (the GPU multiplies them by U's
     // zeros, but not an infinity). A half file holds nothing beyond half's range but infinity.
-    MaterialTexture& own = file.textures[std::size_t(&sxv - file.textures.data())];
+    MaterialTexture& own = file.texture("sxv");
     if (own.kind == MaterialTexture::Half) {
         for (BtfFactor& factor : factors.factors) roundToHalf(factor.U, file.source, "U");
         if (own.halves.empty()) {  // a FittedMaterial made in memory, with float values

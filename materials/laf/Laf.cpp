@@ -37,7 +37,7 @@ FittedMaterial LafMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<LafMaterial> LafMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<LafMaterial> LafMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<LafMaterial> m = new LafMaterial;
     m->readCommon(file);
     m->readLobeParameters(file);

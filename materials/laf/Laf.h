@@ -42,7 +42,7 @@ public:
          *  50), cosine (0 or 1, default 1). Throws Error "laf: ..." for invalid or unknown options
          * and an empty BTF. */
         static osg::ref_ptr<LafMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<LafMaterial> fromFile(const FittedMaterial& file);
+    static osg::ref_ptr<LafMaterial> fromFile(FittedMaterial file);
     /** An unfitted model of the given shape (zero colours, zero lobes): memory accounting and
      *  tests build models without fitting. */
     static osg::ref_ptr<LafMaterial> create(int width, int height, int lobes,

@@ -53,20 +53,21 @@ void LobeMaterial::readLobeParameters(const FittedMaterial& file) {
     _cosine = cosine == "1";
 }
 
-void LobeMaterial::readLobeTextures(const FittedMaterial& file) {
+void LobeMaterial::readLobeTextures(FittedMaterial& file) {
     rhoD = readTexture(file, "rhoD", 1, 3);
     rhoS = readTexture(file, "rhoS", 1, 3);
     lobes = readTexture(file, "lobes", _lobes, 4);
 }
 
-std::vector<float> LobeMaterial::readTexture(const FittedMaterial& file, const std::string& name,
+std::vector<float> LobeMaterial::readTexture(FittedMaterial& file, const std::string& name,
                                              int depth, int channels) const {
-    const MaterialTexture& t = file.texture(name);
+    // The file is the caller's own (fromFile takes it by value): its values are taken.
+    MaterialTexture& t = file.texture(name);
     if (t.width != _width || t.height != _height || t.depth != depth || t.channels != channels)
         fail(file.source, "texture '" + name + "' must be " + std::to_string(_width) + "x" +
                               std::to_string(_height) + "x" + std::to_string(depth) + " with " +
                               std::to_string(channels) + " channels");
-    return t.data;
+    return std::move(t.data);
 }
 
 void LobeMaterial::addLobeState(osg::StateSet& stateSet, const std::string& prefix) const {

@@ -62,9 +62,9 @@ protected:
     /** Reads and checks the parameters lobes and cosine. */
     void readLobeParameters(const FittedMaterial& file);
     /** Reads the textures rhoD, rhoS and lobes (after readLobeParameters). */
-    void readLobeTextures(const FittedMaterial& file);
+    void readLobeTextures(FittedMaterial& file);
     /** A texture of the file that must have this material's size, `depth` and `channels`. */
-    std::vector<float> readTexture(const FittedMaterial& file, const std::string& name, int depth,
+    std::vector<float> readTexture(FittedMaterial& file, const std::string& name, int depth,
                                    int channels) const;
     /** Binds rhoD, rhoS and the lobe atlas to units 0, 1, 2 as <prefix>RhoD, <prefix>RhoS,
      *  <prefix>Lobes, and the uniforms <prefix>LobeCount and <prefix>Cosine. */

@@ -20,14 +20,15 @@ FittedMaterial LambertMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<LambertMaterial> LambertMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<LambertMaterial> LambertMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<LambertMaterial> m = new LambertMaterial;
     m->readCommon(file);
-    const MaterialTexture& t = file.texture("albedo");
+    // The file is this function's own: its values are taken.
+    MaterialTexture& t = file.texture("albedo");
     if (t.width != m->_width || t.height != m->_height || t.channels != 3)
         fail(file.source, "texture 'albedo' must be " + std::to_string(m->_width) + "x" +
                               std::to_string(m->_height) + " RGB");
-    m->albedo = t.data;
+    m->albedo = std::move(t.data);
     return m;
 }
 

@@ -30,7 +30,7 @@ public:
     META_Object(osgBTF, LambertMaterial)
 
         static osg::ref_ptr<LambertMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<LambertMaterial> fromFile(const FittedMaterial& file);
+    static osg::ref_ptr<LambertMaterial> fromFile(FittedMaterial file);
 
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     MemoryFootprint memory() const override;

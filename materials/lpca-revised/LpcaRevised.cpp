@@ -116,7 +116,7 @@ FittedMaterial LpcaRevisedMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<LpcaRevisedMaterial> m = new LpcaRevisedMaterial;
     m->readCommon(file);
     try {
@@ -132,13 +132,13 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromFile(const FittedMate
     m->_eightBit = storage == "unorm8";
     if (m->_clusters < 1 || m->_clusters > 256 || m->_components < 1 || m->_resolution < 2)
         fail(file.source, "invalid clusters/components/resolution");
-    const MaterialTexture& g = file.texture("grid");
+    MaterialTexture& g = file.texture("grid");  // the file is ours: its values are taken
     if (g.width != m->gridWidth() || g.height != m->gridHeight() || g.depth != m->gridDepth() ||
         g.channels != 3)
         fail(file.source, "texture 'grid' does not match clusters, components and resolution");
     m->clusterOf = lpcaClusterFromTexture(file, m->_clusters);
     m->weights = lpcaWeightsFromTexture(file, m->weightsPerTexel());
-    m->grid = g.data;
+    m->grid = std::move(g.data);
     try {
         m->finishSetup();
     } catch (const Error& error) {

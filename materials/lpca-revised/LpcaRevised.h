@@ -65,7 +65,7 @@ public:
     /** Resamples a fitted LPCA model. */
     static osg::ref_ptr<LpcaRevisedMaterial> fromLpca(const LpcaMaterial& lpca, int resolution,
                                                       bool eightBit);
-    static osg::ref_ptr<LpcaRevisedMaterial> fromFile(const FittedMaterial& file);
+    static osg::ref_ptr<LpcaRevisedMaterial> fromFile(FittedMaterial file);
 
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;

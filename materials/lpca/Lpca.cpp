@@ -126,8 +126,8 @@ MaterialTexture lpcaWeightTexture(int width, int height, int components,
     return t;
 }
 
-std::vector<std::uint8_t> lpcaClusterFromTexture(const FittedMaterial& file, int clusters) {
-    const MaterialTexture& t = file.texture("cluster");
+std::vector<std::uint8_t> lpcaClusterFromTexture(FittedMaterial& file, int clusters) {
+    MaterialTexture& t = file.texture("cluster");
     if (t.channels != 1 || t.depth != 1 || t.kind != MaterialTexture::UNorm8)
         fail(file.source, "texture 'cluster' must be one 8-bit channel");
     std::vector<std::uint8_t> clusterOf(t.data.size());
@@ -138,11 +138,12 @@ std::vector<std::uint8_t> lpcaClusterFromTexture(const FittedMaterial& file, int
                                   std::to_string(clusters) + " clusters)");
         clusterOf[i] = std::uint8_t(k);
     }
+    std::vector<float>().swap(t.data);  // the file's copy is no longer needed
     return clusterOf;
 }
 
-std::vector<float> lpcaWeightsFromTexture(const FittedMaterial& file, int components) {
-    const MaterialTexture& t = file.texture("weights");
+std::vector<float> lpcaWeightsFromTexture(FittedMaterial& file, int components) {
+    MaterialTexture& t = file.texture("weights");
     if (t.channels != 4 || t.depth != (components + 3) / 4)
         fail(file.source, "texture 'weights' must have " + std::to_string((components + 3) / 4) +
                               " RGBA layers for " + std::to_string(components) + " components");
@@ -151,6 +152,7 @@ std::vector<float> lpcaWeightsFromTexture(const FittedMaterial& file, int compon
     for (std::size_t x = 0; x < texels; ++x)
         for (int i = 0; i < components; ++i)
             weights[x * components + i] = t.data[(std::size_t(i / 4) * texels + x) * 4 + i % 4];
+    std::vector<float>().swap(t.data);  // the file's copy is no longer needed
     return weights;
 }
 
@@ -186,7 +188,7 @@ FittedMaterial LpcaMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<LpcaMaterial> LpcaMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<LpcaMaterial> LpcaMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<LpcaMaterial> m = new LpcaMaterial;
     m->readCommon(file);
     int clusters = 0, components = 0;
@@ -198,25 +200,31 @@ osg::ref_ptr<LpcaMaterial> LpcaMaterial::fromFile(const FittedMaterial& file) {
     }
     if (clusters < 1 || clusters > 256 || components < 1)
         fail(file.source, "invalid clusters/components");
-    const MaterialTexture& e = file.texture("eigenBrdfs");
+    MaterialTexture& e = file.texture("eigenBrdfs");  // the file is ours: its values are taken
     const std::size_t views = m->_views.size(), lights = m->_lights.size();
     if (e.width != int(lights) || e.height != int(views) * components || e.depth != clusters ||
         e.channels != 3)
         fail(file.source, "texture 'eigenBrdfs' does not match the directions and shape");
     m->clusterOf = lpcaClusterFromTexture(file, clusters);
     m->weights = lpcaWeightsFromTexture(file, components);
-    m->eigenBrdfs.resize(e.data.size());
-    const std::size_t size = views * lights * 3;
-    for (int k = 0; k < clusters; ++k)
+    // The file's [cluster][view][component][light][rgb] reordered in place to the material's
+    // [cluster][component][view][light][rgb], a cluster at a time through a buffer of one: the
+    // Eigen-BRDFs are held once.
+    const std::size_t run = lights * 3, block = views * std::size_t(components) * run;
+    if (e.data.size() != block * std::size_t(clusters))
+        fail(file.source, "texture 'eigenBrdfs' holds " + std::to_string(e.data.size()) +
+                              " values, " + std::to_string(block * std::size_t(clusters)) +
+                              " expected");
+    std::vector<float> cluster(block);
+    for (int k = 0; k < clusters; ++k) {
+        float* at = e.data.data() + std::size_t(k) * block;
+        std::copy_n(at, block, cluster.data());
         for (int i = 0; i < components; ++i)
             for (std::size_t v = 0; v < views; ++v)
-                for (std::size_t l = 0; l < lights; ++l)
-                    for (int c = 0; c < 3; ++c)
-                        m->eigenBrdfs[(std::size_t(k) * components + i) * size +
-                                      (v * lights + l) * 3 + c] =
-                            e.data[(((std::size_t(k) * views + v) * components + i) * lights + l) *
-                                       3 +
-                                   c];
+                std::copy_n(cluster.data() + (v * std::size_t(components) + std::size_t(i)) * run,
+                            run, at + (std::size_t(i) * views + v) * run);
+    }
+    m->eigenBrdfs = std::move(e.data);
     try {
         m->finishSetup(clusters, components);
     } catch (const Error& error) {

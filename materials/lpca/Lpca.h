@@ -69,7 +69,7 @@ public:
         static osg::ref_ptr<LpcaMaterial> fit(const BtfSource& btf, const FitOptions& options);
     /** The same with settings already read (lpca-revised's fit). */
     static osg::ref_ptr<LpcaMaterial> fit(const BtfSource& btf, const LpcaSettings& settings);
-    static osg::ref_ptr<LpcaMaterial> fromFile(const FittedMaterial& file);
+    static osg::ref_ptr<LpcaMaterial> fromFile(FittedMaterial file);
 
     /** A model of the given shape with zero weights and Eigen-BRDFs, e.g. for memory accounting
      *  of a configuration without fitting one. */
@@ -116,8 +116,8 @@ MaterialTexture lpcaClusterTexture(int width, int height,
 MaterialTexture lpcaWeightTexture(int width, int height, int components,
                                   const std::vector<float>& weights);
 /** Reads them back; throws Error naming the file for wrong shapes or out-of-range indices. */
-std::vector<std::uint8_t> lpcaClusterFromTexture(const FittedMaterial& file, int clusters);
-std::vector<float> lpcaWeightsFromTexture(const FittedMaterial& file, int components);
+std::vector<std::uint8_t> lpcaClusterFromTexture(FittedMaterial& file, int clusters);
+std::vector<float> lpcaWeightsFromTexture(FittedMaterial& file, int components);
 
 /** LPCA's per-vertex environment data are g itself (lights x RGB; g: the environment projected
  *  onto the measured light directions, materials/EnvironmentLighting.h): folding into every

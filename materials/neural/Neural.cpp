@@ -112,7 +112,7 @@ FittedMaterial NeuralMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<NeuralMaterial> NeuralMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<NeuralMaterial> NeuralMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<NeuralMaterial> m = new NeuralMaterial;
     m->readCommon(file);
     int shape[3];
@@ -132,7 +132,7 @@ osg::ref_ptr<NeuralMaterial> NeuralMaterial::fromFile(const FittedMaterial& file
         fail(file.source, e.what());
     }
     for (MaterialTexture* expected : {&m->latent, &m->decoder}) {
-        const MaterialTexture& got = file.texture(expected->name);
+        MaterialTexture& got = file.texture(expected->name);  // the file is ours: taken
         if (got.width != expected->width || got.height != expected->height ||
             got.depth != expected->depth || got.channels != expected->channels ||
             got.kind != expected->kind || got.storedCount() != expected->valueCount())
@@ -143,7 +143,7 @@ osg::ref_ptr<NeuralMaterial> NeuralMaterial::fromFile(const FittedMaterial& file
                                   (expected->kind == MaterialTexture::Half ? "half" : "float") +
                                   " for latent " + std::to_string(shape[0]) + ", layers " +
                                   std::to_string(shape[1]) + ", units " + std::to_string(shape[2]));
-        expected->data = got.data;
+        expected->data = std::move(got.data);
     }
     for (float v : m->decoder.data)
         if (!std::isfinite(v))

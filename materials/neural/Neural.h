@@ -51,7 +51,7 @@ public:
          * for an empty BTF, unknown or out-of-range options, latent or units not a multiple of 4,
          * and a build without libtorch. */
         static osg::ref_ptr<NeuralMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<NeuralMaterial> fromFile(const FittedMaterial& file);
+    static osg::ref_ptr<NeuralMaterial> fromFile(FittedMaterial file);
 
     /** Sets the texel size and directions, then setNetworkShape. */
     void setShape(int width, int height, const DirectionSet& views, const DirectionSet& lights,

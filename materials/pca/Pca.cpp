@@ -152,8 +152,9 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(FittedMaterial file) {
     } catch (const std::logic_error&) {
         fail(file.source, "parameter 'components' is not an integer");
     }
-    const MaterialTexture& eigen = file.texture("eigenTextures");
-    const MaterialTexture& w = file.texture("weights");
+    // The file is this function's own: its arrays are taken, not copied.
+    MaterialTexture& eigen = file.texture("eigenTextures");
+    MaterialTexture& w = file.texture("weights");
     try {
         m->setShape(m->_width, m->_height, file.views, file.lights, components, eigen.kind);
     } catch (const Error& e) {
@@ -176,21 +177,17 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(FittedMaterial file) {
             fail(file.source, "texture '" + t->name + "' holds " +
                                   std::to_string(t->storedCount()) + " values, " +
                                   std::to_string(t->valueCount()) + " expected");
-    // The file is this function's own: its arrays are taken, not copied.
-    const auto own = [&](const MaterialTexture& t) -> MaterialTexture& {
-        return file.textures[std::size_t(&t - file.textures.data())];
-    };
     if (eigen.kind == MaterialTexture::UNorm8 && eigen.bytes.empty()) {
         // Held as bytes like a fit's (values k / 255.0f: exact).
         m->eigenTextures.bytes.resize(eigen.valueCount());
         for (std::size_t i = 0; i < eigen.valueCount(); ++i)
             m->eigenTextures.bytes[i] = std::uint8_t(std::lround(eigen.value(i) * 255.0f));
     } else if (eigen.kind == MaterialTexture::UNorm8) {
-        m->eigenTextures.bytes = std::move(own(eigen).bytes);
+        m->eigenTextures.bytes = std::move(eigen.bytes);
     } else {
-        m->eigenTextures.data = std::move(own(eigen).data);
+        m->eigenTextures.data = std::move(eigen.data);
     }
-    m->weights.data = std::move(own(w).data);
+    m->weights.data = std::move(w.data);
     m->prepareLookups();
     return m;
 }

@@ -190,7 +190,7 @@ FittedMaterial PtmMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<PtmMaterial> m = new PtmMaterial;
     m->readCommon(file);
     const std::string colourModel = file.parameter("colour"), views = file.parameter("views");
@@ -204,7 +204,7 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(const FittedMaterial& file) {
     } catch (const std::logic_error&) {
         fail(file.source, "parameter 'frontView' is not an integer");
     }
-    const MaterialTexture& coefficients = file.texture("coefficients");
+    MaterialTexture& coefficients = file.texture("coefficients");
     Shape shape;
     shape.luminance = colourModel == "luminance";
     shape.perView = views == "all";
@@ -214,7 +214,8 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(const FittedMaterial& file) {
     } catch (const Error& e) {
         fail(file.source, e.what());
     }
-    const auto take = [&](const MaterialTexture& t, int depth, std::vector<float>& into) {
+    // The file is this function's own: its values are taken.
+    const auto take = [&](MaterialTexture& t, int depth, std::vector<float>& into) {
         if (t.width != m->_width || t.height != m->_height || t.depth != depth || t.channels != 3 ||
             t.kind != shape.storage)
             fail(file.source, "texture '" + t.name + "' must be " + std::to_string(m->_width) +
@@ -222,7 +223,7 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(const FittedMaterial& file) {
                                   " layer(s) of RGB " + storageName(shape.storage));
         if (std::any_of(t.data.begin(), t.data.end(), [](float v) { return !std::isfinite(v); }))
             fail(file.source, "texture '" + t.name + "' holds non-finite values");
-        into = t.data;
+        into = std::move(t.data);
     };
     take(coefficients, m->_slots * m->layersPerSlot(), m->coefficients);
     if (shape.luminance) take(file.texture("colour"), m->_slots, m->colour);

@@ -87,7 +87,7 @@ public:
          *  array layers than OpenGL guarantees. Fills fitInfo: seconds, colour, views, storage,
          *  front-view, rank and condition of the design matrix. */
         static osg::ref_ptr<PtmMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<PtmMaterial> fromFile(const FittedMaterial& file);
+    static osg::ref_ptr<PtmMaterial> fromFile(FittedMaterial file);
     /** A zero model of the given shape (tests, synthetic data); `frontView` is the measured view
      *  a front model was fitted on. Throws Error for shapes fit() refuses. */
     static osg::ref_ptr<PtmMaterial> create(int width, int height, DirectionSet views,

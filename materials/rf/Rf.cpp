@@ -204,7 +204,7 @@ FittedMaterial RfMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<RfMaterial> RfMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<RfMaterial> RfMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<RfMaterial> m = new RfMaterial;
     m->readCommon(file);
     int lobeCount = 0;
@@ -233,7 +233,7 @@ osg::ref_ptr<RfMaterial> RfMaterial::fromFile(const FittedMaterial& file) {
         fail(file.source, e.what());
     }
     for (const StoredArray& a : storedArrays(m->_views.size(), lobeCount, variant)) {
-        const MaterialTexture& t = file.texture(a.name);
+        MaterialTexture& t = file.texture(a.name);  // the file is ours: its values are taken
         if (t.width != m->_width || t.height != m->_height || t.depth != a.depth ||
             t.channels != a.channels || t.kind != a.kind)
             fail(file.source, std::string("texture '") + a.name + "' must be " +
@@ -243,7 +243,7 @@ osg::ref_ptr<RfMaterial> RfMaterial::fromFile(const FittedMaterial& file) {
                                   (a.kind == MaterialTexture::UNorm8 ? "8-bit" : "half"));
         if (std::any_of(t.data.begin(), t.data.end(), [](float v) { return !std::isfinite(v); }))
             fail(file.source, std::string("texture '") + a.name + "' holds non-finite values");
-        (*m).*a.member = t.data;
+        (*m).*a.member = std::move(t.data);
     }
     return m;
 }

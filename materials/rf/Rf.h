@@ -104,7 +104,7 @@ public:
      *  per texel and view, and channel with rgb), fallbacks (fits that kept their
      *  initialisation), max-exponent, diffuse, colour. */
     static osg::ref_ptr<RfMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<RfMaterial> fromFile(const FittedMaterial& file);
+    static osg::ref_ptr<RfMaterial> fromFile(FittedMaterial file);
     /** A zero model of the given shape: memory accounting, tests and synthetic data. Throws Error
      *  if the shape is invalid (fewer than 3 views, lobes out of range, too many layers). */
     static osg::ref_ptr<RfMaterial> create(int width, int height, DirectionSet views,

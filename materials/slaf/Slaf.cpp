@@ -70,7 +70,7 @@ FittedMaterial SlafMaterial::toFittedMaterial() const {
     return file;
 }
 
-osg::ref_ptr<SlafMaterial> SlafMaterial::fromFile(const FittedMaterial& file) {
+osg::ref_ptr<SlafMaterial> SlafMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<SlafMaterial> m = new SlafMaterial;
     m->readCommon(file);
     m->readLobeParameters(file);

@@ -50,7 +50,7 @@ public:
          * or 1, default 1). Throws Error "slaf: ..." for invalid or unknown options and an empty
          * BTF. */
         static osg::ref_ptr<SlafMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<SlafMaterial> fromFile(const FittedMaterial& file);
+    static osg::ref_ptr<SlafMaterial> fromFile(FittedMaterial file);
     /** An unfitted model of the given shape (T = 1, zero colours and lobes). */
     static osg::ref_ptr<SlafMaterial> create(int width, int height, int lobes,
                                              const DirectionSet& views, const DirectionSet& lights);
