@@ -36,7 +36,7 @@ float PtmMaterial::toStorage(double value, MaterialTexture::PixelKind kind) {
 }
 
 void PtmMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
-                           Shape shape, std::size_t frontView) {
+                           Shape shape, std::size_t frontView, bool allocate) {
     if (width <= 0 || height <= 0)
         throw Error("ptm: invalid size " + std::to_string(width) + "x" + std::to_string(height));
     if (lights.size() == 0) throw Error("ptm: needs at least one measured light");
@@ -64,8 +64,10 @@ void PtmMaterial::setShape(int width, int height, DirectionSet views, DirectionS
     _viewLookup = shape.perView ? DirectionLookup(views) : DirectionLookup();
     _lightVectors.clear();
     for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
-    coefficients.assign(texels * layers * 3, 0.0f);
-    colour.assign(colourValues, 0.0f);
+    if (allocate) {
+        coefficients.assign(texels * layers * 3, 0.0f);
+        colour.assign(colourValues, 0.0f);
+    }
     setGeometry(width, height, std::move(views), std::move(lights));
 }
 
@@ -210,7 +212,8 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(FittedMaterial file) {
     shape.perView = views == "all";
     shape.storage = coefficients.kind;
     try {
-        m->setShape(m->_width, m->_height, m->_views, m->_lights, shape, frontView);
+        // No arrays: the file's are taken below (sized zeros would double the peak).
+        m->setShape(m->_width, m->_height, m->_views, m->_lights, shape, frontView, false);
     } catch (const Error& e) {
         fail(file.source, e.what());
     }

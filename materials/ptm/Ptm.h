@@ -134,8 +134,10 @@ protected:
                            const glm::vec3& light) const override;
 
 private:
+    /** Checks the shape, builds the view interpolation and, unless `allocate` is false (a file
+     *  brings the arrays), sizes the arrays. */
     void setShape(int width, int height, DirectionSet views, DirectionSet lights, Shape shape,
-                  std::size_t frontView);
+                  std::size_t frontView, bool allocate = true);
 };
 
 }  // namespace osgBTF

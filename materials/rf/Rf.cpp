@@ -64,7 +64,7 @@ constexpr int kMaxLayers = 2048;  // GL_MAX_ARRAY_TEXTURE_LAYERS guaranteed by G
 }  // namespace
 
 void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
-                          int lobeCount, Variant variant) {
+                          int lobeCount, Variant variant, bool allocate) {
     if (width <= 0 || height <= 0)
         throw Error("rf: invalid size " + std::to_string(width) + "x" + std::to_string(height));
     if (lobeCount < 1 || lobeCount > kMaxLobes)
@@ -90,9 +90,11 @@ void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSe
     for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
     _lobes = lobeCount;
     _variant = variant;
-    rhoD.assign(variant.diffuse ? texels * 3 : 0, 0.0f);
-    rhoV.assign(texels * views.size() * 3, 0.0f);
-    lobes.assign(texels * layers * 4, 0.0f);
+    if (allocate) {
+        rhoD.assign(variant.diffuse ? texels * 3 : 0, 0.0f);
+        rhoV.assign(texels * views.size() * 3, 0.0f);
+        lobes.assign(texels * layers * 4, 0.0f);
+    }
     setGeometry(width, height, std::move(views), std::move(lights));
 }
 
@@ -228,7 +230,8 @@ osg::ref_ptr<RfMaterial> RfMaterial::fromFile(FittedMaterial file) {
         variant.rgb = colour->second == "rgb";
     }
     try {
-        m->setShape(m->_width, m->_height, m->_views, m->_lights, lobeCount, variant);
+        // No arrays: the file's are taken below (sized zeros would double the peak).
+        m->setShape(m->_width, m->_height, m->_views, m->_lights, lobeCount, variant, false);
     } catch (const Error& e) {
         fail(file.source, e.what());
     }

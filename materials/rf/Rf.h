@@ -142,9 +142,10 @@ protected:
     ~RfMaterial() override = default;
 
 private:
-    /** Sizes the arrays and builds the view interpolation. */
+    /** Checks the shape, builds the view interpolation and, unless `allocate` is false (a file
+     *  brings the arrays), sizes the arrays. */
     void setShape(int width, int height, DirectionSet views, DirectionSet lights, int lobes,
-                  Variant variant);
+                  Variant variant, bool allocate = true);
 };
 
 }  // namespace osgBTF
