@@ -106,34 +106,38 @@ MaterialTexture sxvShapeOf(const FactoredBtf& factors, MaterialTexture::PixelKin
 
 /** SxV of `factors` as the GPU texture (sxvShapeOf): texels bottom-up, zero beyond a factor's
  *  rank; half storage rounds to half (throws when a value does not fit) and fills `halves`.
- *  Frees each factor's SxV matrix once copied. */
+ *  Factor by factor, each factor's SxV matrix freed once copied, and the texture grown by that
+ *  factor's layers only then: the floats and the texture are never held whole together (a
+ *  full-size UBO2014 file: 183 MiB of floats, 92 of halves). */
 MaterialTexture moveSxvToTexture(FactoredBtf& factors, MaterialTexture::PixelKind storage) {
     MaterialTexture t = sxvShapeOf(factors, storage);
     const bool half = storage == MaterialTexture::Half;
     if (half)
-        t.halves.assign(t.valueCount(), Imath::half(0.0f));
+        t.halves.reserve(t.valueCount());  // address space only: pages are touched when grown
     else
-        t.data.assign(t.valueCount(), 0.0f);
+        t.data.reserve(t.valueCount());
     const std::size_t texels = factors.texelCount(), width = std::size_t(factors.width);
-    int firstLayer = 0;
     for (BtfFactor& factor : factors.factors) {
         const int k = int(factor.U.cols()), layers = groupsOf(k);
-        // In parallel over rows: a full-size UBO2014 file has 48 million values to convert.
+        const std::size_t first = half ? t.halves.size() : t.data.size();
+        const std::size_t grown = first + std::size_t(layers) * texels * 4;
+        if (half)
+            t.halves.resize(grown, Imath::half(0.0f));
+        else
+            t.data.resize(grown, 0.0f);
+        // In parallel over rows, a texel's SxV row read once and written to its layers: a
+        // full-size UBO2014 file has 48 million values to convert.
         tbb::parallel_for(
-            tbb::blocked_range<std::size_t>(0, std::size_t(layers) * std::size_t(factors.height)),
-            [&](const tbb::blocked_range<std::size_t>& range) {
-                for (std::size_t r = range.begin(); r != range.end(); ++r) {
-                    const int layer = int(r / std::size_t(factors.height));
-                    const int y = int(r % std::size_t(factors.height));
-                    const int first = layer * 4, count = std::min(4, k - first);
-                    const std::size_t out =
-                        ((std::size_t(firstLayer + layer) * texels) + std::size_t(y) * width) * 4;
+            tbb::blocked_range<int>(0, factors.height), [&](const tbb::blocked_range<int>& rows) {
+                for (int y = rows.begin(); y != rows.end(); ++y)
                     for (int x = 0; x < factors.width; ++x) {
-                        const float* row = factor.SxV.data() +
-                                           factors.factorRow(x, y) * std::size_t(k) +
-                                           std::size_t(first);
-                        for (int j = 0; j < count; ++j) {
-                            const std::size_t at = out + std::size_t(x) * 4 + std::size_t(j);
+                        const float* row =
+                            factor.SxV.data() + factors.factorRow(x, y) * std::size_t(k);
+                        const std::size_t texel = std::size_t(y) * width + std::size_t(x);
+                        for (int j = 0; j < k; ++j) {
+                            const std::size_t at = first +
+                                                   (std::size_t(j / 4) * texels + texel) * 4 +
+                                                   std::size_t(j % 4);
                             if (half) {
                                 checkHalfRange(row[j], factors.source, "SxV");
                                 t.halves[at] = Imath::half(row[j]);
@@ -142,10 +146,8 @@ MaterialTexture moveSxvToTexture(FactoredBtf& factors, MaterialTexture::PixelKin
                             }
                         }
                     }
-                }
             });
         factor.SxV.resize(0, k);  // frees the floats, factor by factor
-        firstLayer += layers;
     }
     return t;
 }
