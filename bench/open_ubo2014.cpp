@@ -2,11 +2,12 @@
 // the fmf material of its factors; nothing decoded) and its first rendered frame, headless.
 // Goal at full size (bench_make_ubo2014: 400x400, 151x151, DFMF K = 100): open + first frame
 // <= 5 s, peak resident memory <= 1.5 GB.
-// Usage: bench_open_ubo2014 FILE [--frames N] [--storage half|float]
+// Usage: bench_open_ubo2014 FILE [--frames N] [--storage half|float] [--save MATERIAL]
 //   Prints the time to read the file, to build the material, to render the first frame (one
 //   pixel per texel through the GPU path: texture upload, shader compile, one pass) and the median
 //   of N more frames, and the process's peak resident memory. bench/open_ubo2014.sh adds the
-//   same for `btfviewer FILE --frames 1` under Xvfb.
+//   same for `btfviewer FILE --frames 1` under Xvfb. --save writes the opened material as a
+//   fitted-material file instead (for bench_load_material: loading it at full size).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -22,6 +23,7 @@
 #include "harness/MaterialImage.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "loaders/Ubo2014.h"
+#include "materials/MethodRegistry.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/OpenMaterial.h"
 
@@ -29,7 +31,7 @@ using osgBTF::bench::peakResidentMiB;
 using osgBTF::bench::residentMiB;
 
 int main(int argc, char** argv) {
-    std::string file, storage = "half";
+    std::string file, storage = "half", save;
     int frames = 5;
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
@@ -37,13 +39,17 @@ int main(int argc, char** argv) {
             frames = std::atoi(argv[++i]);
         else if (arg == "--storage" && i + 1 < argc)
             storage = argv[++i];
+        else if (arg == "--save" && i + 1 < argc)
+            save = argv[++i];
         else if (file.empty() && arg[0] != '-')
             file = arg;
         else
             file.clear(), i = argc;
     }
     if (file.empty() || frames < 1 || (storage != "half" && storage != "float")) {
-        std::fprintf(stderr, "usage: %s FILE [--frames N>=1] [--storage half|float]\n", argv[0]);
+        std::fprintf(stderr,
+                     "usage: %s FILE [--frames N>=1] [--storage half|float] [--save MATERIAL]\n",
+                     argv[0]);
         return 2;
     }
     try {
@@ -57,6 +63,11 @@ int main(int argc, char** argv) {
             osgBTF::openUbo2014Material(file, storage == "float" ? osgBTF::MaterialTexture::Float
                                                                  : osgBTF::MaterialTexture::Half);
         const auto opened = clock::now();
+        if (!save.empty()) {
+            osgBTF::saveMaterial(*material, save);
+            std::printf("%s: saved\n", save.c_str());
+            return 0;
+        }
         const double openedResident = residentMiB(), openedPeak = peakResidentMiB();
         const auto* fmf = dynamic_cast<const osgBTF::FmfMaterial*>(material.get());
         osgBTF::HeadlessRenderer renderer;
