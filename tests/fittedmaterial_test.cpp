@@ -61,9 +61,12 @@ MaterialTexture makeTexture(const std::string& name, int width, int height, int 
     return t;
 }
 
-/** A single-channel texture of 2 slices of 2x3 texels, no values yet: small enough to write
- *  the file's expected rows by hand. */
-MaterialTexture twoSlicesOfTwoByThree(const std::string& name, MaterialTexture::PixelKind kind) {
+/** A single-channel texture of 2 slices of 2x3 texels, small enough to write the file's
+ *  expected rows by hand: add(t, slice, row, column) stores each value, in memory order (rows
+ *  counted from the bottom). */
+template <class Add>
+MaterialTexture twoSlicesOfTwoByThree(const std::string& name, MaterialTexture::PixelKind kind,
+                                      Add add) {
     MaterialTexture t;
     t.name = name;
     t.width = 2;
@@ -71,7 +74,18 @@ MaterialTexture twoSlicesOfTwoByThree(const std::string& name, MaterialTexture::
     t.depth = 2;
     t.channels = 1;
     t.kind = kind;
+    for (int z = 0; z < 2; ++z)
+        for (int y = 0; y < 3; ++y)
+            for (int x = 0; x < 2; ++x) add(t, z, y, x);
     return t;
+}
+
+/** A material of method "test" holding `t` alone. */
+FittedMaterial materialOf(const MaterialTexture& t) {
+    FittedMaterial m;
+    m.method = "test";
+    m.textures.push_back(t);
+    return m;
 }
 
 FittedMaterial makeMaterial() {
@@ -187,14 +201,11 @@ TEST(FittedMaterial, TextureLookupNamesWhatIsMissing) {
 
 TEST(FittedMaterial, FileShowsEachSliceUprightInViewers) {
     TempDir dir;
-    FittedMaterial m;
-    m.method = "test";
-    MaterialTexture t = twoSlicesOfTwoByThree("v", MaterialTexture::Float);
     // value = 10 * slice + row, rows counted from the bottom.
-    for (int z = 0; z < 2; ++z)
-        for (int y = 0; y < 3; ++y)
-            for (int x = 0; x < 2; ++x) t.data.push_back(float(10 * z + y));
-    m.textures.push_back(t);
+    const MaterialTexture t = twoSlicesOfTwoByThree(
+        "v", MaterialTexture::Float,
+        [](MaterialTexture& t, int z, int y, int) { t.data.push_back(float(10 * z + y)); });
+    const FittedMaterial m = materialOf(t);
     const std::string path = dir.file("v.exr");
     saveFittedMaterial(m, path);
     const FloatImage file = readFloatImage(path);
@@ -207,14 +218,12 @@ TEST(FittedMaterial, FileShowsEachSliceUprightInViewers) {
 
 TEST(FittedMaterial, EightBitTextureHeldAsBytesIsWrittenAsItsIntegers) {
     TempDir dir;
-    FittedMaterial m;
-    m.method = "test";
-    MaterialTexture t = twoSlicesOfTwoByThree("q", MaterialTexture::UNorm8);
     // byte = 100 * slice + 10 * row + column, rows counted from the bottom.
-    for (int z = 0; z < 2; ++z)
-        for (int y = 0; y < 3; ++y)
-            for (int x = 0; x < 2; ++x) t.bytes.push_back(std::uint8_t(100 * z + 10 * y + x));
-    m.textures.push_back(t);
+    const MaterialTexture t = twoSlicesOfTwoByThree(
+        "q", MaterialTexture::UNorm8, [](MaterialTexture& t, int z, int y, int x) {
+            t.bytes.push_back(std::uint8_t(100 * z + 10 * y + x));
+        });
+    FittedMaterial m = materialOf(t);
     const std::string path = dir.file("q.exr");
     saveFittedMaterial(m, path);
     // The file as any EXR reader sees it: the integers, slices one below the other, each upright.
@@ -256,16 +265,13 @@ TEST(FittedMaterial, EightBitTextureHeldAsBytesIsWrittenAsItsIntegers) {
 
 TEST(FittedMaterial, HalfTextureHeldAsHalvesIsWrittenAndReadAsItsHalves) {
     TempDir dir;
-    FittedMaterial m;
-    m.method = "test";
-    MaterialTexture t = twoSlicesOfTwoByThree("h", MaterialTexture::Half);
     // value = 1000 * slice + row + column / 3 rounded to half, rows counted from the bottom: the
     // thirds are not exact in half, so a float path would show.
-    for (int z = 0; z < 2; ++z)
-        for (int y = 0; y < 3; ++y)
-            for (int x = 0; x < 2; ++x)
-                t.halves.push_back(Imath::half(1000.0f * float(z) + float(y) + float(x) / 3.0f));
-    m.textures.push_back(t);
+    const MaterialTexture t = twoSlicesOfTwoByThree(
+        "h", MaterialTexture::Half, [](MaterialTexture& t, int z, int y, int x) {
+            t.halves.push_back(Imath::half(1000.0f * float(z) + float(y) + float(x) / 3.0f));
+        });
+    FittedMaterial m = materialOf(t);
     const std::string path = dir.file("h.exr");
     saveFittedMaterial(m, path);
     // The file as any EXR reader sees it: slices one below the other, each upright.
