@@ -23,11 +23,8 @@ double texelError(const std::vector<double>& rgb, const std::vector<float>& mode
 MemoryFootprint footprintOf(const FittedMaterial& file, std::size_t texels) {
     double values = 0, bytes = 0;
     for (const MaterialTexture& t : file.textures) {
-        const double size = t.kind == MaterialTexture::Float  ? 4.0
-                            : t.kind == MaterialTexture::Half ? 2.0
-                                                              : 1.0;
         values += double(t.valueCount());
-        bytes += double(t.valueCount()) * size;
+        bytes += double(t.valueCount()) * bytesPerValue(t.kind);
     }
     MemoryFootprint footprint;
     footprint.valuesPerTexel = values / double(texels);

@@ -23,6 +23,16 @@ inline float quantizeUNorm8(double x) {
 /** Meseth et al. 2003's per-texel error: mean over pairs of |measured - model| (RGB length). */
 double texelError(const std::vector<double>& rgb, const std::vector<float>& model);
 
+/** Bytes one value of a texture of this kind takes in the file and on the GPU. */
+inline double bytesPerValue(MaterialTexture::PixelKind kind) {
+    return kind == MaterialTexture::UNorm8 ? 1.0 : kind == MaterialTexture::Half ? 2.0 : 4.0;
+}
+
+/** The GPU limits the methods lay their textures out for: 2D texture size (GL_MAX_TEXTURE_SIZE)
+ *  and array layers (GL_MAX_ARRAY_TEXTURE_LAYERS), what current desktop GPUs offer. */
+constexpr int kMaxTextureSize = 16384;
+constexpr int kMaxArrayLayers = 2048;
+
 /** Values and bytes per texel of a fitted material's textures, by their storage kinds. */
 MemoryFootprint footprintOf(const FittedMaterial& file, std::size_t texels);
 

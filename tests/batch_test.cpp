@@ -26,6 +26,8 @@
 #include "tests/HandMadeBatch.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using namespace osgBTF::batch;
@@ -423,3 +425,5 @@ TEST(BtfBatch, ReportOfHandMadeResultsHasTheParetoFrontAndRecommendations) {
     EXPECT_EQ(page.find("<!--<script>"), std::string::npos);
     EXPECT_NE(page.find("no such file \\u003c!--\\u003cscript>"), std::string::npos);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -36,6 +36,8 @@
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 namespace fs = std::filesystem;
@@ -307,3 +309,5 @@ TEST(Concurrency, FetcherRetriesWhileThreadsRequestTheSameKeys) {
     for (const auto& [path, count] : fetches) EXPECT_EQ(count, 3) << path;
     EXPECT_EQ(fetcher.retries(), std::uint64_t(2 * kKeys));
 }
+
+}  // namespace OSGBTF_TEST_FILE

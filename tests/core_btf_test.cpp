@@ -8,6 +8,8 @@
 #include "core/MeasuredBtf.h"
 #include "harness/sample/SampleBtf.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -161,3 +163,5 @@ TEST(SampleBtf, VariationBreaksThePeriodWithinTheSample) {
     EXPECT_GT(largestShiftDifference(varied), 0.02f);
     EXPECT_EQ(largestShiftDifference(makeSampleBtf(options)), largestShiftDifference(varied));
 }
+
+}  // namespace OSGBTF_TEST_FILE

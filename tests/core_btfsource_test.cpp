@@ -17,6 +17,8 @@
 #include "tests/RandomFactors.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -230,3 +232,5 @@ INSTANTIATE_TEST_SUITE_P(EveryMethod, FitFromFactors, ::testing::ValuesIn(method
                              std::replace(name.begin(), name.end(), '-', '_');
                              return name;
                          });
+
+}  // namespace OSGBTF_TEST_FILE

@@ -18,6 +18,8 @@
 #include "core/MeasuredBtf.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::errorOf;
 using osgBTF::test::TempDir;
@@ -208,3 +210,5 @@ TEST(CoordinateMap, MaterialisedBtfCopiesTheMappedTexelForEveryViewAndLight) {
     EXPECT_EQ(errorOf([&] { materialiseCoordinateMap(sample, wrong); }),
               "coordinate map: made for a 4x2 sample, not 3x2");
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -13,6 +13,8 @@
 #include "core/Error.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 TEST(DirectionSetFile, MissingFileNamesTheFile) {
@@ -281,3 +283,5 @@ TEST(DiscMap, InverseIsExact) {
         EXPECT_LT(glm::length(back - d.toVector()), 1e-6);
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

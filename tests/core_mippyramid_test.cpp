@@ -14,6 +14,8 @@
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -187,3 +189,5 @@ TEST(MipMappedMaterial, BadLevelsAreRefusedWithTheirReason) {
               "levels can be remapped through a map (a render through the map filters its "
               "levels)");
 }
+
+}  // namespace OSGBTF_TEST_FILE

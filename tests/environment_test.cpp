@@ -20,6 +20,8 @@
 #include "materials/pca/Pca.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::errorOf;
 
@@ -538,3 +540,5 @@ TEST(Environment, MedianCutKeepsPowerAndPlacesLightsAtTheEnergy) {
               "environment: representative light count 12 is not a power of two between 1 and "
               "1024");
 }
+
+}  // namespace OSGBTF_TEST_FILE

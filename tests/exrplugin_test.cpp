@@ -22,6 +22,8 @@
 #include "scene/OwnPlugins.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::buildDir;
@@ -340,3 +342,5 @@ TEST_F(ExrPlugin, BadFilesFailCleanlyWithAMessage) {
     EXPECT_EQ(nowhere.status(), WR::ERROR_IN_WRITING_FILE);
     EXPECT_NE(nowhere.message().find(dir.file("no/such.exr")), std::string::npos);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -21,6 +21,8 @@
 #include "core/FloatImage.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::runCommand;
@@ -461,3 +463,5 @@ TEST(FittedMaterial, LoadErrorsNameTheFileAndTheProblem) {
     const std::string message = errorOf([&] { loadFittedMaterial(views); });
     EXPECT_EQ(message.rfind(views + ": osgBTF.views: malformed direction set", 0), 0u) << message;
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -19,6 +19,8 @@
 #include "core/FloatImage.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::runCommand;
@@ -358,3 +360,5 @@ TEST(FloatImage, WritesAreAtomic) {
     EXPECT_EQ(errorOf([&] { writeFloatImage(FloatImage(), path); }),
               path + ": cannot write an empty image (0x0, 0 channels)");
 }
+
+}  // namespace OSGBTF_TEST_FILE

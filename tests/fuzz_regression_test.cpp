@@ -26,6 +26,8 @@
 #include "loaders/Ubo2014.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -259,3 +261,5 @@ TEST_F(FuzzFindings, SceneEndingInsideAnEmbeddedMaterialIsRefused) {
 }
 
 }  // namespace
+
+}  // namespace OSGBTF_TEST_FILE

@@ -16,6 +16,8 @@
 #include "materials/Material.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 namespace fs = std::filesystem;
@@ -291,3 +293,5 @@ TEST(Harness, ErrorMapColoursAndPlotAreWellFormed) {
     EXPECT_NE(svg.find(">pca</text>"), std::string::npos);
     EXPECT_EQ(count(svg, "<circle"), 2u);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -33,6 +33,8 @@
 #include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 namespace fs = std::filesystem;
@@ -612,3 +614,5 @@ TEST(HostileInputs, RssMeasurementSeesAnAllocation) {
     EXPECT_EQ(r.message, "allocated 209715200");
     EXPECT_GE(r.growthKiB, 200 * 1024);
 }
+
+}  // namespace OSGBTF_TEST_FILE

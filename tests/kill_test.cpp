@@ -34,6 +34,8 @@
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 extern char** environ;
 
 using namespace osgBTF;
@@ -397,3 +399,5 @@ TEST(Kills, StaleTemporariesOfDeadProcessesOnlyAreRemoved) {
     EXPECT_EQ(left, expected);
     EXPECT_EQ(removed, folderLeft ? 2u : 3u);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -21,6 +21,8 @@
 #include "loaders/Ubo2003.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::runCommand;
@@ -541,3 +543,5 @@ TEST(Ubo2003Writer, JpegMembersAreStoredAndWriteIsAtomic) {
     EXPECT_NE(listing.output.find("Stored"), std::string::npos) << listing.output;
     EXPECT_EQ(listing.output.find("Defl"), std::string::npos) << listing.output;
 }
+
+}  // namespace OSGBTF_TEST_FILE

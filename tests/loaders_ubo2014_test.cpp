@@ -19,6 +19,8 @@
 #include "tests/HandWrittenUbo2014.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::readTextFile;
@@ -674,3 +676,5 @@ TEST(Ubo2014HandWritten, HeaderOnlyReadSkipsTheMatricesButChecksTheirSizes) {
     EXPECT_EQ(errorOf([&] { readUbo2014(path, header); }),
               path + ": 1 unexpected trailing bytes after the last factor matrix");
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -15,6 +15,8 @@
 #include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -323,3 +325,5 @@ TEST(BlockMap, BlocksAreWindowsOfTheSampleAndDeterministic) {
                 EXPECT_EQ(a.sampleX(x + 1, y), (a.sampleX(x, y) + 1) % 6);
             }
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -16,6 +16,8 @@
 #include "materials/lambert/Lambert.h"
 #include "materials/lpca/Lpca.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -395,3 +397,5 @@ TEST(Degenerate, PtmIsExactOnConstantDataAndStaysFinite) {
     expectPtmBehaves("views=all");
     expectPtmBehaves("views=all colour=luminance");
 }
+
+}  // namespace OSGBTF_TEST_FILE

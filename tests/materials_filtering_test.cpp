@@ -11,6 +11,8 @@
 #include "materials/MipMapping.h"
 #include "materials/lambert/Lambert.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -148,3 +150,5 @@ TEST(MaterialFiltering, MipMappedMaterialsBlendTwoLevelsEachBilinearInsideItsRec
     // lod 1.75: a quarter of level 1, three quarters of level 2 (GL_LINEAR_MIPMAP_LINEAR).
     near(m->evaluateFiltered(u, v, 1.75f, view, light), 0.25f * level1 + 0.75f * level2);
 }
+
+}  // namespace OSGBTF_TEST_FILE

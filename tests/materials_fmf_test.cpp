@@ -19,23 +19,15 @@
 #include "materials/lambert/Lambert.h"
 #include "tests/RandomFactors.h"
 #include "tests/ReferenceSvd.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 using osgBTF::test::randomFactors;
 
 namespace {
-
-MeasuredBtf smallSample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
-
-std::string fitError(const MeasuredBtf& btf, const std::string& options) {
-    return test::errorOf([&] { FmfMaterial::fit(btf, FitOptions::parse(options)); });
-}
 
 /** The ABRDF matrix of Schwartz et al. 2013: rows (view, light, channel), columns texels, in
  * double. */
@@ -77,25 +69,25 @@ const std::vector<std::pair<Direction, Direction>> kUnmeasured = {{{31.7f, 77}, 
 }  // namespace
 
 TEST(Fmf, InvalidOptionsAreRefusedWithClearMessages) {
-    const MeasuredBtf btf = smallSample(4, 3);
-    EXPECT_EQ(fitError(btf, "components=0"),
+    const MeasuredBtf btf = test::sampleBtf(4, 3);
+    EXPECT_EQ(test::fitError<FmfMaterial>(btf, "components=0"),
               "fmf: option components must be an integer >= 1, got 0");
-    EXPECT_EQ(fitError(btf, "components=many"),
+    EXPECT_EQ(test::fitError<FmfMaterial>(btf, "components=many"),
               "fmf: option components must be an integer >= 1, got many");
-    EXPECT_EQ(fitError(btf, "storage=unorm8"),
+    EXPECT_EQ(test::fitError<FmfMaterial>(btf, "storage=unorm8"),
               "fmf: option storage must be one of half, float, got unorm8");
-    EXPECT_EQ(fitError(btf, "clusters=2"),
+    EXPECT_EQ(test::fitError<FmfMaterial>(btf, "clusters=2"),
               "fmf: option clusters is unknown (known: components, storage)");
     // 12 texels: the rank of the 19683 x 12 matrix is at most 12.
-    EXPECT_EQ(fitError(btf, "components=13"),
+    EXPECT_EQ(test::fitError<FmfMaterial>(btf, "components=13"),
               "fmf: option components must be at most 12 for this BTF (its texels, or 3 x "
               "views x lights if fewer), got 13");
-    EXPECT_EQ(fitError(MeasuredBtf(), ""), "fmf: the BTF is empty");
+    EXPECT_EQ(test::fitError<FmfMaterial>(MeasuredBtf(), ""), "fmf: the BTF is empty");
 }
 
 TEST(Fmf, FitErrorIsTheOptimalRankCError) {
     // 30 texels: the exact Gram path. Float storage, so the error is the SVD's own.
-    const MeasuredBtf btf = smallSample(6, 5);
+    const MeasuredBtf btf = test::sampleBtf(6, 5);
     const Eigen::MatrixXd a = abrdfMatrix(btf);
     const Eigen::VectorXd s = test::referenceSingularValues(a);
     for (int c : {1, 4, 12}) {
@@ -115,7 +107,7 @@ TEST(Fmf, FitErrorIsTheOptimalRankCError) {
 TEST(Fmf, RandomisedSvdReachesTheOptimalError) {
     // The randomised path (forced: no Gram) on the sample's 19683 x 256 matrix, read in blocks of
     // 30 rows, against a direct SVD: its Frobenius error within 0.1 % of the optimum.
-    const MeasuredBtf btf = smallSample(16, 16);
+    const MeasuredBtf btf = test::sampleBtf(16, 16);
     const Eigen::MatrixXd a = abrdfMatrix(btf);
     const Eigen::MatrixXf af = a.cast<float>();
     const Eigen::VectorXd sigma = test::referenceSingularValues(a);
@@ -288,7 +280,7 @@ TEST(Fmf, SaveLoadRoundTripIsExact) {
     std::vector<osg::ref_ptr<FmfMaterial>> materials = {
         FmfMaterial::fromFactors(dfmf, MaterialTexture::Half),
         FmfMaterial::fromFactors(drr, MaterialTexture::Float),
-        FmfMaterial::fit(smallSample(8, 6), FitOptions::parse("components=5"))};
+        FmfMaterial::fit(test::sampleBtf(8, 6), FitOptions::parse("components=5"))};
     for (std::size_t i = 0; i < materials.size(); ++i) {
         const FmfMaterial& m = *materials[i];
         const std::string path = dir.file("fmf-" + std::to_string(i) + ".exr");
@@ -328,8 +320,8 @@ TEST(Fmf, SaveLoadRoundTripIsExact) {
 TEST(Fmf, LoadingTakesTheFilesSxvTextureWithThePaddingZeroed) {
     // What loadMaterial hands over: the sxv texture as halves, moved into the material (its
     // padding beyond rank 3 is garbage here, which must not reach the renders).
-    FittedMaterial file =
-        FmfMaterial::fit(smallSample(4, 3), FitOptions::parse("components=3"))->toFittedMaterial();
+    FittedMaterial file = FmfMaterial::fit(test::sampleBtf(4, 3), FitOptions::parse("components=3"))
+                              ->toFittedMaterial();
     for (MaterialTexture& t : file.textures)
         if (t.kind == MaterialTexture::Half) {
             t.halves.assign(t.data.begin(), t.data.end());
@@ -362,7 +354,7 @@ TEST(Fmf, LoadingTakesTheFilesSxvTextureWithThePaddingZeroed) {
 TEST(Fmf, FileWithMismatchedTexturesIsRefused) {
     test::TempDir dir;
     osg::ref_ptr<FmfMaterial> m =
-        FmfMaterial::fit(smallSample(4, 3), FitOptions::parse("components=3"));
+        FmfMaterial::fit(test::sampleBtf(4, 3), FitOptions::parse("components=3"));
     FittedMaterial file = m->toFittedMaterial();
     file.parameters["components"] = "5";
     saveFittedMaterial(file, dir.file("bad.exr"));
@@ -401,7 +393,7 @@ TEST(Fmf, MemoryCountsSxvPerTexelAndUShared) {
 }
 
 TEST(Fmf, SampleErrorIsFarBelowTheLambertBaseline) {
-    const MeasuredBtf btf = smallSample(32, 32);
+    const MeasuredBtf btf = test::sampleBtf(32, 32);
     osg::ref_ptr<FmfMaterial> m = FmfMaterial::fit(btf, {});
     const ErrorSummary fmf =
         computeError(btf, [&](std::size_t t, float* out) { m->evaluateMeasured(t, out); });
@@ -414,3 +406,5 @@ TEST(Fmf, SampleErrorIsFarBelowTheLambertBaseline) {
     EXPECT_EQ(fmf.nonFiniteValues, 0u);
     EXPECT_LT(fmf.average, base.average / 4);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -9,6 +9,8 @@
 #include "materials/lambert/Lambert.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 TEST(FitOptions, ParsesKeyValuePairs) {
@@ -115,3 +117,5 @@ TEST(FittedMaterialUNorm8, RoundTripIsExact) {
     EXPECT_EQ(back.texture("a").kind, MaterialTexture::UNorm8);
     EXPECT_EQ(back.texture("a").data, values);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -13,27 +13,14 @@
 #include "materials/laf/Laf.h"
 #include "materials/laf/Lobes.h"
 #include "materials/lambert/Lambert.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
 namespace {
-
-std::string fitError(const MeasuredBtf& btf, const std::string& options) {
-    try {
-        LafMaterial::fit(btf, FitOptions::parse(options));
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "no error";
-}
-
-MeasuredBtf smallSample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
 
 /** Data from a model (evaluateMeasured) plus uniform noise of +-amplitude. */
 MeasuredBtf dataFrom(const Material& model, float amplitude, unsigned seed) {
@@ -58,16 +45,20 @@ ErrorSummary errorOf(const MeasuredBtf& btf, const Material& m) {
 }  // namespace
 
 TEST(Laf, InvalidOptionsAndInputAreRefused) {
-    const MeasuredBtf btf = smallSample(2, 2);
-    EXPECT_EQ(fitError(btf, "lobes=0"), "laf: option lobes must be an integer in 1..8, got 0");
-    EXPECT_EQ(fitError(btf, "lobes=9"), "laf: option lobes must be an integer in 1..8, got 9");
-    EXPECT_EQ(fitError(btf, "lobes=two"), "laf: option lobes must be an integer in 1..8, got two");
-    EXPECT_EQ(fitError(btf, "iterations=0"),
+    const MeasuredBtf btf = test::sampleBtf(2, 2);
+    EXPECT_EQ(test::fitError<LafMaterial>(btf, "lobes=0"),
+              "laf: option lobes must be an integer in 1..8, got 0");
+    EXPECT_EQ(test::fitError<LafMaterial>(btf, "lobes=9"),
+              "laf: option lobes must be an integer in 1..8, got 9");
+    EXPECT_EQ(test::fitError<LafMaterial>(btf, "lobes=two"),
+              "laf: option lobes must be an integer in 1..8, got two");
+    EXPECT_EQ(test::fitError<LafMaterial>(btf, "iterations=0"),
               "laf: option iterations must be an integer in 1..500, got 0");
-    EXPECT_EQ(fitError(btf, "clusters=4"),
+    EXPECT_EQ(test::fitError<LafMaterial>(btf, "clusters=4"),
               "laf: option clusters is unknown (known: lobes, iterations, cosine)");
-    EXPECT_EQ(fitError(btf, "cosine=2"), "laf: option cosine must be 0 or 1, got 2");
-    EXPECT_EQ(fitError(MeasuredBtf(), ""), "laf: cannot fit an empty BTF");
+    EXPECT_EQ(test::fitError<LafMaterial>(btf, "cosine=2"),
+              "laf: option cosine must be 0 or 1, got 2");
+    EXPECT_EQ(test::fitError<LafMaterial>(MeasuredBtf(), ""), "laf: cannot fit an empty BTF");
 }
 
 TEST(Laf, TwoVariableNonNegativeLeastSquares) {
@@ -118,7 +109,7 @@ TEST(Laf, RecoversAKnownModelFromNoisyData) {
 }
 
 TEST(Laf, SampleFitIsFiniteBoundedAndBeatsLambert) {
-    const MeasuredBtf btf = smallSample(8, 6);
+    const MeasuredBtf btf = test::sampleBtf(8, 6);
     osg::ref_ptr<LafMaterial> m = LafMaterial::fit(btf, {});
     for (float v : m->rhoD) ASSERT_TRUE(v >= 0.0f && v <= 1.0f);
     for (float v : m->rhoS) ASSERT_TRUE(v >= 0.0f && v <= 1.0f);
@@ -168,7 +159,8 @@ TEST(Laf, LiteralSeedModelWithoutCosineIsAvailable) {
 
 TEST(Laf, SaveLoadRoundTripIsExact) {
     test::TempDir dir;
-    osg::ref_ptr<LafMaterial> m = LafMaterial::fit(smallSample(5, 3), FitOptions::parse("lobes=1"));
+    osg::ref_ptr<LafMaterial> m =
+        LafMaterial::fit(test::sampleBtf(5, 3), FitOptions::parse("lobes=1"));
     saveMaterial(*m, dir.file("laf.exr"));
     osg::ref_ptr<Material> back = loadMaterial(dir.file("laf.exr"));
     ASSERT_EQ(back->methodName(), "laf");
@@ -203,3 +195,5 @@ TEST(Laf, IsRegistered) {
     ASSERT_EQ(info.options.size(), 3u);
     EXPECT_EQ(info.options[0].name, "lobes");
 }
+
+}  // namespace OSGBTF_TEST_FILE

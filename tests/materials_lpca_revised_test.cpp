@@ -13,27 +13,14 @@
 #include "materials/lambert/Lambert.h"
 #include "materials/lpca-revised/ConcentricMap.h"
 #include "materials/lpca-revised/LpcaRevised.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
 namespace {
-
-MeasuredBtf sample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
-
-std::string fitError(const std::string& options) {
-    try {
-        LpcaRevisedMaterial::fit(sample(4, 4), FitOptions::parse(options));
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "no error";
-}
 
 ErrorSummary errorOf(const MeasuredBtf& btf, const Material& m) {
     return computeError(btf, [&](std::size_t t, float* out) { m.evaluateMeasured(t, out); });
@@ -70,18 +57,19 @@ TEST(ConcentricMap, InverseIsExactBothWays) {
 }
 
 TEST(LpcaRevised, InvalidOptionsAreRefusedWithClearMessages) {
-    EXPECT_EQ(fitError("resolution=1"),
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "resolution=1"),
               "lpca-revised: option resolution must be an integer in 2..45, got 1");
-    EXPECT_EQ(fitError("resolution=46"),
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "resolution=46"),
               "lpca-revised: option resolution must be an integer in 2..45, got 46");
-    EXPECT_EQ(fitError("storage=float"),
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "storage=float"),
               "lpca-revised: option storage must be one of half, unorm8, got float");
-    EXPECT_EQ(fitError("clusters=0"),
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "clusters=0"),
               "lpca-revised: option clusters must be an integer in 1..256, got 0");
-    EXPECT_EQ(fitError("clusters=200 resolution=16"),
-              "lpca-revised: option resolution must be at most 10 with clusters=200 "
-              "components=8 (k x n and c x n <= 2048, the 3D texture size), got 16");
-    EXPECT_EQ(fitError("lobes=2"),
+    EXPECT_EQ(
+        test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "clusters=200 resolution=16"),
+        "lpca-revised: option resolution must be at most 10 with clusters=200 "
+        "components=8 (k x n and c x n <= 2048, the 3D texture size), got 16");
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "lobes=2"),
               "lpca-revised: option lobes is unknown (known: clusters, components, iterations, "
               "training, seed, resolution, storage)");
 }
@@ -92,7 +80,7 @@ TEST(LpcaRevised, ReproducesTheLpcaModelItResamples) {
     // rounding: never better than LPCA on the data, a finer grid closer, and (at n = 24) far
     // below the Lambert baseline. (n = 8 is about as far from the data as Lambert here: the
     // resampling error, not the LPCA error, dominates this nearly exactly fitted 8x8 sample.)
-    const MeasuredBtf btf = sample(8, 8);
+    const MeasuredBtf btf = test::sampleBtf(8, 8);
     osg::ref_ptr<LpcaMaterial> lpca =
         LpcaMaterial::fit(btf, FitOptions::parse("clusters=4 components=4"));
     const double lpcaError = errorOf(btf, *lpca).average;
@@ -115,7 +103,7 @@ TEST(LpcaRevised, EightBitStorageStaysWithinItsQuantisationBound) {
     // is a convex combination, so no more after filtering); with alpha'_i = 2 s_i alpha_i a
     // texel's value is off by sum_i |alpha'_i| / 510, plus the half rounding of the folded
     // weights and offset (2^-11 relative, q <= 1) and of the half model's grid (|E| <= s_i).
-    const MeasuredBtf btf = sample(6, 4);
+    const MeasuredBtf btf = test::sampleBtf(6, 4);
     osg::ref_ptr<LpcaMaterial> lpca =
         LpcaMaterial::fit(btf, FitOptions::parse("clusters=3 components=4"));
     osg::ref_ptr<LpcaRevisedMaterial> half = LpcaRevisedMaterial::fromLpca(*lpca, 12, false);
@@ -146,7 +134,7 @@ TEST(LpcaRevised, EightBitStorageStaysWithinItsQuantisationBound) {
 
 TEST(LpcaRevised, SaveLoadRoundTripIsExactAndOiioReadsTheFile) {
     test::TempDir dir;
-    const MeasuredBtf btf = sample(5, 3);
+    const MeasuredBtf btf = test::sampleBtf(5, 3);
     for (const char* storage : {"half", "unorm8"}) {
         osg::ref_ptr<LpcaRevisedMaterial> m = LpcaRevisedMaterial::fit(
             btf, FitOptions::parse(std::string("clusters=2 components=5 resolution=6 storage=") +
@@ -184,7 +172,7 @@ TEST(LpcaRevised, MemoryFollowsFromTheGrid) {
 }
 
 TEST(LpcaRevised, ErrorOnTheBuiltInSampleIsWellBelowTheLambertBaseline) {
-    const MeasuredBtf btf = sample(16, 16);
+    const MeasuredBtf btf = test::sampleBtf(16, 16);
     osg::ref_ptr<LpcaRevisedMaterial> m =
         LpcaRevisedMaterial::fit(btf, FitOptions::parse("clusters=8 components=4"));
     const ErrorSummary e = errorOf(btf, *m);
@@ -197,3 +185,5 @@ TEST(LpcaRevised, ErrorOnTheBuiltInSampleIsWellBelowTheLambertBaseline) {
     EXPECT_EQ(e.nonFiniteValues, 0u);
     EXPECT_LT(e.average, 0.75 * base.average);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -13,27 +13,14 @@
 #include "materials/lambert/Lambert.h"
 #include "materials/lpca/Lpca.h"
 #include "tests/ReferenceSvd.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
 namespace {
-
-MeasuredBtf sample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
-
-std::string fitError(const std::string& options) {
-    try {
-        LpcaMaterial::fit(sample(4, 4), FitOptions::parse(options));
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "no error";
-}
 
 double sumSquaredResidual(const MeasuredBtf& btf, const Material& m) {
     double sum = 0;
@@ -50,19 +37,24 @@ double sumSquaredResidual(const MeasuredBtf& btf, const Material& m) {
 }  // namespace
 
 TEST(Lpca, InvalidOptionsAreRefusedWithClearMessages) {
-    EXPECT_EQ(fitError("clusters=0"), "lpca: option clusters must be an integer in 1..256, got 0");
-    EXPECT_EQ(fitError("clusters=257"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "clusters=0"),
+              "lpca: option clusters must be an integer in 1..256, got 0");
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "clusters=257"),
               "lpca: option clusters must be an integer in 1..256, got 257");
-    EXPECT_EQ(fitError("components=0"), "lpca: option components must be an integer >= 1, got 0");
-    EXPECT_EQ(fitError("iterations=0"), "lpca: option iterations must be an integer >= 1, got 0");
-    EXPECT_EQ(fitError("training=-1"), "lpca: option training must be an integer >= 0, got -1");
-    EXPECT_EQ(fitError("seed=-1"), "lpca: option seed must be an integer >= 0, got -1");
-    EXPECT_EQ(fitError("clusters=17"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "components=0"),
+              "lpca: option components must be an integer >= 1, got 0");
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "iterations=0"),
+              "lpca: option iterations must be an integer >= 1, got 0");
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "training=-1"),
+              "lpca: option training must be an integer >= 0, got -1");
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "seed=-1"),
+              "lpca: option seed must be an integer >= 0, got -1");
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "clusters=17"),
               "lpca: option clusters must be at most 16 (the texels of this BTF), got 17");
-    EXPECT_EQ(fitError("lobes=2"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "lobes=2"),
               "lpca: option lobes is unknown (known: clusters, components, iterations, training, "
               "seed)");
-    EXPECT_EQ(fitError("clusters=two"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "clusters=two"),
               "lpca: option clusters must be an integer in 1..256, got two");
 }
 
@@ -108,7 +100,7 @@ TEST(Lpca, OneClusterIsTheOptimalRankCApproximation) {
     few.width = few.height = 8;
     few.views = DirectionSet("v", {{0, 0}, {30, 90}, {60, 200}});
     few.lights = DirectionSet("l", {{10, 0}, {40, 120}, {70, 240}});
-    for (const MeasuredBtf& btf : {sample(8, 6), makeSampleBtf(few)}) {
+    for (const MeasuredBtf& btf : {test::sampleBtf(8, 6), makeSampleBtf(few)}) {
         const bool viaGram = btf.texelCount() < btf.imageCount() * 3;
         // One component for the small case: with three, its optimum (~4e-4) is of the order of
         // the half rounding of model and weights, which the 1 % below does not allow for.
@@ -132,7 +124,7 @@ TEST(Lpca, OneClusterIsTheOptimalRankCApproximation) {
 }
 
 TEST(Lpca, ErrorDecreasesAsClustersOrComponentsGrow) {
-    const MeasuredBtf btf = sample(12, 12);
+    const MeasuredBtf btf = test::sampleBtf(12, 12);
     auto averageError = [&](int k, int c) {
         osg::ref_ptr<LpcaMaterial> m =
             LpcaMaterial::fit(btf, FitOptions::parse("training=0 clusters=" + std::to_string(k) +
@@ -158,7 +150,7 @@ TEST(Lpca, ErrorDecreasesAsClustersOrComponentsGrow) {
 }
 
 TEST(Lpca, InterpolatedEvaluationEqualsMeasuredAtTheSamples) {
-    const MeasuredBtf btf = sample(5, 3);
+    const MeasuredBtf btf = test::sampleBtf(5, 3);
     osg::ref_ptr<LpcaMaterial> m =
         LpcaMaterial::fit(btf, FitOptions::parse("clusters=3 components=4"));
     std::vector<float> measured(81 * 81 * 3);
@@ -176,7 +168,7 @@ TEST(Lpca, InterpolatedEvaluationEqualsMeasuredAtTheSamples) {
 TEST(Lpca, SaveLoadRoundTripIsExactAndOiioReadsTheFile) {
     test::TempDir dir;
     osg::ref_ptr<LpcaMaterial> m =
-        LpcaMaterial::fit(sample(7, 5), FitOptions::parse("clusters=3 components=5"));
+        LpcaMaterial::fit(test::sampleBtf(7, 5), FitOptions::parse("clusters=3 components=5"));
     saveMaterial(*m, dir.file("lpca.exr"));
     osg::ref_ptr<Material> back = loadMaterial(dir.file("lpca.exr"));
     ASSERT_EQ(back->methodName(), "lpca");
@@ -207,7 +199,7 @@ TEST(Lpca, MemoryMatchesMeseth2003Table2AtTheStandardConfiguration) {
 
 TEST(Lpca, ErrorOnTheBuiltInSampleIsWellBelowTheLambertBaseline) {
     // Small enough for a Debug/ASan build; bench_fit_lpca --error gives the default 32x8 figures.
-    const MeasuredBtf btf = sample(16, 16);
+    const MeasuredBtf btf = test::sampleBtf(16, 16);
     osg::ref_ptr<LpcaMaterial> m =
         LpcaMaterial::fit(btf, FitOptions::parse("clusters=8 components=4"));
     const ErrorSummary e =
@@ -225,3 +217,5 @@ TEST(Lpca, ErrorOnTheBuiltInSampleIsWellBelowTheLambertBaseline) {
     EXPECT_LT(e.average, 0.5 * base.average);
     EXPECT_LT(e.maximum, base.maximum);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -15,19 +15,15 @@
 #include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/neural/Neural.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 using osgBTF::test::errorOf;
 
 namespace {
-
-MeasuredBtf sample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
 
 osg::ref_ptr<NeuralMaterial> fit(const BtfSource& btf, const std::string& options) {
     return NeuralMaterial::fit(btf, FitOptions::parse(options));
@@ -70,7 +66,7 @@ osg::ref_ptr<NeuralMaterial> handMadeNetwork() {
 }  // namespace
 
 TEST(Neural, OptionErrorsHaveTheRegistryFormat) {
-    const MeasuredBtf btf = sample(2, 2);
+    const MeasuredBtf btf = test::sampleBtf(2, 2);
     EXPECT_EQ(errorOf([&] { fit(btf, "latent=6"); }),
               "neural: option latent must be a multiple of 4, got 6");
     EXPECT_EQ(errorOf([&] { fit(btf, "units=30"); }),
@@ -162,7 +158,7 @@ TEST(Neural, MemoryCountsHalfLatentsPerTexelAndTheSharedDecoder) {
 // The network can represent lambert's albedo x l_z exactly (a constant decoder output per texel),
 // so a working fit ends below the baseline; 2000 steps on 8 x 8 texels give 0.0169 against 0.0190.
 TEST(Neural, FitLearnsTheSampleBelowTheLambertBaseline) {
-    const MeasuredBtf btf = sample(8, 8);
+    const MeasuredBtf btf = test::sampleBtf(8, 8);
     const osg::ref_ptr<NeuralMaterial> m = fit(btf, "latent=4 units=16 steps=2000 batch=1024");
     const ErrorSummary neural = errorOfMaterial(btf, *m);
     const ErrorSummary lambert = errorOfMaterial(btf, *LambertMaterial::fit(btf, FitOptions()));
@@ -176,7 +172,7 @@ TEST(Neural, FitLearnsTheSampleBelowTheLambertBaseline) {
 }
 
 TEST(Neural, TheSameSeedFitsTheSameMaterialAndAnotherSeedAnother) {
-    const MeasuredBtf btf = sample(4, 4);
+    const MeasuredBtf btf = test::sampleBtf(4, 4);
     const std::string options = "latent=4 units=8 layers=1 steps=50 batch=256";
     const osg::ref_ptr<NeuralMaterial> a = fit(btf, options), b = fit(btf, options),
                                        c = fit(btf, options + " seed=2");
@@ -186,7 +182,7 @@ TEST(Neural, TheSameSeedFitsTheSameMaterialAndAnotherSeedAnother) {
 }
 
 TEST(Neural, AMemoryLimitSplitsTheMeasuredDataIntoBlocks) {
-    const MeasuredBtf btf = sample(8, 8);
+    const MeasuredBtf btf = test::sampleBtf(8, 8);
     MemoryLimitGuard guard;
     // An eighth of the limit holds 16 texels' ABRDFs (81 x 81 pairs, RGB floats): 4 blocks.
     setMemoryLimit(8ull * 16 * 81 * 81 * 3 * 4);
@@ -201,3 +197,5 @@ TEST(Neural, AMemoryLimitSplitsTheMeasuredDataIntoBlocks) {
     const ErrorSummary lambert = errorOfMaterial(btf, *LambertMaterial::fit(btf, FitOptions()));
     EXPECT_LT(neural.rmse, 0.95 * lambert.rmse);
 }
+
+}  // namespace OSGBTF_TEST_FILE

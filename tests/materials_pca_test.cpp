@@ -14,27 +14,14 @@
 #include "materials/lambert/Lambert.h"
 #include "materials/pca/Pca.h"
 #include "tests/ReferenceSvd.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
 namespace {
-
-std::string fitError(const MeasuredBtf& btf, const std::string& options) {
-    try {
-        PcaMaterial::fit(btf, FitOptions::parse(options));
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
-}
-
-MeasuredBtf smallSample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
 
 /** Data generated from the model itself: each view's images are a rank-`rank` combination of
  *  random non-negative textures, plus Gaussian noise of deviation `noise`. */
@@ -95,21 +82,21 @@ double optimalResidual(const MeasuredBtf& btf, std::size_t v, int c) {
 }  // namespace
 
 TEST(Pca, InvalidOptionsAreRefusedWithClearMessages) {
-    const MeasuredBtf btf = smallSample(4, 3);
-    EXPECT_EQ(fitError(btf, "components=0"),
+    const MeasuredBtf btf = test::sampleBtf(4, 3);
+    EXPECT_EQ(test::fitError<PcaMaterial>(btf, "components=0"),
               "pca: option components must be an integer >= 1, got 0");
-    EXPECT_EQ(fitError(btf, "components=37"),
+    EXPECT_EQ(test::fitError<PcaMaterial>(btf, "components=37"),
               "pca: option components must be at most 36 for this BTF (its lights, or 3 x texels "
               "if fewer), got 37");
-    EXPECT_EQ(fitError(btf, "components=many"),
+    EXPECT_EQ(test::fitError<PcaMaterial>(btf, "components=many"),
               "pca: option components must be an integer >= 1, got many");
-    EXPECT_EQ(fitError(btf, "storage=int4"),
+    EXPECT_EQ(test::fitError<PcaMaterial>(btf, "storage=int4"),
               "pca: option storage must be one of unorm8, half, float, got int4");
-    EXPECT_EQ(fitError(btf, "lobes=2"),
+    EXPECT_EQ(test::fitError<PcaMaterial>(btf, "lobes=2"),
               "pca: option lobes is unknown (known: components, storage)");
-    EXPECT_EQ(fitError(MeasuredBtf(), ""), "pca: the BTF is empty");
+    EXPECT_EQ(test::fitError<PcaMaterial>(MeasuredBtf(), ""), "pca: the BTF is empty");
     // With more texel values than lights, the light count bounds the rank.
-    EXPECT_EQ(fitError(smallSample(6, 5), "components=82"),
+    EXPECT_EQ(test::fitError<PcaMaterial>(test::sampleBtf(6, 5), "components=82"),
               "pca: option components must be at most 81 for this BTF (its lights, or 3 x texels "
               "if fewer), got 82");
 }
@@ -200,7 +187,7 @@ TEST(Pca, QuantisedStorageStaysCloseToTheOptimum) {
 
 TEST(Pca, SaveLoadRoundTripIsExact) {
     test::TempDir dir;
-    const MeasuredBtf btf = smallSample(8, 6);
+    const MeasuredBtf btf = test::sampleBtf(8, 6);
     for (const std::string storage : {"unorm8", "half", "float"}) {
         osg::ref_ptr<PcaMaterial> m =
             PcaMaterial::fit(btf, FitOptions::parse("components=5 storage=" + storage));
@@ -232,7 +219,7 @@ TEST(Pca, SaveLoadRoundTripIsExact) {
 TEST(Pca, FileWithMismatchedTexturesIsRefused) {
     test::TempDir dir;
     osg::ref_ptr<PcaMaterial> m =
-        PcaMaterial::fit(smallSample(4, 3), FitOptions::parse("components=3"));
+        PcaMaterial::fit(test::sampleBtf(4, 3), FitOptions::parse("components=3"));
     FittedMaterial file = m->toFittedMaterial();
     file.parameters["components"] = "4";
     saveFittedMaterial(file, dir.file("bad.exr"));
@@ -271,7 +258,7 @@ TEST(Pca, MemoryMatchesMeseth2003Table2) {
 }
 
 TEST(Pca, SampleErrorIsFarBelowTheLambertBaseline) {
-    const MeasuredBtf btf = smallSample(32, 32);
+    const MeasuredBtf btf = test::sampleBtf(32, 32);
     osg::ref_ptr<PcaMaterial> m = PcaMaterial::fit(btf, {});
     const ErrorSummary pca =
         computeError(btf, [&](std::size_t t, float* out) { m->evaluateMeasured(t, out); });
@@ -289,3 +276,5 @@ TEST(Pca, SampleErrorIsFarBelowTheLambertBaseline) {
     EXPECT_LT(pca.average, base.average / 4);
     EXPECT_LT(pca.average, 0.0166);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -17,7 +17,10 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/ptm/Ptm.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
@@ -27,13 +30,6 @@ namespace {
 
 /** Unit roundoff of float: every stored float value is within u of the exact one (relative). */
 const double kFloatU = std::ldexp(1.0, -24);
-
-MeasuredBtf sample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
 
 osg::ref_ptr<PtmMaterial> fit(const BtfSource& btf, const std::string& options) {
     return PtmMaterial::fit(btf, FitOptions::parse(options));
@@ -91,7 +87,7 @@ Eigen::VectorXd values(const MeasuredBtf& btf, std::size_t texel, std::size_t vi
 // ---- options -----------------------------------------------------------------------------------
 
 TEST(PtmOptions, InvalidOptionsAreRefusedWithExactMessages) {
-    const MeasuredBtf btf = sample(3, 2);
+    const MeasuredBtf btf = test::sampleBtf(3, 2);
     EXPECT_EQ(errorOf([&] { fit(btf, "colour=grey"); }),
               "ptm: option colour must be one of rgb, luminance, got grey");
     EXPECT_EQ(errorOf([&] { fit(btf, "views=some"); }),
@@ -110,7 +106,7 @@ TEST(PtmOptions, InvalidOptionsAreRefusedWithExactMessages) {
 }
 
 TEST(PtmOptions, DefaultsAreTheSeedsRgbFrontViewPtmInHalf) {
-    const osg::ref_ptr<PtmMaterial> m = fit(sample(3, 2), "");
+    const osg::ref_ptr<PtmMaterial> m = fit(test::sampleBtf(3, 2), "");
     EXPECT_FALSE(m->shape().luminance);
     EXPECT_FALSE(m->shape().perView);
     EXPECT_EQ(m->shape().storage, MaterialTexture::Half);
@@ -205,7 +201,7 @@ TEST(PtmFit, LuminanceVariantRecoversAColourTimesAPtm) {
 // columns. With float storage the stored coefficients are the exact solution rounded (|da_j| <=
 // u |a_j|), so A^T r = -A^T A da: |(A^T r)_k| <= u sum_j |G_kj| |a_j|.
 TEST(PtmFit, ResidualIsOrthogonalToTheDesignColumns) {
-    const MeasuredBtf btf = sample(6, 5);
+    const MeasuredBtf btf = test::sampleBtf(6, 5);
     const Eigen::MatrixXd a = design(btf.lights());
     const Eigen::MatrixXd gram = a.transpose() * a;
     const osg::ref_ptr<PtmMaterial> m = fit(btf, "storage=float");
@@ -235,7 +231,7 @@ TEST(PtmFit, ResidualIsOrthogonalToTheDesignColumns) {
 // colour. The stored polynomial P = P* + A d (|d_k| <= u |a_k|) gives colour <y, P> / <P, P> =
 // 1 - <P*, A d> / <P*, P*> + O(u^2), off by at most u K with K = sum_k |a_k| |A e_k| / |A a|.
 TEST(PtmFit, LuminanceOnGreyDataEqualsRgb) {
-    const MeasuredBtf colourful = sample(4, 4);
+    const MeasuredBtf colourful = test::sampleBtf(4, 4);
     MeasuredBtf grey(4, 4, colourful.views(), colourful.lights());
     for (std::size_t v = 0; v < grey.viewCount(); ++v)
         for (std::size_t l = 0; l < grey.lightCount(); ++l)
@@ -276,7 +272,7 @@ TEST(PtmFit, LuminanceOnGreyDataEqualsRgb) {
 // the barycentric coordinates (well below 1e-5 for directions on the unit sphere), so the blend is
 // that view's own PTM; between views it is a blend of distinct PTMs.
 TEST(PtmViews, BlendingAtAMeasuredViewReturnsThatViewsPtm) {
-    const MeasuredBtf btf = sample(4, 3);
+    const MeasuredBtf btf = test::sampleBtf(4, 3);
     const osg::ref_ptr<PtmMaterial> m = fit(btf, "views=all colour=luminance");
     const DirectionSet& views = m->views();
     const std::vector<Direction> lights = {{0, 0}, {37, 110}, {60, 285}, {80, 10}};
@@ -307,7 +303,7 @@ TEST(PtmViews, BlendingAtAMeasuredViewReturnsThatViewsPtm) {
 TEST(PtmFile, SaveLoadRoundTripIsExact) {
     test::TempDir dir;
     for (const char* options : {"", "colour=luminance views=all"}) {
-        const osg::ref_ptr<PtmMaterial> m = fit(sample(5, 3), options);
+        const osg::ref_ptr<PtmMaterial> m = fit(test::sampleBtf(5, 3), options);
         saveMaterial(*m, dir.file("ptm.exr"));
         osg::ref_ptr<Material> loaded = loadMaterial(dir.file("ptm.exr"));
         ASSERT_EQ(loaded->methodName(), "ptm");
@@ -320,7 +316,7 @@ TEST(PtmFile, SaveLoadRoundTripIsExact) {
         EXPECT_EQ(back.evaluate(4, 2, v, l), m->evaluate(4, 2, v, l)) << options;
     }
     // A file whose arrays do not match its declared shape is refused with the reason.
-    const osg::ref_ptr<PtmMaterial> m = fit(sample(5, 3), "");
+    const osg::ref_ptr<PtmMaterial> m = fit(test::sampleBtf(5, 3), "");
     FittedMaterial broken = m->toFittedMaterial();
     broken.parameters["views"] = "all";
     saveFittedMaterial(broken, dir.file("broken.exr"));
@@ -366,7 +362,7 @@ TEST(PtmSample, ErrorsOnTheBuiltInSample) {
     // For the record (README); the check: one PTM per view is the least-squares optimum of each
     // view, so its RMSE is below that of the front view's PTM used for every view (the clamp at 0
     // and half rounding change both by far less than the views differ).
-    const MeasuredBtf btf = sample(16, 16);
+    const MeasuredBtf btf = test::sampleBtf(16, 16);
     const auto errorOfFit = [&](const Material& m) {
         return computeError(btf, [&](std::size_t t, float* out) { m.evaluateMeasured(t, out); });
     };
@@ -385,3 +381,5 @@ TEST(PtmSample, ErrorsOnTheBuiltInSample) {
     }
     EXPECT_LT(allRmse, frontRmse);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -12,20 +12,16 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/rf/Rf.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
 using osgBTF::test::errorOf;
 
 namespace {
-
-MeasuredBtf sample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
 
 /** The model's values at every measured (view, light) pair as a MeasuredBtf, plus noise. */
 MeasuredBtf render(const RfMaterial& m, float noise, unsigned seed) {
@@ -79,7 +75,7 @@ bool allFinite(const std::vector<float>& v) {
 }  // namespace
 
 TEST(RfOptions, InvalidOptionsAreRefusedWithExactMessages) {
-    const MeasuredBtf btf = sample(2, 2);
+    const MeasuredBtf btf = test::sampleBtf(2, 2);
     const auto fitWith = [&](const std::string& options) {
         return errorOf([&] { RfMaterial::fit(btf, FitOptions::parse(options)); });
     };
@@ -179,7 +175,7 @@ TEST(RfFit, RecoversAModelFromNoisyData) {
 // The built-in sample (woven cloth with parallax and self-shadowing): error reported and bounded,
 // no NaN, no divergent texel, nothing blowing up between the measured directions.
 TEST(RfFit, BuiltInSampleIsFittedWithoutDivergence) {
-    const MeasuredBtf btf = sample(8, 8);
+    const MeasuredBtf btf = test::sampleBtf(8, 8);
     osg::ref_ptr<RfMaterial> m = RfMaterial::fit(btf, {});
     ASSERT_TRUE(allFinite(m->rhoD) && allFinite(m->rhoV) && allFinite(m->lobes));
     for (std::size_t i = 3; i < m->lobes.size(); i += 4) {
@@ -236,7 +232,8 @@ TEST(RfFit, BuiltInSampleIsFittedWithoutDivergence) {
 
 TEST(RfFile, SaveLoadRoundTripIsExact) {
     test::TempDir dir;
-    osg::ref_ptr<RfMaterial> m = RfMaterial::fit(sample(5, 3), FitOptions::parse("lobes=1"));
+    osg::ref_ptr<RfMaterial> m =
+        RfMaterial::fit(test::sampleBtf(5, 3), FitOptions::parse("lobes=1"));
     saveMaterial(*m, dir.file("rf.exr"));
     osg::ref_ptr<Material> loaded = loadMaterial(dir.file("rf.exr"));
     ASSERT_EQ(loaded->methodName(), "rf");
@@ -428,7 +425,7 @@ double relativeRms(const MeasuredBtf& btf, const RfMaterial& m) {
 }  // namespace
 
 TEST(RfVariants, OptionsAndShapesAreValidatedWithExactMessages) {
-    const MeasuredBtf btf = sample(2, 2);
+    const MeasuredBtf btf = test::sampleBtf(2, 2);
     const auto fitWith = [&](const std::string& options) {
         return errorOf([&] { RfMaterial::fit(btf, FitOptions::parse(options)); });
     };
@@ -547,7 +544,8 @@ TEST(RfVariants, SaveLoadRoundTripIsExactAndOldFilesLoadAsTheDefault) {
 
     // A file from before the options (no "diffuse", no "colour") is the default model.
     FittedMaterial old =
-        RfMaterial::fit(sample(3, 2), FitOptions::parse("lobes=1 starts=1"))->toFittedMaterial();
+        RfMaterial::fit(test::sampleBtf(3, 2), FitOptions::parse("lobes=1 starts=1"))
+            ->toFittedMaterial();
     old.parameters.erase("diffuse");
     old.parameters.erase("colour");
     saveFittedMaterial(old, dir.file("old.exr"));
@@ -598,3 +596,5 @@ TEST(RfMemory, VariantsMatchBosserhoff2003PerView) {
     EXPECT_DOUBLE_EQ(rgbFloor.valuesPerTexel, 3 + 81 * 27.0);
     EXPECT_DOUBLE_EQ(rgbFloor.bytesPerTexel, 3 + 81 * 54.0);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -14,27 +14,14 @@
 #include "materials/laf/Laf.h"
 #include "materials/laf/Lobes.h"
 #include "materials/slaf/Slaf.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
 namespace {
-
-std::string fitError(const MeasuredBtf& btf, const std::string& options) {
-    try {
-        SlafMaterial::fit(btf, FitOptions::parse(options));
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "no error";
-}
-
-MeasuredBtf smallSample(int width, int height) {
-    SampleOptions options;
-    options.width = width;
-    options.height = height;
-    return makeSampleBtf(options);
-}
 
 MeasuredBtf dataFrom(const Material& model, float amplitude, unsigned seed) {
     MeasuredBtf btf(model.width(), model.height(), model.views(), model.lights());
@@ -58,15 +45,16 @@ ErrorSummary errorOf(const MeasuredBtf& btf, const Material& m) {
 }  // namespace
 
 TEST(Slaf, InvalidOptionsAndInputAreRefused) {
-    const MeasuredBtf btf = smallSample(2, 2);
-    EXPECT_EQ(fitError(btf, "lobes=0"), "slaf: option lobes must be an integer in 1..8, got 0");
-    EXPECT_EQ(fitError(btf, "rounds=-1"),
+    const MeasuredBtf btf = test::sampleBtf(2, 2);
+    EXPECT_EQ(test::fitError<SlafMaterial>(btf, "lobes=0"),
+              "slaf: option lobes must be an integer in 1..8, got 0");
+    EXPECT_EQ(test::fitError<SlafMaterial>(btf, "rounds=-1"),
               "slaf: option rounds must be an integer in 0..10, got -1");
-    EXPECT_EQ(fitError(btf, "iterations=501"),
+    EXPECT_EQ(test::fitError<SlafMaterial>(btf, "iterations=501"),
               "slaf: option iterations must be an integer in 1..500, got 501");
-    EXPECT_EQ(fitError(btf, "views=3"),
+    EXPECT_EQ(test::fitError<SlafMaterial>(btf, "views=3"),
               "slaf: option views is unknown (known: lobes, iterations, rounds, cosine)");
-    EXPECT_EQ(fitError(MeasuredBtf(), ""), "slaf: cannot fit an empty BTF");
+    EXPECT_EQ(test::fitError<SlafMaterial>(MeasuredBtf(), ""), "slaf: cannot fit an empty BTF");
 }
 
 TEST(Slaf, RecoversAKnownModelFromNoisyData) {
@@ -110,7 +98,7 @@ TEST(Slaf, RecoversAKnownModelFromNoisyData) {
 }
 
 TEST(Slaf, SampleFitIsFiniteBoundedAndNotWorseThanLaf) {
-    const MeasuredBtf btf = smallSample(6, 5);
+    const MeasuredBtf btf = test::sampleBtf(6, 5);
     osg::ref_ptr<SlafMaterial> m = SlafMaterial::fit(btf, {});
     for (float v : m->scale) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
     for (std::size_t i = 0; i < m->lobes.size(); ++i) {
@@ -155,7 +143,7 @@ TEST(Slaf, SampleFitIsFiniteBoundedAndNotWorseThanLaf) {
 
 TEST(Slaf, InterpolationIsExactAtMeasuredViews) {
     osg::ref_ptr<SlafMaterial> m =
-        SlafMaterial::fit(smallSample(3, 2), FitOptions::parse("rounds=0"));
+        SlafMaterial::fit(test::sampleBtf(3, 2), FitOptions::parse("rounds=0"));
     std::vector<float> abrdf(81 * 81 * 3);
     m->evaluateMeasured(4, abrdf.data());
     for (std::size_t v : {0, 5, 33, 80})
@@ -168,7 +156,7 @@ TEST(Slaf, InterpolationIsExactAtMeasuredViews) {
 // LAF is SLAF with T fixed at 1 (both are LobeMaterial): a SLAF holding a LAF fit's colours and
 // lobes with T = 1 gives exactly LAF's values.
 TEST(Slaf, WithTheViewTableAtOneIsLaf) {
-    osg::ref_ptr<LafMaterial> laf = LafMaterial::fit(smallSample(3, 2), FitOptions::parse(""));
+    osg::ref_ptr<LafMaterial> laf = LafMaterial::fit(test::sampleBtf(3, 2), FitOptions::parse(""));
     osg::ref_ptr<SlafMaterial> slaf =
         SlafMaterial::create(3, 2, laf->lobeCount(), laf->views(), laf->lights());
     slaf->rhoD = laf->rhoD;
@@ -188,7 +176,7 @@ TEST(Slaf, WithTheViewTableAtOneIsLaf) {
 TEST(Slaf, SaveLoadRoundTripIsExact) {
     test::TempDir dir;
     osg::ref_ptr<SlafMaterial> m =
-        SlafMaterial::fit(smallSample(4, 3), FitOptions::parse("rounds=1"));
+        SlafMaterial::fit(test::sampleBtf(4, 3), FitOptions::parse("rounds=1"));
     saveMaterial(*m, dir.file("slaf.exr"));
     osg::ref_ptr<Material> back = loadMaterial(dir.file("slaf.exr"));
     ASSERT_EQ(back->methodName(), "slaf");
@@ -211,3 +199,5 @@ TEST(Slaf, MemoryMatchesMeseth2003Table2) {
     EXPECT_EQ(m->memory().bytesPerTexel, 508.0);
     EXPECT_EQ(m->memory().totalBytes, 508u * 256u * 256u);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -17,6 +17,8 @@
 #include "materials/Material.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 namespace fs = std::filesystem;
@@ -213,3 +215,5 @@ TEST(MethodShaders, EmbeddedFromTheMethodFolders) {
     }
     EXPECT_FALSE(fs::exists(source / "shaders" / "environment"));
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -12,6 +12,8 @@
 #include "materials/Material.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -129,3 +131,5 @@ TEST(MethodOptions, EachReadmeOptionTableMatchesTheSchema) {
     }
     EXPECT_GE(checked, 7);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -23,6 +23,8 @@
 #include "tests/DummyMethod.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 
 using namespace osgBTF;
@@ -172,3 +174,5 @@ TEST(MethodPlugin, AppearsInTheComparisonTables) {
         std::string::npos)
         << report;
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -30,6 +30,8 @@
 #include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using osgBTF::test::buildDir;
 using osgBTF::test::builtTool;
@@ -318,3 +320,5 @@ TEST(PackageScripts, LinkOsgsPluginNamesToOursOnlyWhereFree) {
               "OpenSceneGraph's\n");
     EXPECT_TRUE(fs::exists(plugins / "osgdb_btfzip.so"));  // dpkg's to remove, not the script's
 }
+
+}  // namespace OSGBTF_TEST_FILE

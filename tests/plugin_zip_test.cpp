@@ -18,6 +18,8 @@
 #include "scene/OwnPlugins.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using osgBTF::test::buildDir;
 using osgBTF::test::builtTool;
 using osgBTF::test::runCommand;
@@ -132,3 +134,5 @@ TEST(ZipPlugin, OsgDbGoesOnToTheNextReader) {
     EXPECT_EQ(result.message().rfind(odd + ": ", 0), 0u) << result.message();
     osgDB::Registry::instance()->removeReaderWriter(next.get());
 }
+
+}  // namespace OSGBTF_TEST_FILE

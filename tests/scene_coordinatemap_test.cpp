@@ -18,6 +18,8 @@
 #include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::ScopedNotifyCapture;
 using osgBTF::test::TempDir;
@@ -244,3 +246,5 @@ TEST(CoordinateMapPlugin, PseudoLoaderMapOption) {
     EXPECT_EQ(node->getTextureScale(), 4.0f);
     EXPECT_EQ(node->getNumChildren(), 1u);
 }
+
+}  // namespace OSGBTF_TEST_FILE

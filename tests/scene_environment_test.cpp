@@ -20,6 +20,8 @@
 #include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::errorOf;
 using osgBTF::test::TempDir;
@@ -252,3 +254,5 @@ TEST(EnvironmentLight, RepresentativeLightSourcesCarryThePowerTimesExposure) {
     light->getExposureUniform()->get(exposure);
     EXPECT_EQ(exposure, 0.5f);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -14,6 +14,8 @@
 #include "scene/FitCache.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::TempDir;
@@ -136,3 +138,5 @@ TEST(FitCache, DefaultFolderFollowsTheEnvironment) {
         EXPECT_EQ(defaultFitCacheFolder(), "");
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -26,6 +26,8 @@
 #include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::errorOf;
@@ -246,3 +248,5 @@ TEST(NativeUbo2014, PseudoLoaderPutsAModelUnderTheStoredMaterial) {
     ASSERT_NE(asMaterialNode(fitted), nullptr) << fitted.message();
     EXPECT_EQ(asMaterialNode(fitted)->getMaterial()->methodName(), "lambert");
 }
+
+}  // namespace OSGBTF_TEST_FILE

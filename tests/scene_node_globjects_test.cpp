@@ -20,6 +20,8 @@
 #include "scene/MaterialNode.h"
 #include "scene/ShadowTerminator.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -165,3 +167,5 @@ TEST(SceneMaterialNodeGLObjects, LightStateOfADeletedCameraIsPruned) {
     node->releaseGLObjects(nullptr);  // also prunes
     EXPECT_EQ(node->getNumCameraLightStates(), 1u);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -21,6 +21,8 @@
 #include "tests/NotifyCapture.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::TempDir;
@@ -382,3 +384,5 @@ TEST(SceneMaterialNode, NodesShareOneTerminatorStateSetWhoseTextureHasOneParent)
     EXPECT_EQ(shared->referenceCount(), 3);
     EXPECT_EQ(texture->getNumParents(), 1u);
 }
+
+}  // namespace OSGBTF_TEST_FILE

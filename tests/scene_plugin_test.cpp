@@ -21,6 +21,8 @@
 #include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using osgBTF::test::TempDir;
@@ -280,3 +282,5 @@ TEST(ScenePlugins, CacheOffFitsWithoutWriting) {
     EXPECT_EQ(filesIn(dir.file("env-cache")).size(), 1u);
     unsetenv("OSGBTF_CACHE_DIR");
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -14,6 +14,8 @@
 #include "scene/ShadowTerminator.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -152,3 +154,5 @@ TEST(TerminatorSerializer, OsgtWrittenBeforeItReadsWithTheDefaults) {
     EXPECT_EQ(read->getTerminatorAlpha(), kDefaultTerminatorAlpha);
     EXPECT_EQ(read->getShadowLight(), -1);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -9,6 +9,8 @@
 #include "scene/MaterialNode.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -77,3 +79,5 @@ TEST(ShaderInterface, ProgramsBindTheTangentAttribute) {
     ASSERT_NE(it, bindings.end());
     EXPECT_EQ(it->second, shader::kTangentAttribute);
 }
+
+}  // namespace OSGBTF_TEST_FILE

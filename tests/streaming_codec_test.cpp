@@ -22,6 +22,8 @@
 #include "core/Error.h"
 #include "streaming/TileCodec.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using Imath::half;
 
@@ -683,3 +685,5 @@ TEST_F(TileCodecPayload, RandomBytesAndMutationsNeverCrash) {
 }
 
 }  // namespace
+
+}  // namespace OSGBTF_TEST_FILE

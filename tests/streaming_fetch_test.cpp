@@ -22,6 +22,8 @@
 #include "tests/NotifyCapture.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::NginxServer;
 using osgBTF::test::ScopedNotifyCapture;
@@ -426,3 +428,5 @@ TEST_F(NginxTileServer, FetcherDestructorReturnsPromptlyDuringAStalledTransfer) 
 }
 
 }  // namespace
+
+}  // namespace OSGBTF_TEST_FILE

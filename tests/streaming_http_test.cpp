@@ -39,6 +39,8 @@
 #include "tests/RandomFactors.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::NginxServer;
 using osgBTF::test::ScopedNotifyCapture;
@@ -822,3 +824,5 @@ TEST_F(StreamingHttp, BytesReceivedCountsTheIndex) {
 }
 
 }  // namespace
+
+}  // namespace OSGBTF_TEST_FILE

@@ -25,6 +25,8 @@
 #include "tests/RandomFactors.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -186,3 +188,5 @@ TEST(BsvtfSerializer, AStreamingGroupRoundTripsThroughOsgtAndOsgb) {
     EXPECT_NE(capture.text().find("(its nodes draw their children without it)"), std::string::npos)
         << capture.text();
 }
+
+}  // namespace OSGBTF_TEST_FILE

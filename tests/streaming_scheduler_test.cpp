@@ -22,6 +22,8 @@
 #include "streaming/TileLayout.h"
 #include "streaming/TileScheduler.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -846,3 +848,5 @@ TEST(TileScheduler, HundredMaterialScene) {
               << " ms, worst " << worst << " ms per step, " << operations << " operations, "
               << evictions << " evictions\n";
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -16,6 +16,8 @@
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::errorOf;
 
@@ -358,3 +360,5 @@ TEST(TilesCommand, RefusesOtherMethodsAndWritesTheSetOfAnFmfMaterial) {
 }
 
 }  // namespace
+
+}  // namespace OSGBTF_TEST_FILE

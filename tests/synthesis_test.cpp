@@ -16,6 +16,8 @@
 #include "synthesis/Tileable.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -332,3 +334,5 @@ TEST(MakeTileable, RowPassAloneShrinksTheJumpExactly) {
         EXPECT_NEAR(step, band ? 0.1f - e / 5.0f : 0.1f, 1e-6f) << x;
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -7,6 +7,8 @@
 
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF::test;
 
 namespace {
@@ -196,3 +198,5 @@ TEST(BtfTool, FindsItsOwnPluginsWithoutOsgLibraryPath) {
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("environment " + sky), std::string::npos) << r.output;
 }
+
+}  // namespace OSGBTF_TEST_FILE

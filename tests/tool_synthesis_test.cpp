@@ -10,6 +10,8 @@
 #include "loaders/LoadBtf.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -135,3 +137,5 @@ TEST_F(BtfSynthesizeTool, DeterministicMapQualityFiguresAndMakeTileable) {
                 }
     EXPECT_LE(after, 2.0f * before / 7.0f + 1.0f / 255.0f + 1e-6f);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -16,6 +16,8 @@
 #include "tests/HandWrittenUbo2014.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF::test;
 
 namespace {
@@ -298,3 +300,5 @@ TEST(BtfToolUbo2014, TilesConvertADfmfFileAndStateTheError) {
               std::string::npos)
         << refused.output;
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -22,6 +22,8 @@
 #include "materials/fmf/Fmf.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::readTextFile;
 using osgBTF::test::TempDir;
@@ -388,3 +390,5 @@ TEST(Ubo2014Write, BtfFitWritesAUbo2014FileOnlyForFmf) {
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("factors:  FMF, rank 4"), std::string::npos) << r.output;
 }
+
+}  // namespace OSGBTF_TEST_FILE

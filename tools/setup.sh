@@ -37,7 +37,9 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"
 fi
 
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@"
+# $PWD, not ".": the path the script was started by, a link included (CMake would resolve "."),
+# so that .ci/run can build every clone at one path and ccache reuses the last run's objects.
+cmake -S "$PWD" -B "$PWD/build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@"
 targets=()
 for t in ${OSGBTF_BUILD_TARGETS:-}; do targets+=(--target "$t"); done
 cmake --build build -j "$(nproc)" "${targets[@]}"

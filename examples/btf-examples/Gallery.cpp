@@ -184,7 +184,7 @@ std::string html(const std::string& text) {
     return out;
 }
 
-std::string number(double value, int digits) {
+std::string significantDigits(double value, int digits) {
     std::ostringstream s;
     s << std::setprecision(digits) << value;
     return s.str();
@@ -232,10 +232,10 @@ std::string galleryPage(const CompareResult& result, const std::vector<std::stri
                  << "</span></td></tr>\n";
             continue;
         }
-        page << "error " << number(found->error.average, 3) << "<br>"
-             << number(found->memory.bytesPerTexel, 4) << " bytes/texel<br>";
+        page << "error " << significantDigits(found->error.average, 3) << "<br>"
+             << significantDigits(found->memory.bytesPerTexel, 4) << " bytes/texel<br>";
         if (const MethodPass* pass = found->primaryPass())
-            page << "pass " << number(pass->pass.ms, 3) << " ms";
+            page << "pass " << significantDigits(pass->pass.ms, 3) << " ms";
         else
             page << "pass not measured";
         page << "</td>";

@@ -117,7 +117,7 @@ std::vector<SceneFps> benchmarkScenes(const std::vector<BenchScene>& scenes,
 
 namespace {
 
-std::string number(double value, int decimals) {
+std::string fixedDecimals(double value, int decimals) {
     char buffer[64];
     std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
     return buffer;
@@ -159,10 +159,10 @@ std::string sceneFpsMarkdown(const std::vector<SceneFps>& results, const SceneBe
                 md << " n/a | n/a |" << (gpu ? " n/a |" : "");
                 continue;
             }
-            md << " " << number(it->second->fps(), 1) << " | " << number(it->second->frameMs, 2)
+            md << " " << fixedDecimals(it->second->fps(), 1) << " | " << fixedDecimals(it->second->frameMs, 2)
                << " |";
             if (gpu)
-                md << " " << (it->second->gpuMs >= 0 ? number(it->second->gpuMs, 3) : "n/a")
+                md << " " << (it->second->gpuMs >= 0 ? fixedDecimals(it->second->gpuMs, 3) : "n/a")
                    << " |";
         }
         md << "\n";
@@ -174,8 +174,8 @@ std::string sceneFpsCsv(const std::vector<SceneFps>& results) {
     std::ostringstream csv;
     csv << "scene,method,lights,frame_ms,fps,gpu_ms\n";
     for (const SceneFps& r : results)
-        csv << r.scene << "," << r.method << "," << r.lights << "," << number(r.frameMs, 4) << ","
-            << number(r.fps(), 3) << "," << (r.gpuMs >= 0 ? number(r.gpuMs, 4) : "") << "\n";
+        csv << r.scene << "," << r.method << "," << r.lights << "," << fixedDecimals(r.frameMs, 4) << ","
+            << fixedDecimals(r.fps(), 3) << "," << (r.gpuMs >= 0 ? fixedDecimals(r.gpuMs, 4) : "") << "\n";
     return csv.str();
 }
 

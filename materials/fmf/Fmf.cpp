@@ -14,6 +14,7 @@
 
 #include "core/Error.h"
 #include "core/LowRank.h"
+#include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
 
 namespace osgBTF {
@@ -21,16 +22,10 @@ namespace osgBTF {
 namespace {
 
 // GL limits every OpenGL 4 implementation offers (and llvmpipe): texture size and array layers.
-constexpr int kMaxTextureSize = 16384;
-constexpr int kMaxArrayLayers = 2048;
 constexpr float kHalfMax = 65504.0f;
 
 int groupsOf(int components) {
     return (components + 3) / 4;
-}
-
-double bytesPerValue(MaterialTexture::PixelKind kind) {
-    return kind == MaterialTexture::Half ? 2 : 4;
 }
 
 /** Shortest text that reads back as the same float. */
@@ -620,7 +615,7 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethodClass<FmfMaterial>([] {
+const bool fmfRegistered = registerMethodClass<FmfMaterial>([] {
     MethodInfo m;
     m.description =
         "full-matrix factorisation (Schwartz et al. 2013; UBO2014 FMF/DFMF files): "
@@ -688,7 +683,7 @@ const bool registered = registerMethodClass<FmfMaterial>([] {
 }  // namespace
 
 // The tables every texel shares; the other textures are per texel (remapMaterial).
-[[maybe_unused]] const bool sharedTexturesDeclared =
+[[maybe_unused]] const bool fmfSharedTexturesDeclared =
     declareSharedTextures(FmfMaterial::kMethod, {"u", "singularValues"});
 
 }  // namespace osgBTF

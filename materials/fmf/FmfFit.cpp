@@ -93,7 +93,7 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const BtfSource& btf, const FitOption
 
 namespace {
 // The fit hook of the method registered in Fmf.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<FmfMaterial>();
+const bool fmfFitterRegistered = registerFitterClass<FmfMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

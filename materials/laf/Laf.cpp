@@ -55,7 +55,7 @@ osg::ref_ptr<osg::StateSet> LafMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethodClass<LafMaterial>([] {
+const bool lafRegistered = registerMethodClass<LafMaterial>([] {
     MethodInfo m;
     m.description =
         "Lafortune lobes per texel (McAllister): rho_d + rho_s * sum_k (C . v*l)^n; RGB albedos, "

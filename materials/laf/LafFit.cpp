@@ -20,7 +20,7 @@ osg::ref_ptr<LafMaterial> LafMaterial::fit(const BtfSource& btf, const FitOption
 
 namespace {
 // The fit hook of the method registered in Laf.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<LafMaterial>();
+const bool lafFitterRegistered = registerFitterClass<LafMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

@@ -44,7 +44,7 @@ osg::ref_ptr<osg::StateSet> LambertMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethodClass<LambertMaterial>([] {
+const bool lambertRegistered = registerMethodClass<LambertMaterial>([] {
     MethodInfo m;
     m.description = "plain lit texture: rho(x) * cos(theta_l), the baseline";
     // One albedo fetch, times l_z.

@@ -42,7 +42,7 @@ osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const BtfSource& btf,
 
 namespace {
 // The fit hook of the method registered in Lambert.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<LambertMaterial>();
+const bool lambertFitterRegistered = registerFitterClass<LambertMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

@@ -172,7 +172,7 @@ osg::ref_ptr<osg::StateSet> LpcaRevisedMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethodClass<LpcaRevisedMaterial>([] {
+const bool lpcaRevisedRegistered = registerMethodClass<LpcaRevisedMaterial>([] {
     MethodInfo m;
     m.description =
         "revised local PCA (Schneider 2004): LPCA Eigen-BRDFs resampled over the elevated "
@@ -208,7 +208,7 @@ const bool registered = registerMethodClass<LpcaRevisedMaterial>([] {
 }  // namespace
 
 // The tables every texel shares; the other textures are per texel (remapMaterial).
-[[maybe_unused]] const bool sharedTexturesDeclared =
+[[maybe_unused]] const bool lpcaRevisedSharedTexturesDeclared =
     declareSharedTextures(LpcaRevisedMaterial::kMethod, {"grid"});
 
 }  // namespace osgBTF

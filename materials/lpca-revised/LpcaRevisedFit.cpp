@@ -142,7 +142,7 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromLpca(const LpcaMateri
 
 namespace {
 // The fit hook of the method registered in LpcaRevised.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<LpcaRevisedMaterial>();
+const bool lpcaRevisedFitterRegistered = registerFitterClass<LpcaRevisedMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

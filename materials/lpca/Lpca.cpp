@@ -250,7 +250,7 @@ osg::ref_ptr<osg::StateSet> LpcaMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethodClass<LpcaMaterial>([] {
+const bool lpcaRegistered = registerMethodClass<LpcaMaterial>([] {
     MethodInfo m;
     m.description =
         "local PCA (Mueller 2003): per texel a cluster index and c weights of its cluster's "
@@ -296,7 +296,7 @@ const bool registered = registerMethodClass<LpcaMaterial>([] {
 }  // namespace
 
 // The tables every texel shares; the other textures are per texel (remapMaterial).
-[[maybe_unused]] const bool sharedTexturesDeclared =
+[[maybe_unused]] const bool lpcaSharedTexturesDeclared =
     declareSharedTextures(LpcaMaterial::kMethod, {"eigenBrdfs"});
 
 }  // namespace osgBTF

@@ -469,7 +469,7 @@ osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const BtfSource& btf, const LpcaSetti
 
 namespace {
 // The fit hook of the method registered in Lpca.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<LpcaMaterial>();
+const bool lpcaFitterRegistered = registerFitterClass<LpcaMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

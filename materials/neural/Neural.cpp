@@ -166,7 +166,7 @@ osg::ref_ptr<osg::StateSet> NeuralMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethodClass<NeuralMaterial>([] {
+const bool neuralRegistered = registerMethodClass<NeuralMaterial>([] {
     MethodInfo m;
     m.description =
         "neural BTF (Rainer et al. 2019): a latent texture (L half values per texel) decoded with "
@@ -212,7 +212,7 @@ const bool registered = registerMethodClass<NeuralMaterial>([] {
 }  // namespace
 
 // The decoder is every texel's; only the latents are per texel (remapMaterial).
-[[maybe_unused]] const bool sharedTexturesDeclared =
+[[maybe_unused]] const bool neuralSharedTexturesDeclared =
     declareSharedTextures(NeuralMaterial::kMethod, {"decoder"});
 
 }  // namespace osgBTF

@@ -60,7 +60,7 @@ osg::ref_ptr<NeuralMaterial> NeuralMaterial::fit(const BtfSource& btf, const Fit
 
 namespace {
 // The fit hook of the method registered in Neural.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<NeuralMaterial>();
+const bool neuralFitterRegistered = registerFitterClass<NeuralMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

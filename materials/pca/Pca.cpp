@@ -7,6 +7,7 @@
 #include <osg/Uniform>
 
 #include "core/Error.h"
+#include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
 
 namespace osgBTF {
@@ -14,8 +15,6 @@ namespace osgBTF {
 namespace {
 
 // GL limits every OpenGL 4 implementation offers (and llvmpipe): texture size and array layers.
-constexpr int kMaxTextureSize = 16384;
-constexpr int kMaxArrayLayers = 2048;
 
 const char* storageName(MaterialTexture::PixelKind kind) {
     switch (kind) {
@@ -27,18 +26,6 @@ const char* storageName(MaterialTexture::PixelKind kind) {
             break;
     }
     return "float";
-}
-
-double bytesPerValue(MaterialTexture::PixelKind kind) {
-    switch (kind) {
-        case MaterialTexture::UNorm8:
-            return 1;
-        case MaterialTexture::Half:
-            return 2;
-        case MaterialTexture::Float:
-            break;
-    }
-    return 4;
 }
 
 }  // namespace
@@ -205,7 +192,7 @@ osg::ref_ptr<osg::StateSet> PcaMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethodClass<PcaMaterial>([] {
+const bool pcaRegistered = registerMethodClass<PcaMaterial>([] {
     MethodInfo m;
     m.description =
         "per-view Eigen-Textures (Sattler 2003): rank-c PCA of each view's light images, "
@@ -256,7 +243,7 @@ const bool registered = registerMethodClass<PcaMaterial>([] {
 }  // namespace
 
 // The tables every texel shares; the other textures are per texel (remapMaterial).
-[[maybe_unused]] const bool sharedTexturesDeclared =
+[[maybe_unused]] const bool pcaSharedTexturesDeclared =
     declareSharedTextures(PcaMaterial::kMethod, {"weights"});
 
 }  // namespace osgBTF

@@ -166,7 +166,7 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const BtfSource& btf, const FitOption
 
 namespace {
 // The fit hook of the method registered in Pca.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<PcaMaterial>();
+const bool pcaFitterRegistered = registerFitterClass<PcaMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

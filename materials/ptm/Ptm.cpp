@@ -19,14 +19,8 @@ namespace osgBTF {
 
 namespace {
 
-constexpr int kMaxLayers = 2048;  // GL_MAX_ARRAY_TEXTURE_LAYERS guaranteed by GL 3.3+
-
 const char* storageName(MaterialTexture::PixelKind kind) {
     return kind == MaterialTexture::Float ? "float" : "half";
-}
-
-double bytesPerValue(MaterialTexture::PixelKind kind) {
-    return kind == MaterialTexture::Float ? 4 : 2;
 }
 
 }  // namespace
@@ -52,11 +46,11 @@ void PtmMaterial::setShape(int width, int height, DirectionSet views, DirectionS
     _shape = shape;
     _slots = shape.perView ? int(views.size()) : 1;
     const std::size_t layers = std::size_t(_slots) * std::size_t(layersPerSlot());
-    if (layers > std::size_t(kMaxLayers))
+    if (layers > std::size_t(kMaxArrayLayers))
         throw Error("ptm: " + std::to_string(_slots) + " views x " +
                     std::to_string(layersPerSlot()) + " coefficient layers need " +
                     std::to_string(layers) + " texture layers, more than the " +
-                    std::to_string(kMaxLayers) + " OpenGL guarantees");
+                    std::to_string(kMaxArrayLayers) + " OpenGL guarantees");
     const std::size_t texels = std::size_t(width) * std::size_t(height);
     const std::size_t colourValues = shape.luminance ? texels * std::size_t(_slots) * 3 : 0;
     checkMemory(std::uint64_t(texels * layers * 3 + colourValues) * sizeof(float), "ptm model");
@@ -266,7 +260,7 @@ osg::ref_ptr<osg::StateSet> PtmMaterial::createStateSet() const {
 // ---- registration ------------------------------------------------------------------------------
 
 namespace {
-const bool registered = registerMethodClass<PtmMaterial>([] {
+const bool ptmRegistered = registerMethodClass<PtmMaterial>([] {
     MethodInfo m;
     m.description =
         "polynomial texture maps (Malzbender 2001, as Boßerhoff and Nicoll 2003 use them): per "

@@ -182,7 +182,7 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fit(const BtfSource& btf, const FitOption
 
 namespace {
 // The fit hook of the method registered in Ptm.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<PtmMaterial>();
+const bool ptmFitterRegistered = registerFitterClass<PtmMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

@@ -12,6 +12,7 @@
 #include <osg/Uniform>
 
 #include "core/Error.h"
+#include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
 #include "materials/rf/RfValues.h"
 
@@ -43,23 +44,9 @@ std::vector<StoredArray> storedArrays(std::size_t views, int lobes, RfMaterial::
     return arrays;
 }
 
-double bytesPerValue(MaterialTexture::PixelKind kind) {
-    switch (kind) {
-        case MaterialTexture::UNorm8:
-            return 1;
-        case MaterialTexture::Half:
-            return 2;
-        case MaterialTexture::Float:
-            return 4;
-    }
-    return 4;
-}
-
 using rf::lobeValue;
 using rf::toHalf;
 using rf::toUNorm8;
-
-constexpr int kMaxLayers = 2048;  // GL_MAX_ARRAY_TEXTURE_LAYERS guaranteed by GL 3.3+
 
 }  // namespace
 
@@ -74,11 +61,11 @@ void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSe
     if (lights.size() == 0) throw Error("rf: needs at least one measured light");
     const std::size_t channels = variant.rgb ? 3 : 1;
     const std::size_t layers = views.size() * channels * std::size_t(lobeCount);
-    if (layers > std::size_t(kMaxLayers))
+    if (layers > std::size_t(kMaxArrayLayers))
         throw Error("rf: " + std::to_string(views.size()) + " views x " +
                     (variant.rgb ? "3 colour channels (colour=rgb) x " : "") +
                     std::to_string(lobeCount) + " lobes need " + std::to_string(layers) +
-                    " texture layers, more than the " + std::to_string(kMaxLayers) +
+                    " texture layers, more than the " + std::to_string(kMaxArrayLayers) +
                     " OpenGL guarantees");
     const std::size_t texels = std::size_t(width) * std::size_t(height);
     checkMemory(std::uint64_t(texels) *
@@ -279,7 +266,7 @@ osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
 // ---- registration ----------------------------------------------------------------------------
 
 namespace {
-const bool registered = registerMethodClass<RfMaterial>([] {
+const bool rfRegistered = registerMethodClass<RfMaterial>([] {
     const RfMaterial::Settings defaults;
     MethodInfo m;
     m.description =

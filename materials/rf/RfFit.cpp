@@ -463,7 +463,7 @@ osg::ref_ptr<RfMaterial> RfMaterial::fit(const BtfSource& btf, const FitOptions&
 
 namespace {
 // The fit hook of the method registered in Rf.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<RfMaterial>();
+const bool rfFitterRegistered = registerFitterClass<RfMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

@@ -98,7 +98,7 @@ osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
 }
 
 namespace {
-const bool registered = registerMethodClass<SlafMaterial>([] {
+const bool slafRegistered = registerMethodClass<SlafMaterial>([] {
     MethodInfo m;
     m.description =
         "scaled Lafortune lobes (Daubert): T(v) * (rho_d + rho_s * sum_k (C . v*l)^n), T an RGB "

@@ -23,7 +23,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const BtfSource& btf, const FitOpti
 
 namespace {
 // The fit hook of the method registered in Slaf.cpp (libosgBTF).
-const bool fitterRegistered = registerFitterClass<SlafMaterial>();
+const bool slafFitterRegistered = registerFitterClass<SlafMaterial>();
 }  // namespace
 
 }  // namespace osgBTF

@@ -19,6 +19,8 @@
 #include "tests/RandomFactors.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -154,3 +156,5 @@ TEST(BilinearFilterGpu, FmfMatchesCpuWithDecodingAfterTheBlend) {
             return 1e-3 * largestValue(*m, glm::vec3(0, 0, 1), light);
         });
 }
+
+}  // namespace OSGBTF_TEST_FILE

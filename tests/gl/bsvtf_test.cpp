@@ -29,6 +29,8 @@
 #include "tests/TestUtil.h"
 #include "tests/gl/GlTestEnv.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -628,3 +630,5 @@ TEST_F(BsvtfGpu, AMaterialNodeTakesAStreamedMaterialLikeAnyOther) {
 }
 
 }  // namespace
+
+}  // namespace OSGBTF_TEST_FILE

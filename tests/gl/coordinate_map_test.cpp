@@ -27,6 +27,8 @@
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -300,3 +302,5 @@ TEST(CoordinateMapGpu, MaterialNodeThroughAMapEqualsTheMaterialisedMaterial) {
     EXPECT_LE(worst, kSameArithmetic);
     EXPECT_GT(brightest, 0.01) << "nothing rendered";
 }
+
+}  // namespace OSGBTF_TEST_FILE

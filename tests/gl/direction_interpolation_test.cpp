@@ -22,6 +22,8 @@
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -264,3 +266,5 @@ TEST_P(DirectionInterpolationGpu, ComparePictureHasNoSeamWhereTheTextureWraps) {
 INSTANTIATE_TEST_SUITE_P(Methods, DirectionInterpolationGpu,
                          ::testing::Values("pca", "rf", "slaf", "lpca"),
                          [](const auto& info) { return info.param; });
+
+}  // namespace OSGBTF_TEST_FILE

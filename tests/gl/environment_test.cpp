@@ -43,6 +43,8 @@
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using osgBTF::test::trianglePatch;
 
@@ -729,3 +731,5 @@ TEST(EnvironmentGpu, PatchImagesOfFoldedAndOtherMethodsMatchTheCpu) {
         EXPECT_LE(maxAbsDifference(gpu, cpu), 1e-4 * largest) << m->methodName();
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

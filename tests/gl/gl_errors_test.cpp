@@ -46,6 +46,8 @@
 #include "tests/gl/GlErrorWatch.h"
 #include "tests/gl/GlTestEnv.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -432,3 +434,5 @@ TEST_P(GlErrorsEveryMethod,
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, GlErrorsEveryMethod, ::testing::ValuesIn(methodNames()),
                          testName);
+
+}  // namespace OSGBTF_TEST_FILE

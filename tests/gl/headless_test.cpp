@@ -24,6 +24,8 @@
 #include <random>
 #include <string>
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -485,3 +487,5 @@ TEST(HeadlessGl, OSMesaIsRegistered) {
     EXPECT_TRUE(isHeadlessBackendAvailable(HeadlessBackend::OSMesa));
 }
 #endif
+
+}  // namespace OSGBTF_TEST_FILE

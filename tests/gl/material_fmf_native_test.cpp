@@ -16,6 +16,8 @@
 #include "tests/HandWrittenUbo2014.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -69,3 +71,5 @@ TEST(FmfNativeGpu, HandWrittenFmfWithDrrAndCosineMatchesCpu) {
     checkFile(test::handWrittenFmfDrrCosine(), MaterialTexture::Half);
     std::cout << "fmf native (FMF) GPU vs CPU: largest difference " << worstDifference << "\n";
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -14,6 +14,8 @@
 #include "tests/RandomFactors.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -97,3 +99,5 @@ TEST(FmfGpu, FittedMaterialMatchesCpu) {
     expectGpuEqualsCpu(*m, {30, 90}, {45, 20}, "fitted");
     expectGpuEqualsCpu(*m, {31.7f, 77}, {52, 200}, "fitted");
 }
+
+}  // namespace OSGBTF_TEST_FILE

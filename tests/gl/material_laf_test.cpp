@@ -5,6 +5,8 @@
 #include "materials/laf/Laf.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 TEST(LafGpu, MatchesCpuAtMeasuredAndUnmeasuredDirections) {
@@ -42,3 +44,5 @@ TEST(LafGpu, OneLobeMaterialRendersToo) {
         *material, Direction{30, 60}.toVector(), Direction{45, 200}.toVector());
     EXPECT_LE(r.maxAbsDifference, 1e-3) << r.worst;
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -5,6 +5,8 @@
 #include "materials/lambert/Lambert.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 TEST(LambertGpu, MatchesCpuAtMeasuredAndUnmeasuredDirections) {
@@ -22,3 +24,5 @@ TEST(LambertGpu, MatchesCpuAtMeasuredAndUnmeasuredDirections) {
         EXPECT_LE(r.maxAbsDifference, 1e-5) << r.worst;
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -1,6 +1,6 @@
-// Revised LPCA on the GPU (materials/lpca-revised/lpca-revised.frag, hardware trilinear filtering of the 3D
-// grid) equals LpcaRevisedMaterial::evaluate on the CPU; the 8-bit grid within its quantisation
-// bound (GPUs may filter 8-bit textures with 8-bit fractional weights).
+// Revised LPCA on the GPU (materials/lpca-revised/lpca-revised.frag, hardware trilinear filtering
+// of the 3D grid) equals LpcaRevisedMaterial::evaluate on the CPU; the 8-bit grid within its
+// quantisation bound (GPUs may filter 8-bit textures with 8-bit fractional weights).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +9,8 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/lpca-revised/LpcaRevised.h"
 #include "tests/gl/MaterialGpuCheck.h"
+
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
@@ -67,3 +69,5 @@ TEST(LpcaRevisedGpu, EightBitMatchesCpuWithinItsQuantisationBound) {
     std::cout << "8-bit tolerance " << bound << "\n";
     check(*material, btf, bound);
 }
+
+}  // namespace OSGBTF_TEST_FILE

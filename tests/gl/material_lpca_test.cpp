@@ -5,6 +5,8 @@
 #include "materials/lpca/Lpca.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 TEST(LpcaGpu, MatchesCpuAtMeasuredAndUnmeasuredDirections) {
@@ -31,3 +33,5 @@ TEST(LpcaGpu, MatchesCpuAtMeasuredAndUnmeasuredDirections) {
                                             << l.theta << ", " << l.phi << "): " << r.worst;
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

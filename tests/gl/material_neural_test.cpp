@@ -10,6 +10,8 @@
 #include "materials/neural/Neural.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -50,3 +52,5 @@ TEST(NeuralGpu, ThreeHiddenLayersMatchCpu) {
 TEST(NeuralGpu, TheLargestNetworkMatchesCpu) {
     expectGpuEqualsCpu("latent=32 units=64 layers=4 steps=20 batch=256");
 }
+
+}  // namespace OSGBTF_TEST_FILE

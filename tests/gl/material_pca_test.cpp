@@ -9,6 +9,8 @@
 #include "materials/pca/Pca.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -57,3 +59,5 @@ TEST(PcaGpu, FloatStorageMatchesCpu) {
     expectGpuEqualsCpu(*m, {30, 90}, {45, 20});
     expectGpuEqualsCpu(*m, {31.7f, 77}, {52, 200});
 }
+
+}  // namespace OSGBTF_TEST_FILE

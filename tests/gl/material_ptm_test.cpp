@@ -10,6 +10,8 @@
 #include "materials/ptm/Ptm.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -58,3 +60,5 @@ TEST(PtmGpu, LuminancePerViewMatchesCpuAtMeasuredAndUnmeasuredDirections) {
     // The per-view rgb branch, two pairs.
     expectGpuEqualsCpu("views=all", {{{31.7f, 77}, {52, 200}}, {{15, 60}, {45, 20}}});
 }
+
+}  // namespace OSGBTF_TEST_FILE

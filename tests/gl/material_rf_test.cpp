@@ -12,6 +12,8 @@
 #include "materials/rf/Rf.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 TEST(RfGpu, MatchesCpuAtMeasuredAndUnmeasuredDirections) {
@@ -88,3 +90,5 @@ TEST(RfGpu, VariantsMatchCpu) {
         std::cout << "rf " << name << " GPU vs CPU: largest difference " << worst << "\n";
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

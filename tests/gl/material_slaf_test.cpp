@@ -6,6 +6,8 @@
 #include "materials/slaf/Slaf.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 TEST(SlafGpu, MatchesCpuAtMeasuredAndUnmeasuredDirections) {
@@ -44,3 +46,5 @@ TEST(SlafGpu, OneLobeMaterialRendersToo) {
         *material, Direction{30, 60}.toVector(), Direction{45, 200}.toVector());
     EXPECT_LE(r.maxAbsDifference, 1e-3) << r.worst;
 }
+
+}  // namespace OSGBTF_TEST_FILE

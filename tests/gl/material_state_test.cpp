@@ -11,6 +11,8 @@
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 TEST(MaterialImage, GpuImageEqualsCpuImageAndKeepsTheInputOrientation) {
@@ -43,3 +45,5 @@ TEST(MaterialState, ARectifiedImageLeavesTheNextDrawItsRealEyeDirection) {
     EXPECT_GT(r.pixelsCompared, 8);
     EXPECT_LE(r.maxAbsDifference, 1e-3) << r.worst;
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -38,6 +38,8 @@
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 using osgBTFTest::DummyMaterial;
@@ -342,3 +344,5 @@ TEST(MethodPluginGpu, EnvironmentLitGroupLightsTheDummyByItsFold) {
     EXPECT_GT(largest, 0.01) << "nothing rendered";
     EXPECT_LE(worst, 1e-5 * largest);
 }
+
+}  // namespace OSGBTF_TEST_FILE

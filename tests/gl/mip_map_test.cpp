@@ -18,6 +18,8 @@
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -205,3 +207,5 @@ TEST(MipMapGpu, MinifiedBetweenLevelsEveryMethodBlendsBothLevelsBilinearly) {
         EXPECT_GT(fromNearest, 10 * (1e-3 * (1.0 + mean) + 2e-3 * mean)) << name;
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

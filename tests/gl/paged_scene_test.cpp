@@ -30,6 +30,8 @@
 #include "tests/gl/GlErrorWatch.h"
 #include "tests/gl/GlTestEnv.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -159,3 +161,5 @@ TEST(PagedScene, TilesArriveCompiledAndLeaveNoGLObjectsBehind) {
     pager->clear();
     viewer.setIncrementalCompileOperation(nullptr);
 }
+
+}  // namespace OSGBTF_TEST_FILE

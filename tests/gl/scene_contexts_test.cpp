@@ -26,6 +26,8 @@
 #include "scene/MaterialNode.h"
 #include "tests/gl/GlTestEnv.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -238,3 +240,5 @@ TEST(SceneContexts, GLObjectsVisitorCompilesTheMaterialAheadOfTheFirstFrame) {
     EXPECT_GT(r.compared, 40);
     EXPECT_LE(r.worst, 4e-3) << r.where;
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -31,6 +31,8 @@
 #include "tests/TestUtil.h"
 #include "tests/gl/GlTestEnv.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF;
 using namespace osgBTF::test;
@@ -403,3 +405,5 @@ TEST(SceneRender, WithoutLightSourcesTheViewersHeadlightLights) {
     EXPECT_GT(r.compared, 60);
     EXPECT_LE(r.worst, 2e-3) << r.where;
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -21,6 +21,8 @@
 #include "scene/MaterialNode.h"
 #include "tests/gl/GlTestEnv.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -155,3 +157,5 @@ TEST(SceneThreads, CullThreadPerCameraDrawThreadPerContextDrawsWhatOneThreadDraw
     for (const auto& image : threaded.images)
         EXPECT_EQ(maxDifference(*reference.images[0], *image), 0.0);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -34,6 +34,8 @@
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 
@@ -540,3 +542,5 @@ TEST_F(ShadowMapGpu, AnotherTechniqueIsNamedOnceAndTheNodeDrawsWithoutCastShadow
     expectNamedOnce(capture.text(), "ShadowTexture");
     EXPECT_GT(centre(*image), 0.0f);
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -15,6 +15,8 @@
 #include "tests/TestUtil.h"
 #include "tests/gl/GlTestEnv.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 using namespace osgBTF::test;
 namespace fs = std::filesystem;
@@ -54,3 +56,5 @@ TEST(Soak, MemoryAndGlObjectsStayFlatWhileSwitchingAndReloading) {
     EXPECT_GT(result.samples.front().programs, 0);
     EXPECT_EQ(result.growth, "");
 }
+
+}  // namespace OSGBTF_TEST_FILE

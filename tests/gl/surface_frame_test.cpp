@@ -14,6 +14,8 @@
 #include "materials/pca/Pca.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
+namespace OSGBTF_TEST_FILE {
+
 using namespace osgBTF;
 
 namespace {
@@ -114,3 +116,5 @@ TEST(SurfaceFrame, PerspectiveProjection) {
         expectMatch(laf(), render, model.isIdentity() ? "flat" : "stretched");
     }
 }
+
+}  // namespace OSGBTF_TEST_FILE

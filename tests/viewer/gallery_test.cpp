@@ -17,6 +17,8 @@
 #include "tests/TestUtil.h"
 #include "tests/viewer/Browser.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using osgBTF::test::BrowserView;
 using osgBTF::test::builtTool;
@@ -102,3 +104,5 @@ TEST(Gallery, EveryPictureIsShownInAHeadlessBrowserWithoutConsoleMessages) {
     const BrowserView broken = openInChromium(page, dir.path());
     EXPECT_TRUE(broken.consoleMessages()) << broken.log;
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -12,6 +12,8 @@
 #include "tests/TestUtil.h"
 #include "tests/viewer/Browser.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using namespace osgBTF::test;
 
@@ -104,3 +106,5 @@ window.addEventListener('load', () => {
     writeTextFile(clicked.string(), html + "<script>notAFunction();</script>\n");
     EXPECT_TRUE(openInChromium(clicked.string(), dir.path()).consoleMessages());
 }
+
+}  // namespace OSGBTF_TEST_FILE

@@ -44,6 +44,8 @@
 #include "tests/HandWrittenUbo2014.h"
 #include "tests/TestUtil.h"
 
+namespace OSGBTF_TEST_FILE {
+
 namespace fs = std::filesystem;
 using osgBTF::test::buildDir;
 using osgBTF::test::builtTool;
@@ -993,3 +995,5 @@ TEST(Btfviewer, CoversASurfaceThroughACoordinateMap) {
 }
 
 }  // namespace
+
+}  // namespace OSGBTF_TEST_FILE
