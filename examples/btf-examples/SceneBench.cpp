@@ -159,8 +159,8 @@ std::string sceneFpsMarkdown(const std::vector<SceneFps>& results, const SceneBe
                 md << " n/a | n/a |" << (gpu ? " n/a |" : "");
                 continue;
             }
-            md << " " << fixedDecimals(it->second->fps(), 1) << " | " << fixedDecimals(it->second->frameMs, 2)
-               << " |";
+            md << " " << fixedDecimals(it->second->fps(), 1) << " | "
+               << fixedDecimals(it->second->frameMs, 2) << " |";
             if (gpu)
                 md << " " << (it->second->gpuMs >= 0 ? fixedDecimals(it->second->gpuMs, 3) : "n/a")
                    << " |";
@@ -174,8 +174,9 @@ std::string sceneFpsCsv(const std::vector<SceneFps>& results) {
     std::ostringstream csv;
     csv << "scene,method,lights,frame_ms,fps,gpu_ms\n";
     for (const SceneFps& r : results)
-        csv << r.scene << "," << r.method << "," << r.lights << "," << fixedDecimals(r.frameMs, 4) << ","
-            << fixedDecimals(r.fps(), 3) << "," << (r.gpuMs >= 0 ? fixedDecimals(r.gpuMs, 4) : "") << "\n";
+        csv << r.scene << "," << r.method << "," << r.lights << "," << fixedDecimals(r.frameMs, 4)
+            << "," << fixedDecimals(r.fps(), 3) << ","
+            << (r.gpuMs >= 0 ? fixedDecimals(r.gpuMs, 4) : "") << "\n";
     return csv.str();
 }
 
