@@ -34,9 +34,9 @@
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
-namespace OSGBTF_TEST_FILE {
+extern char** environ;  // POSIX: the process environment, for the children
 
-extern char** environ;
+namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 using namespace osgBTF::test;
