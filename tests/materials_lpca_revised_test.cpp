@@ -57,19 +57,19 @@ TEST(ConcentricMap, InverseIsExactBothWays) {
 }
 
 TEST(LpcaRevised, InvalidOptionsAreRefusedWithClearMessages) {
-    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "resolution=1"),
+    const MeasuredBtf btf = test::sampleBtf(4, 4);
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(btf, "resolution=1"),
               "lpca-revised: option resolution must be an integer in 2..45, got 1");
-    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "resolution=46"),
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(btf, "resolution=46"),
               "lpca-revised: option resolution must be an integer in 2..45, got 46");
-    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "storage=float"),
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(btf, "storage=float"),
               "lpca-revised: option storage must be one of half, unorm8, got float");
-    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "clusters=0"),
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(btf, "clusters=0"),
               "lpca-revised: option clusters must be an integer in 1..256, got 0");
-    EXPECT_EQ(
-        test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "clusters=200 resolution=16"),
-        "lpca-revised: option resolution must be at most 10 with clusters=200 "
-        "components=8 (k x n and c x n <= 2048, the 3D texture size), got 16");
-    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(test::sampleBtf(4, 4), "lobes=2"),
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(btf, "clusters=200 resolution=16"),
+              "lpca-revised: option resolution must be at most 10 with clusters=200 "
+              "components=8 (k x n and c x n <= 2048, the 3D texture size), got 16");
+    EXPECT_EQ(test::fitError<LpcaRevisedMaterial>(btf, "lobes=2"),
               "lpca-revised: option lobes is unknown (known: clusters, components, iterations, "
               "training, seed, resolution, storage)");
 }

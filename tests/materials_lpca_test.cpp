@@ -37,24 +37,25 @@ double sumSquaredResidual(const MeasuredBtf& btf, const Material& m) {
 }  // namespace
 
 TEST(Lpca, InvalidOptionsAreRefusedWithClearMessages) {
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "clusters=0"),
+    const MeasuredBtf btf = test::sampleBtf(4, 4);
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "clusters=0"),
               "lpca: option clusters must be an integer in 1..256, got 0");
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "clusters=257"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "clusters=257"),
               "lpca: option clusters must be an integer in 1..256, got 257");
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "components=0"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "components=0"),
               "lpca: option components must be an integer >= 1, got 0");
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "iterations=0"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "iterations=0"),
               "lpca: option iterations must be an integer >= 1, got 0");
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "training=-1"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "training=-1"),
               "lpca: option training must be an integer >= 0, got -1");
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "seed=-1"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "seed=-1"),
               "lpca: option seed must be an integer >= 0, got -1");
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "clusters=17"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "clusters=17"),
               "lpca: option clusters must be at most 16 (the texels of this BTF), got 17");
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "lobes=2"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "lobes=2"),
               "lpca: option lobes is unknown (known: clusters, components, iterations, training, "
               "seed)");
-    EXPECT_EQ(test::fitError<LpcaMaterial>(test::sampleBtf(4, 4), "clusters=two"),
+    EXPECT_EQ(test::fitError<LpcaMaterial>(btf, "clusters=two"),
               "lpca: option clusters must be an integer in 1..256, got two");
 }
 
