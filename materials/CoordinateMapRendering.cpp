@@ -33,35 +33,39 @@ MaterialTexture remapTexture(const MaterialTexture& t, int width, int height,
     MaterialTexture out = t;
     out.width = tilesX * map.width;
     out.height = tilesY * map.height;
-    const bool bytes = !t.bytes.empty();
-    checkMemory(std::uint64_t(out.valueCount()) * (bytes ? 1 : sizeof(float)),
+    // The values stay in the representation they come in (bytes, halves or floats).
+    const std::size_t valueBytes = !t.bytes.empty()    ? 1
+                                   : !t.halves.empty() ? sizeof(Imath::half)
+                                                       : sizeof(float);
+    checkMemory(std::uint64_t(out.valueCount()) * valueBytes,
                 "texture '" + t.name + "' remapped to " + sizeText(out.width, out.height));
-    if (bytes)
-        out.bytes.assign(out.valueCount(), 0);
-    else
-        out.data.assign(out.valueCount(), 0.0f);
     const std::size_t channels = std::size_t(t.channels);
-    for (int z = 0; z < t.depth; ++z)
-        for (int ty = 0; ty < tilesY; ++ty)
-            for (int y = 0; y < map.height; ++y)
-                for (int tx = 0; tx < tilesX; ++tx)
-                    for (int x = 0; x < map.width; ++x) {
-                        const std::size_t srcRow = std::size_t(z) * t.height +
-                                                   std::size_t(ty) * height + map.sampleY(x, y);
-                        const std::size_t src =
-                            (srcRow * t.width + std::size_t(tx) * width + map.sampleX(x, y)) *
-                            channels;
-                        const std::size_t dstRow =
-                            std::size_t(z) * out.height + std::size_t(ty) * map.height + y;
-                        const std::size_t dst =
-                            (dstRow * out.width + std::size_t(tx) * map.width + x) * channels;
-                        if (bytes)
-                            std::copy_n(t.bytes.begin() + std::ptrdiff_t(src), channels,
-                                        out.bytes.begin() + std::ptrdiff_t(dst));
-                        else
-                            std::copy_n(t.data.begin() + std::ptrdiff_t(src), channels,
-                                        out.data.begin() + std::ptrdiff_t(dst));
-                    }
+    const auto remap = [&](const auto& from, auto& to) {
+        to.assign(out.valueCount(), {});
+        for (int z = 0; z < t.depth; ++z)
+            for (int ty = 0; ty < tilesY; ++ty)
+                for (int y = 0; y < map.height; ++y)
+                    for (int tx = 0; tx < tilesX; ++tx)
+                        for (int x = 0; x < map.width; ++x) {
+                            const std::size_t srcRow = std::size_t(z) * t.height +
+                                                       std::size_t(ty) * height + map.sampleY(x, y);
+                            const std::size_t src =
+                                (srcRow * t.width + std::size_t(tx) * width + map.sampleX(x, y)) *
+                                channels;
+                            const std::size_t dstRow =
+                                std::size_t(z) * out.height + std::size_t(ty) * map.height + y;
+                            const std::size_t dst =
+                                (dstRow * out.width + std::size_t(tx) * map.width + x) * channels;
+                            std::copy_n(from.begin() + std::ptrdiff_t(src), channels,
+                                        to.begin() + std::ptrdiff_t(dst));
+                        }
+    };
+    if (!t.bytes.empty())
+        remap(t.bytes, out.bytes);
+    else if (!t.halves.empty())
+        remap(t.halves, out.halves);
+    else
+        remap(t.data, out.data);
     return out;
 }
 

@@ -307,9 +307,12 @@ void expectLpcaExact(const MeasuredBtf& btf, const std::string& what, int rank) 
     ASSERT_NE(m, nullptr);
     for (int k = 0; k < m->clusters(); ++k)
         for (int i = rank; i < m->components(); ++i) {
-            const float* e = m->eigenBrdf(k, i);
             double norm2 = 0;
-            for (std::size_t j = 0; j < m->eigenBrdfSize(); ++j) norm2 += double(e[j]) * e[j];
+            for (std::size_t v = 0; v < m->views().size(); ++v) {
+                const std::size_t e = m->eigenBrdfRun(k, i, v);
+                for (std::size_t j = 0; j < m->lights().size() * 3; ++j)
+                    norm2 += double(m->eigenBrdfs[e + j]) * m->eigenBrdfs[e + j];
+            }
             EXPECT_EQ(norm2, 0.0) << what << ": cluster " << k << " component " << i;
         }
 }

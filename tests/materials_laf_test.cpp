@@ -81,15 +81,15 @@ TEST(Laf, RecoversAKnownModelFromNoisyData) {
     const std::size_t texels = truth->texelCount();
     for (std::size_t t = 0; t < texels; ++t) {
         for (int c = 0; c < 3; ++c) {
-            truth->rhoD[t * 3 + c] = quantizeUNorm8(0.05 + 0.02 * double(t) + 0.05 * c);
-            truth->rhoS[t * 3 + c] = quantizeUNorm8(1.0 - 0.2 * c);
+            truth->rhoD.set(t * 3 + c, quantizeUNorm8(0.05 + 0.02 * double(t) + 0.05 * c));
+            truth->rhoS.set(t * 3 + c, quantizeUNorm8(1.0 - 0.2 * c));
         }
         const float diffuse[4] = {0.1f * float(t % 3), 0.0f, 0.5f, 1.0f};
         const float sharp = 6.0f + 2.0f * float(t), k = std::pow(0.4f, 1.0f / sharp);
         const float mirror[4] = {-k, -k, k, sharp};
         for (int i = 0; i < 4; ++i) {
-            truth->lobes[t * 4 + i] = roundHalf(diffuse[i]);
-            truth->lobes[(texels + t) * 4 + i] = roundHalf(mirror[i]);
+            truth->lobes.set(t * 4 + i, roundHalf(diffuse[i]));
+            truth->lobes.set((texels + t) * 4 + i, roundHalf(mirror[i]));
         }
     }
     const float noise = 0.01f;
@@ -111,8 +111,8 @@ TEST(Laf, RecoversAKnownModelFromNoisyData) {
 TEST(Laf, SampleFitIsFiniteBoundedAndBeatsLambert) {
     const MeasuredBtf btf = test::sampleBtf(8, 6);
     osg::ref_ptr<LafMaterial> m = LafMaterial::fit(btf, {});
-    for (float v : m->rhoD) ASSERT_TRUE(v >= 0.0f && v <= 1.0f);
-    for (float v : m->rhoS) ASSERT_TRUE(v >= 0.0f && v <= 1.0f);
+    for (float v : m->rhoD.floats()) ASSERT_TRUE(v >= 0.0f && v <= 1.0f);
+    for (float v : m->rhoS.floats()) ASSERT_TRUE(v >= 0.0f && v <= 1.0f);
     for (std::size_t i = 0; i < m->lobes.size(); ++i) {
         ASSERT_TRUE(std::isfinite(m->lobes[i]));
         if (i % 4 == 3) {
@@ -143,11 +143,11 @@ TEST(Laf, LiteralSeedModelWithoutCosineIsAvailable) {
     ASSERT_FALSE(truth->cosine());
     for (std::size_t t = 0; t < 4; ++t) {
         for (int c = 0; c < 3; ++c) {
-            truth->rhoD[t * 3 + c] = quantizeUNorm8(0.2 + 0.1 * c);
-            truth->rhoS[t * 3 + c] = quantizeUNorm8(0.8);
+            truth->rhoD.set(t * 3 + c, quantizeUNorm8(0.2 + 0.1 * c));
+            truth->rhoS.set(t * 3 + c, quantizeUNorm8(0.8));
         }
         const float lobe[4] = {-0.9f, -0.9f, 0.9f, 4.0f + float(t)};
-        for (int i = 0; i < 4; ++i) truth->lobes[t * 4 + i] = roundHalf(lobe[i]);
+        for (int i = 0; i < 4; ++i) truth->lobes.set(t * 4 + i, roundHalf(lobe[i]));
     }
     const MeasuredBtf data = dataFrom(*truth, 0.0f, 1);
     osg::ref_ptr<LafMaterial> fitted =

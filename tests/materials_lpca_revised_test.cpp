@@ -109,13 +109,13 @@ TEST(LpcaRevised, EightBitStorageStaysWithinItsQuantisationBound) {
     osg::ref_ptr<LpcaRevisedMaterial> half = LpcaRevisedMaterial::fromLpca(*lpca, 12, false);
     osg::ref_ptr<LpcaRevisedMaterial> byte = LpcaRevisedMaterial::fromLpca(*lpca, 12, true);
     EXPECT_TRUE(byte->eightBit());
-    for (float v : byte->grid) EXPECT_FLOAT_EQ(v * 255.0f, std::round(v * 255.0f));
+    for (float v : byte->grid.floats()) EXPECT_FLOAT_EQ(v * 255.0f, std::round(v * 255.0f));
     std::vector<float> a(81 * 81 * 3), b(a.size());
     double worst = 0, worstBound = 0;
     for (std::size_t t = 0; t < btf.texelCount(); ++t) {
-        double bound = std::abs(byte->weights[t * 5 + 4]) / 2048.0 + 1e-6;
+        double bound = std::abs(byte->weight(t, 4)) / 2048.0 + 1e-6;
         for (int i = 0; i < 4; ++i)
-            bound += std::abs(byte->weights[t * 5 + i]) * (1.0 / 510 + 1.0 / 2048 + 1.0 / 4096);
+            bound += std::abs(byte->weight(t, i)) * (1.0 / 510 + 1.0 / 2048 + 1.0 / 4096);
         half->evaluateMeasured(t, a.data());
         byte->evaluateMeasured(t, b.data());
         double largest = 0;

@@ -189,7 +189,8 @@ TEST(PtmFit, LuminanceVariantRecoversAColourTimesAPtm) {
         // the exact fit; the stored polynomial and colour are rounded to float, a few u of the
         // colour's size.
         for (std::size_t t = 0; t < btf.texelCount(); ++t) {
-            const float* rgb = &m->colour[t * 3];
+            float rgb[3];
+            m->colour.read(t * 3, 3, rgb);
             EXPECT_NEAR(0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2], 1.0,
                         16 * kFloatU * (1 + rgb[0] + rgb[1] + rgb[2]))
                 << t;

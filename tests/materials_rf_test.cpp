@@ -40,6 +40,12 @@ MeasuredBtf render(const RfMaterial& m, float noise, unsigned seed) {
     return btf;
 }
 
+/** Lobe `lobe` (index into the [layer][y][x] lobes) = (axis, exponent), rounded as stored. */
+void setLobe(RfMaterial& m, std::size_t lobe, const glm::vec3& axis, float exponent) {
+    const float values[] = {axis.x, axis.y, axis.z, exponent};
+    m.lobes.write(lobe * 4, values, 4);
+}
+
 /** A model with known, plausible parameters: a broad lobe near the normal and a glossy one near
  *  the mirror direction of each view, values within [0, 1]. */
 osg::ref_ptr<RfMaterial> groundTruth(int width, int height) {
@@ -47,10 +53,10 @@ osg::ref_ptr<RfMaterial> groundTruth(int width, int height) {
     osg::ref_ptr<RfMaterial> m = RfMaterial::create(width, height, bonn, bonn, 2);
     const std::size_t texels = m->texelCount();
     for (std::size_t t = 0; t < texels; ++t) {
-        for (int c = 0; c < 3; ++c) m->rhoD[t * 3 + c] = 0.02f + 0.01f * float((t + c) % 4);
+        for (int c = 0; c < 3; ++c) m->rhoD.set(t * 3 + c, 0.02f + 0.01f * float((t + c) % 4));
         for (std::size_t v = 0; v < bonn.size(); ++v) {
             for (int c = 0; c < 3; ++c)
-                m->rhoV[(v * texels + t) * 3 + c] = 0.35f + 0.1f * float((t + 2 * c + v) % 4);
+                m->rhoV.set((v * texels + t) * 3 + c, 0.35f + 0.1f * float((t + 2 * c + v) % 4));
             const glm::vec3 view = bonn.vector(v);
             const float n1 = 1.0f + 0.5f * float((t + v) % 3), n2 = 6.0f + 3.0f * float(t % 4);
             const glm::vec3 d1 = glm::normalize(
@@ -58,18 +64,11 @@ osg::ref_ptr<RfMaterial> groundTruth(int width, int height) {
             const glm::vec3 d2 = glm::normalize(glm::vec3(-view.x, -view.y, view.z + 0.3f));
             const glm::vec3 a1 = std::pow(0.6f, 1.0f / n1) * d1,
                             a2 = std::pow(0.5f, 1.0f / n2) * d2;
-            float* p = &m->lobes[((v * 2) * texels + t) * 4];
-            float* q = &m->lobes[((v * 2 + 1) * texels + t) * 4];
-            p[0] = a1.x, p[1] = a1.y, p[2] = a1.z, p[3] = n1;
-            q[0] = a2.x, q[1] = a2.y, q[2] = a2.z, q[3] = n2;
+            setLobe(*m, (v * 2) * texels + t, a1, n1);
+            setLobe(*m, (v * 2 + 1) * texels + t, a2, n2);
         }
     }
-    m->roundToStorage();
     return m;
-}
-
-bool allFinite(const std::vector<float>& v) {
-    return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
 }
 
 }  // namespace
@@ -177,7 +176,7 @@ TEST(RfFit, RecoversAModelFromNoisyData) {
 TEST(RfFit, BuiltInSampleIsFittedWithoutDivergence) {
     const MeasuredBtf btf = test::sampleBtf(8, 8);
     osg::ref_ptr<RfMaterial> m = RfMaterial::fit(btf, {});
-    ASSERT_TRUE(allFinite(m->rhoD) && allFinite(m->rhoV) && allFinite(m->lobes));
+    ASSERT_TRUE(m->rhoD.allFinite() && m->rhoV.allFinite() && m->lobes.allFinite());
     for (std::size_t i = 3; i < m->lobes.size(); i += 4) {
         ASSERT_GE(m->lobes[i], RfMaterial::kMinExponent);
         ASSERT_LE(m->lobes[i], 64.0f);
@@ -274,27 +273,29 @@ TEST(RfHalfLobes, RoundingStaysWithinTheBoundDerivedFromHalfPrecision) {
     const std::size_t texels = exact->texelCount();
     const std::size_t views = bonn.size();
     // rho_v on a 1/1024 grid and rho_d on 1/255: exact in their storage, so only lobes round.
-    for (float& v : exact->rhoV) v = std::round(unit(rng) * 1024.0f) / 1024.0f;
-    for (float& v : exact->rhoD) v = std::round(unit(rng) * 255.0f) / 255.0f;
+    for (std::size_t i = 0; i < exact->rhoV.size(); ++i)
+        exact->rhoV.set(i, std::round(unit(rng) * 1024.0f) / 1024.0f);
+    for (std::size_t i = 0; i < exact->rhoD.size(); ++i)
+        exact->rhoD.set(i, std::round(unit(rng) * 255.0f) / 255.0f);
+    // The exact lobes as floats (the model reads any precision); `stored` gets them as half.
+    exact->lobes = StoredValues(MaterialTexture::Float, exact->lobes.size());
     const float exponents[] = {1.0f, 7.3f, 33.7f, 64.0f, 129.9f, 255.8f};
     for (std::size_t layer = 0; layer < views * kLobes; ++layer)
         for (std::size_t t = 0; t < texels; ++t) {
-            float* p = &exact->lobes[(layer * texels + t) * 4];
             // An axis in the upper hemisphere; magnitude near 1, as the fitter leaves it (the lobe
             // sum peaks at 1 over the measured lights), so the base reaches 1 and a little more.
             const Direction axis{unit(rng) * 80.0f, unit(rng) * 360.0f};
             const glm::vec3 a = axis.toVector() * (0.95f + 0.1f * unit(rng));
-            p[0] = a.x;
-            p[1] = a.y;
-            p[2] = a.z;
-            p[3] = exponents[(layer + t) % 6];
+            setLobe(*exact, layer * texels + t, a, exponents[(layer + t) % 6]);
         }
     osg::ref_ptr<RfMaterial> stored = new RfMaterial(*exact);
-    stored->lobes = exact->lobes;
-    stored->roundToStorage();
-    ASSERT_EQ(stored->rhoV, exact->rhoV);
-    ASSERT_EQ(stored->rhoD, exact->rhoD);
-    ASSERT_NE(stored->lobes, exact->lobes);
+    stored->lobes = StoredValues(MaterialTexture::Half, exact->lobes.size());
+    std::size_t rounded = 0;
+    for (std::size_t i = 0; i < exact->lobes.size(); ++i) {
+        stored->lobes.set(i, exact->lobes[i]);
+        rounded += stored->lobes[i] != exact->lobes[i];
+    }
+    ASSERT_GT(rounded, exact->lobes.size() / 2);
 
     const double u = std::ldexp(1.0, -11);
     double worstRatio = 0, worstAt256 = 0;
@@ -309,7 +310,8 @@ TEST(RfHalfLobes, RoundingStaysWithinTheBoundDerivedFromHalfPrecision) {
                 //  exponent: |Dn| <= u n moves b^n by at most max |b^(n (1 +- u)) - b^n|.
                 double bound = 0;
                 for (int i = 0; i < kLobes; ++i) {
-                    const float* p = &exact->lobes[((v * kLobes + i) * texels + t) * 4];
+                    float p[4];
+                    exact->lobes.read(((v * kLobes + i) * texels + t) * 4, 4, p);
                     const double b =
                         double(p[0]) * light.x + double(p[1]) * light.y + double(p[2]) * light.z;
                     const double m = std::abs(double(p[0]) * light.x) +
@@ -371,10 +373,10 @@ osg::ref_ptr<RfMaterial> variantTruth(int width, int height, RfMaterial::Variant
     const int channels = m->lobeChannels();
     for (std::size_t t = 0; t < texels; ++t) {
         for (std::size_t i = 0; i < m->rhoD.size() / texels; ++i)
-            m->rhoD[t * 3 + i] = 0.03f + 0.01f * float((t + i) % 3);
+            m->rhoD.set(t * 3 + i, 0.03f + 0.01f * float((t + i) % 3));
         for (std::size_t v = 0; v < views.size(); ++v) {
             for (int c = 0; c < 3; ++c)
-                m->rhoV[(v * texels + t) * 3 + c] = 0.35f + 0.1f * float((t + 2 * c + v) % 4);
+                m->rhoV.set((v * texels + t) * 3 + c, 0.35f + 0.1f * float((t + 2 * c + v) % 4));
             const glm::vec3 view = views.vector(v);
             for (int c = 0; c < channels; ++c) {
                 const float tilt = channels == 1 ? 0.15f : 0.3f * float(1 - c);
@@ -392,14 +394,11 @@ osg::ref_ptr<RfMaterial> variantTruth(int width, int height, RfMaterial::Variant
                 const glm::vec3 a1 = std::pow(0.6f, 1.0f / n1) * d1,
                                 a2 = std::pow(w2, 1.0f / n2) * d2;
                 const std::size_t first = (v * channels + c) * 2;
-                float* p = &m->lobes[(first * texels + t) * 4];
-                float* q = &m->lobes[((first + 1) * texels + t) * 4];
-                p[0] = a1.x, p[1] = a1.y, p[2] = a1.z, p[3] = n1;
-                q[0] = a2.x, q[1] = a2.y, q[2] = a2.z, q[3] = n2;
+                setLobe(*m, first * texels + t, a1, n1);
+                setLobe(*m, (first + 1) * texels + t, a2, n2);
             }
         }
     }
-    m->roundToStorage();
     return m;
 }
 
@@ -519,7 +518,8 @@ TEST(RfVariants, WithoutDiffuseAConstantOffsetIsNotRepresented) {
     std::cout << "rf on lobes + 0.1: relative rms residual with rho_d " << a << ", without " << b
               << "\n";
     EXPECT_LT(a, 0.01);
-    for (float d : withFloor->rhoD) EXPECT_NEAR(d, offset, 0.02);
+    for (std::size_t i = 0; i < withFloor->rhoD.size(); ++i)
+        EXPECT_NEAR(withFloor->rhoD[i], offset, 0.02);
     EXPECT_GT(b, 2 * a);
     EXPECT_GT(b, 0.01);
 }

@@ -63,22 +63,22 @@ TEST(Slaf, RecoversAKnownModelFromNoisyData) {
     const std::size_t texels = truth->texelCount();
     for (std::size_t t = 0; t < texels; ++t) {
         for (int c = 0; c < 3; ++c) {
-            truth->rhoD[t * 3 + c] = quantizeUNorm8(0.1 + 0.03 * double(t) + 0.05 * c);
-            truth->rhoS[t * 3 + c] = quantizeUNorm8(1.0 - 0.25 * c);
+            truth->rhoD.set(t * 3 + c, quantizeUNorm8(0.1 + 0.03 * double(t) + 0.05 * c));
+            truth->rhoS.set(t * 3 + c, quantizeUNorm8(1.0 - 0.25 * c));
         }
         const float sharp = 5.0f + 3.0f * float(t), k = std::pow(0.3f, 1.0f / sharp);
         const float diffuse[4] = {0.0f, 0.1f * float(t % 2), 0.6f, 1.0f};
         const float mirror[4] = {-k, -k, k, sharp};
         for (int i = 0; i < 4; ++i) {
-            truth->lobes[t * 4 + i] = roundHalf(diffuse[i]);
-            truth->lobes[(texels + t) * 4 + i] = roundHalf(mirror[i]);
+            truth->lobes.set(t * 4 + i, roundHalf(diffuse[i]));
+            truth->lobes.set((texels + t) * 4 + i, roundHalf(mirror[i]));
         }
         // View-dependent darkening toward grazing views, tinted differently per channel.
         for (std::size_t v = 0; v < 81; ++v) {
             const float z = truth->views().vector(v).z;
             for (int c = 0; c < 3; ++c)
-                truth->scale[(v * texels + t) * 3 + c] =
-                    roundHalf(0.6 + 0.4 * std::pow(z, 1.0 + c + 0.5 * double(t)));
+                truth->scale.set((v * texels + t) * 3 + c,
+                                 roundHalf(0.6 + 0.4 * std::pow(z, 1.0 + c + 0.5 * double(t))));
         }
     }
     const MeasuredBtf data = dataFrom(*truth, 0.01f, 11);
@@ -100,7 +100,7 @@ TEST(Slaf, RecoversAKnownModelFromNoisyData) {
 TEST(Slaf, SampleFitIsFiniteBoundedAndNotWorseThanLaf) {
     const MeasuredBtf btf = test::sampleBtf(6, 5);
     osg::ref_ptr<SlafMaterial> m = SlafMaterial::fit(btf, {});
-    for (float v : m->scale) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    for (float v : m->scale.floats()) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
     for (std::size_t i = 0; i < m->lobes.size(); ++i) {
         ASSERT_TRUE(std::isfinite(m->lobes[i]));
         if (i % 4 == 3) {

@@ -32,6 +32,9 @@ struct LafData {};
 class LafMaterial : public MethodMaterial<LafMaterial, LafData, LobeMaterial> {
 public:
     static constexpr const char* kMethod = "laf";
+    /** fromFile takes the file's 8-bit and half textures as they are stored. */
+    static constexpr bool kLoadsBytes = true;
+    static constexpr bool kLoadsHalves = true;
 
     LafMaterial() = default;
     LafMaterial(const LafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)

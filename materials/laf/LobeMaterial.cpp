@@ -15,18 +15,20 @@ namespace osgBTF {
 void LobeMaterial::initLobes(int lobeCount) {
     _lobes = lobeCount;
     _cosine = true;
-    rhoD.assign(texelCount() * 3, 0.0f);
-    rhoS.assign(texelCount() * 3, 0.0f);
-    lobes.assign(texelCount() * lobeCount * lobes::kValuesPerLobe, 0.0f);
-    for (std::size_t i = 3; i < lobes.size(); i += lobes::kValuesPerLobe) lobes[i] = 1.0f;
+    rhoD = StoredValues(MaterialTexture::UNorm8, texelCount() * 3);
+    rhoS = StoredValues(MaterialTexture::UNorm8, texelCount() * 3);
+    lobes = StoredValues(MaterialTexture::Half, texelCount() * lobeCount * lobes::kValuesPerLobe);
+    for (std::size_t i = 3; i < lobes.size(); i += lobes::kValuesPerLobe) lobes.set(i, 1.0f);
 }
 
 glm::vec3 LobeMaterial::bracket(std::size_t t, const glm::vec3& view,
                                 const glm::vec3& light) const {
     const std::size_t texels = texelCount();
-    float sum = 0.0f;
-    for (int i = 0; i < _lobes; ++i)
-        sum += lobes::lobeValue(&lobes[(i * texels + t) * lobes::kValuesPerLobe], view, light);
+    float sum = 0.0f, lobe[lobes::kValuesPerLobe];
+    for (int i = 0; i < _lobes; ++i) {
+        lobes.read((i * texels + t) * lobes::kValuesPerLobe, lobes::kValuesPerLobe, lobe);
+        sum += lobes::lobeValue(lobe, view, light);
+    }
     return (glm::vec3(rhoD[t * 3], rhoD[t * 3 + 1], rhoD[t * 3 + 2]) +
             glm::vec3(rhoS[t * 3], rhoS[t * 3 + 1], rhoS[t * 3 + 2]) * sum) *
            (_cosine ? light.z : 1.0f);
@@ -35,9 +37,9 @@ glm::vec3 LobeMaterial::bracket(std::size_t t, const glm::vec3& view,
 void LobeMaterial::writeLobes(FittedMaterial& file) const {
     file.parameters["lobes"] = std::to_string(_lobes);
     file.parameters["cosine"] = _cosine ? "1" : "0";
-    file.textures.push_back({"rhoD", _width, _height, 1, 3, MaterialTexture::UNorm8, rhoD});
-    file.textures.push_back({"rhoS", _width, _height, 1, 3, MaterialTexture::UNorm8, rhoS});
-    file.textures.push_back({"lobes", _width, _height, _lobes, 4, MaterialTexture::Half, lobes});
+    file.textures.push_back(rhoD.texture("rhoD", _width, _height, 1, 3));
+    file.textures.push_back(rhoS.texture("rhoS", _width, _height, 1, 3));
+    file.textures.push_back(lobes.texture("lobes", _width, _height, _lobes, 4));
 }
 
 void LobeMaterial::readLobeParameters(const FittedMaterial& file) {
@@ -54,38 +56,32 @@ void LobeMaterial::readLobeParameters(const FittedMaterial& file) {
 }
 
 void LobeMaterial::readLobeTextures(FittedMaterial& file) {
-    rhoD = readTexture(file, "rhoD", 1, 3);
-    rhoS = readTexture(file, "rhoS", 1, 3);
-    lobes = readTexture(file, "lobes", _lobes, 4);
+    rhoD = readTexture(file, "rhoD", 1, 3, MaterialTexture::UNorm8);
+    rhoS = readTexture(file, "rhoS", 1, 3, MaterialTexture::UNorm8);
+    lobes = readTexture(file, "lobes", _lobes, 4, MaterialTexture::Half);
 }
 
-std::vector<float> LobeMaterial::readTexture(FittedMaterial& file, const std::string& name,
-                                             int depth, int channels) const {
+StoredValues LobeMaterial::readTexture(FittedMaterial& file, const std::string& name, int depth,
+                                       int channels, MaterialTexture::PixelKind kind) const {
     // The file is the caller's own (fromFile takes it by value): its values are taken.
     MaterialTexture& t = file.texture(name);
     if (t.width != _width || t.height != _height || t.depth != depth || t.channels != channels)
         fail(file.source, "texture '" + name + "' must be " + std::to_string(_width) + "x" +
                               std::to_string(_height) + "x" + std::to_string(depth) + " with " +
                               std::to_string(channels) + " channels");
-    return std::move(t.data);
+    return StoredValues::take(t, kind);
 }
 
 void LobeMaterial::addLobeState(osg::StateSet& stateSet, const std::string& prefix) const {
-    addTexture(
-        stateSet,
-        createFloatTexture({"rhoD", _width, _height, 1, 3, MaterialTexture::UNorm8, rhoD}).get(),
-        prefix + "RhoD", 0);
-    addTexture(
-        stateSet,
-        createFloatTexture({"rhoS", _width, _height, 1, 3, MaterialTexture::UNorm8, rhoS}).get(),
-        prefix + "RhoS", 1);
+    addTexture(stateSet, createFloatTexture(rhoD.texture("rhoD", _width, _height, 1, 3)).get(),
+               prefix + "RhoD", 0);
+    addTexture(stateSet, createFloatTexture(rhoS.texture("rhoS", _width, _height, 1, 3)).get(),
+               prefix + "RhoS", 1);
     // The lobe slices stacked as one atlas (lobe i in rows [i h, (i + 1) h)): the same memory
     // layout as the [lobe][y][x] array, and a plain sampler2D for any lobe count, 1 included.
-    addTexture(
-        stateSet,
-        createFloatTexture({"lobes", _width, _height * _lobes, 1, 4, MaterialTexture::Half, lobes})
-            .get(),
-        prefix + "Lobes", 2);
+    addTexture(stateSet,
+               createFloatTexture(lobes.texture("lobes", _width, _height * _lobes, 1, 4)).get(),
+               prefix + "Lobes", 2);
     stateSet.addUniform(new osg::Uniform((prefix + "LobeCount").c_str(), _lobes));
     stateSet.addUniform(new osg::Uniform((prefix + "Cosine").c_str(), _cosine ? 1 : 0));
 }

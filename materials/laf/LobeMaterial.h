@@ -16,15 +16,18 @@
 #include <glm/vec3.hpp>
 
 #include "materials/Material.h"
+#include "materials/StoredValues.h"
 
 namespace osgBTF {
 
 /** LobeMaterial's members, copied and assigned by the compiler (materials/MethodMaterial.h). */
 struct LobeData {
-    /** RGB per texel, rows bottom-up, multiples of 1/255 in [0, 1] (8-bit storage). */
-    std::vector<float> rhoD, rhoS;
-    /** [lobe][y][x][Cx, Cy, Cz, n], half-representable values. */
-    std::vector<float> lobes;
+    // Held as the file stores them (materials/StoredValues.h): a loaded material takes its
+    // file's size in memory, and every value set is rounded as the file and the GPU hold it.
+    /** RGB per texel, rows bottom-up, 8-bit fixed point. */
+    StoredValues rhoD, rhoS;
+    /** [lobe][y][x][Cx, Cy, Cz, n], half. */
+    StoredValues lobes;
 
 protected:
     int _lobes = 0;
@@ -63,9 +66,10 @@ protected:
     void readLobeParameters(const FittedMaterial& file);
     /** Reads the textures rhoD, rhoS and lobes (after readLobeParameters). */
     void readLobeTextures(FittedMaterial& file);
-    /** A texture of the file that must have this material's size, `depth` and `channels`. */
-    std::vector<float> readTexture(FittedMaterial& file, const std::string& name, int depth,
-                                   int channels) const;
+    /** A texture of the file that must have this material's size, `depth` and `channels`, its
+     *  values taken as `kind` stores them. */
+    StoredValues readTexture(FittedMaterial& file, const std::string& name, int depth, int channels,
+                             MaterialTexture::PixelKind kind) const;
     /** Binds rhoD, rhoS and the lobe atlas to units 0, 1, 2 as <prefix>RhoD, <prefix>RhoS,
      *  <prefix>Lobes, and the uniforms <prefix>LobeCount and <prefix>Cosine. */
     void addLobeState(osg::StateSet& stateSet, const std::string& prefix) const;
@@ -74,7 +78,7 @@ protected:
      *  `scale` null: T fixed at 1 (LAF). Otherwise T is fitted, alternating `rounds` times with
      *  the lobes, and stored there as [view][y][x][rgb] (SLAF). Sets the fit info seconds,
      *  iterations, fallbacks and lobes. */
-    void fitLobes(const BtfSource& btf, int iterations, int rounds, std::vector<float>* scale);
+    void fitLobes(const BtfSource& btf, int iterations, int rounds, StoredValues* scale);
 };
 
 }  // namespace osgBTF

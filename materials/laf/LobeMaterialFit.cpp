@@ -29,7 +29,7 @@ namespace osgBTF {
 // the LAF path the SLAF computation without the T steps.
 
 void LobeMaterial::fitLobes(const BtfSource& btf, int iterations, int rounds,
-                            std::vector<float>* scaleOut) {
+                            StoredValues* scaleOut) {
     const bool viewTable = scaleOut != nullptr;
     const int k = _lobes;
     const auto start = std::chrono::steady_clock::now();
@@ -231,17 +231,16 @@ void LobeMaterial::fitLobes(const BtfSource& btf, int iterations, int rounds,
             }
 
             for (int c = 0; c < 3; ++c) {
-                rhoD[t * 3 + c] = float(rd[c]);
-                rhoS[t * 3 + c] = float(rs[c]);
+                rhoD.set(t * 3 + c, float(rd[c]));
+                rhoS.set(t * 3 + c, float(rs[c]));
             }
             for (int i = 0; i < k; ++i)
-                std::copy(stored + i * lobes::kValuesPerLobe,
-                          stored + (i + 1) * lobes::kValuesPerLobe,
-                          lobes.begin() + (i * texels + t) * lobes::kValuesPerLobe);
+                lobes.write((i * texels + t) * lobes::kValuesPerLobe,
+                            stored + i * lobes::kValuesPerLobe, lobes::kValuesPerLobe);
             if (viewTable)
                 for (std::size_t v = 0; v < viewCount; ++v)
                     for (int c = 0; c < 3; ++c)
-                        (*scaleOut)[(v * texels + t) * 3 + c] = float(T[v * 3 + c]);
+                        scaleOut->set((v * texels + t) * 3 + c, float(T[v * 3 + c]));
             totalIterations += spent;
             progress.advance();
         }

@@ -11,12 +11,12 @@ glm::vec3 LambertMaterial::evaluate(int x, int y, const glm::vec3&, const glm::v
 }
 
 MemoryFootprint LambertMaterial::memory() const {
-    return {3.0, 6.0, std::uint64_t(albedo.size()) * 2};
+    return {3.0, 6.0, std::uint64_t(albedo.bytes())};
 }
 
 FittedMaterial LambertMaterial::toFittedMaterial() const {
     FittedMaterial file = writeCommon();
-    file.textures.push_back({"albedo", _width, _height, 1, 3, MaterialTexture::Half, albedo});
+    file.textures.push_back(albedo.texture("albedo", _width, _height, 1, 3));
     return file;
 }
 
@@ -28,18 +28,18 @@ osg::ref_ptr<LambertMaterial> LambertMaterial::fromFile(FittedMaterial file) {
     if (t.width != m->_width || t.height != m->_height || t.channels != 3)
         fail(file.source, "texture 'albedo' must be " + std::to_string(m->_width) + "x" +
                               std::to_string(m->_height) + " RGB");
-    m->albedo = std::move(t.data);
+    m->albedo = StoredValues::take(t, MaterialTexture::Half);
     return m;
 }
 
 osg::ref_ptr<osg::StateSet> LambertMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
-    addTexture(*stateSet,
-               createFloatTexture({"albedo", _width, _height, 1, 3, MaterialTexture::Half, albedo},
-                                  filtersParameters())
-                   .get(),
-               "lambertAlbedo", 0);
+    addTexture(
+        *stateSet,
+        createFloatTexture(albedo.texture("albedo", _width, _height, 1, 3), filtersParameters())
+            .get(),
+        "lambertAlbedo", 0);
     return stateSet;
 }
 

@@ -7,21 +7,22 @@
 // Memory: 3 values (RGB) per texel, stored as half: 3 values, 6 bytes.
 #pragma once
 
-#include <vector>
-
 #include "materials/MethodMaterial.h"
+#include "materials/StoredValues.h"
 
 namespace osgBTF {
 
 /** LambertMaterial's members (materials/MethodMaterial.h). */
 struct LambertData {
-    /** RGB per texel, rows bottom-up. */
-    std::vector<float> albedo;
+    /** RGB per texel, rows bottom-up; half, as the file stores it (materials/StoredValues.h). */
+    StoredValues albedo;
 };
 
 class LambertMaterial : public MethodMaterial<LambertMaterial, LambertData> {
 public:
     static constexpr const char* kMethod = "lambert";
+    /** fromFile takes the file's half texture as it is stored. */
+    static constexpr bool kLoadsHalves = true;
 
     LambertMaterial() = default;
     LambertMaterial(const LambertMaterial& other,

@@ -12,7 +12,7 @@ osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const BtfSource& btf,
     validateOptions(kMethod, options);  // it has none: anything given is an error
     osg::ref_ptr<LambertMaterial> m = new LambertMaterial;
     m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());
-    m->albedo.assign(btf.texelCount() * 3, 0.0f);
+    m->albedo = StoredValues(MaterialTexture::Half, btf.texelCount() * 3);
     double sumSquares = 0;
     for (std::size_t v = 0; v < btf.viewCount(); ++v)
         for (std::size_t l = 0; l < btf.lightCount(); ++l)
@@ -33,8 +33,7 @@ osg::ref_ptr<LambertMaterial> LambertMaterial::fit(const BtfSource& btf,
                     for (int c = 0; c < 3; ++c) sum[c] += abrdf[i + c] * lz;
                 }
             // The model is what is stored: round to half now so CPU, file and GPU agree exactly.
-            for (int c = 0; c < 3; ++c)
-                m->albedo[t * 3 + c] = float(Imath::half(float(sum[c] / sumSquares)));
+            for (int c = 0; c < 3; ++c) m->albedo.set(t * 3 + c, float(sum[c] / sumSquares));
         }
     });
     return m;

@@ -18,7 +18,7 @@ void LpcaRevisedMaterial::finishSetup() {
     if (_clusters < 1 || _clusters > 256 || _components < 1 || _resolution < 2)
         throw Error("lpca-revised: invalid model shape");
     if (clusterOf.size() != texelCount() ||
-        weights.size() != texelCount() * std::size_t(weightsPerTexel()) ||
+        weights.size() != lpcaWeightCount(texelCount(), weightsPerTexel()) ||
         grid.size() != std::size_t(gridWidth()) * gridHeight() * gridDepth() * 3)
         throw Error("lpca-revised: array sizes do not match the model's shape");
     _viewParams.clear();
@@ -49,8 +49,8 @@ glm::vec3 LpcaRevisedMaterial::trilinear(float x, float y, float z) const {
                   iz = corner & 4 ? i1[2] : i0[2];
         const float w = (corner & 1 ? f[0] : 1 - f[0]) * (corner & 2 ? f[1] : 1 - f[1]) *
                         (corner & 4 ? f[2] : 1 - f[2]);
-        const float* rgb = grid.data() + ((std::size_t(iz) * size[1] + iy) * size[0] + ix) * 3;
-        sum += w * glm::vec3(rgb[0], rgb[1], rgb[2]);
+        const std::size_t rgb = ((std::size_t(iz) * size[1] + iy) * size[0] + ix) * 3;
+        sum += w * glm::vec3(grid[rgb], grid[rgb + 1], grid[rgb + 2]);
     }
     return sum;
 }
@@ -58,7 +58,6 @@ glm::vec3 LpcaRevisedMaterial::trilinear(float x, float y, float z) const {
 glm::vec3 LpcaRevisedMaterial::evaluateAt(std::size_t texel, const glm::vec2& sv,
                                           const glm::vec2& sl) const {
     const float n = float(_resolution);
-    const int perTexel = weightsPerTexel();
     const float x = float(clusterOf[texel]) * n + std::clamp(sv.x * n, 0.5f, n - 0.5f);
     const float yInBlock = std::clamp(sv.y * n, 0.5f, n - 0.5f);
     const float u = std::clamp(sl.y * n - 0.5f, 0.0f, n - 1.0f);
@@ -69,9 +68,9 @@ glm::vec3 LpcaRevisedMaterial::evaluateAt(std::size_t texel, const glm::vec2& sv
     for (int i = 0; i < _components; ++i) {
         const float y = float(i) * n + yInBlock;
         const glm::vec3 a = trilinear(x, y, z1), b = trilinear(x, y, z2);
-        sum += weights[texel * perTexel + i] * (a + (b - a) * w);
+        sum += weight(texel, i) * (a + (b - a) * w);
     }
-    if (_eightBit) sum += glm::vec3(weights[texel * perTexel + _components]);
+    if (_eightBit) sum += glm::vec3(weight(texel, _components));
     return sum;
 }
 
@@ -94,11 +93,12 @@ void LpcaRevisedMaterial::evaluateMeasured(std::size_t texel, float* abrdf) cons
 
 MemoryFootprint LpcaRevisedMaterial::memory() const {
     const double texels = double(texelCount());
-    const std::uint64_t bytes = std::uint64_t(clusterOf.size()) +
-                                std::uint64_t(weights.size()) * 2 +
-                                std::uint64_t(grid.size()) * (_eightBit ? 1 : 2);
-    return {double(clusterOf.size() + weights.size() + grid.size()) / texels,
-            double(bytes) / texels, bytes};
+    // The weights' padding to groups of 4 is not counted.
+    const std::size_t weightCount = texelCount() * std::size_t(weightsPerTexel());
+    const std::uint64_t bytes =
+        std::uint64_t(clusterOf.size()) + std::uint64_t(weightCount) * 2 + grid.bytes();
+    return {double(clusterOf.size() + weightCount + grid.size()) / texels, double(bytes) / texels,
+            bytes};
 }
 
 // ---- file ------------------------------------------------------------------------------------
@@ -111,8 +111,7 @@ FittedMaterial LpcaRevisedMaterial::toFittedMaterial() const {
     file.parameters["storage"] = _eightBit ? "unorm8" : "half";
     file.textures.push_back(lpcaClusterTexture(_width, _height, clusterOf));
     file.textures.push_back(lpcaWeightTexture(_width, _height, weightsPerTexel(), weights));
-    file.textures.push_back({"grid", gridWidth(), gridHeight(), gridDepth(), 3,
-                             _eightBit ? MaterialTexture::UNorm8 : MaterialTexture::Half, grid});
+    file.textures.push_back(grid.texture("grid", gridWidth(), gridHeight(), gridDepth(), 3));
     return file;
 }
 
@@ -138,7 +137,7 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromFile(FittedMaterial f
         fail(file.source, "texture 'grid' does not match clusters, components and resolution");
     m->clusterOf = lpcaClusterFromTexture(file, m->_clusters);
     m->weights = lpcaWeightsFromTexture(file, m->weightsPerTexel());
-    m->grid = std::move(g.data);
+    m->grid = StoredValues::take(g, m->_eightBit ? MaterialTexture::UNorm8 : MaterialTexture::Half);
     try {
         m->finishSetup();
     } catch (const Error& error) {
@@ -160,9 +159,7 @@ osg::ref_ptr<osg::StateSet> LpcaRevisedMaterial::createStateSet() const {
         "lpcaRevisedWeights", 1);
     addTexture(
         *stateSet,
-        createFloatTexture3D({"grid", gridWidth(), gridHeight(), gridDepth(), 3,
-                              _eightBit ? MaterialTexture::UNorm8 : MaterialTexture::Half, grid},
-                             true)
+        createFloatTexture3D(grid.texture("grid", gridWidth(), gridHeight(), gridDepth(), 3), true)
             .get(),
         "lpcaRevisedGrid", 2);
     stateSet->addUniform(new osg::Uniform("lpcaRevisedComponents", _components));

@@ -37,9 +37,11 @@ namespace osgBTF {
 /** LpcaRevisedMaterial's members (materials/MethodMaterial.h). */
 struct LpcaRevisedData {
     std::vector<std::uint8_t> clusterOf;  ///< per texel
-    std::vector<float> weights;           ///< per texel weightsPerTexel() values (half)
-    /** The 3D texture, [z][y][x][rgb]; half values, or multiples of 1/255 for unorm8. */
-    std::vector<float> grid;
+    // Held as the file and the GPU store them (materials/StoredValues.h).
+    /** Per texel weightsPerTexel() values, half, in lpca's weight layout (lpcaWeightIndex). */
+    StoredValues weights;
+    /** The 3D texture, [z][y][x][rgb]; half, or 8-bit for storage=unorm8. */
+    StoredValues grid;
 
 protected:
     int _clusters = 0, _components = 0, _resolution = 0;
@@ -50,6 +52,9 @@ protected:
 class LpcaRevisedMaterial : public MethodMaterial<LpcaRevisedMaterial, LpcaRevisedData> {
 public:
     static constexpr const char* kMethod = "lpca-revised";
+    /** fromFile takes the file's 8-bit and half textures as they are stored. */
+    static constexpr bool kLoadsBytes = true;
+    static constexpr bool kLoadsHalves = true;
 
     LpcaRevisedMaterial() = default;
     LpcaRevisedMaterial(const LpcaRevisedMaterial& other,
@@ -79,6 +84,10 @@ public:
     bool eightBit() const { return _eightBit; }
     /** Weights per texel: c, plus the offset b with unorm8 storage. */
     int weightsPerTexel() const { return _components + (_eightBit ? 1 : 0); }
+    /** Weight i (0 .. weightsPerTexel() - 1) of a texel. */
+    float weight(std::size_t texel, int i) const {
+        return weights[lpcaWeightIndex(texelCount(), texel, i)];
+    }
     /** Size of the grid texture: (K n) x (c n) x (n n). */
     int gridWidth() const { return _clusters * _resolution; }
     int gridHeight() const { return _components * _resolution; }

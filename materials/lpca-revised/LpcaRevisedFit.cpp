@@ -64,8 +64,8 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromLpca(const LpcaMateri
             viewWeights[std::size_t(jt) * n + js] = viewInterpolator.weights(d);
             lightWeights[std::size_t(jt) * n + js] = lightInterpolator.weights(d);
         }
-    m->grid.assign(std::size_t(W) * H * D * 3, 0.0f);
-    const std::size_t lights = lpca.lights().size();
+    // Resampled in float here; the material gets the grid at its storage precision below.
+    std::vector<float> grid(std::size_t(W) * H * D * 3, 0.0f);
     {
         Progress progress("lpca-revised: resampling", std::size_t(D));
         tbb::parallel_for(0, D, [&](int z) {
@@ -75,17 +75,18 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromLpca(const LpcaMateri
                 for (int x = 0; x < W; ++x) {
                     const int k = x / n, jsv = x % n;
                     const InterpolationWeights& wv = viewWeights[std::size_t(jtv) * n + jsv];
-                    const float* e = lpca.eigenBrdf(k, i);
                     double sum[3] = {0, 0, 0};
                     for (int a = 0; a < 3; ++a)
                         for (int b = 0; b < 3; ++b) {
                             const double w = double(wv.weight[a]) * wl.weight[b];
                             if (w == 0) continue;
-                            const float* rgb =
-                                e + (std::size_t(wv.index[a]) * lights + wl.index[b]) * 3;
-                            for (int ch = 0; ch < 3; ++ch) sum[ch] += w * rgb[ch];
+                            const std::size_t rgb =
+                                lpca.eigenBrdfRun(k, i, std::size_t(wv.index[a])) +
+                                std::size_t(wl.index[b]) * 3;
+                            for (int ch = 0; ch < 3; ++ch)
+                                sum[ch] += w * lpca.eigenBrdfs[rgb + std::size_t(ch)];
                         }
-                    float* out = m->grid.data() + ((std::size_t(z) * H + y) * W + x) * 3;
+                    float* out = grid.data() + ((std::size_t(z) * H + y) * W + x) * 3;
                     for (int ch = 0; ch < 3; ++ch) out[ch] = float(sum[ch]);
                 }
             }
@@ -102,7 +103,7 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromLpca(const LpcaMateri
                 for (int x = 0; x < W; ++x)
                     for (int ch = 0; ch < 3; ++ch) {
                         double& s = scale[std::size_t(x / n) * c + std::size_t(y / n)];
-                        s = std::max(s, double(std::abs(m->grid[((z * H + y) * W + x) * 3 + ch])));
+                        s = std::max(s, double(std::abs(grid[((z * H + y) * W + x) * 3 + ch])));
                     }
         for (double& s : scale)
             if (!(s > 0)) s = 1.0;
@@ -110,28 +111,28 @@ osg::ref_ptr<LpcaRevisedMaterial> LpcaRevisedMaterial::fromLpca(const LpcaMateri
             for (int y = 0; y < H; ++y)
                 for (int x = 0; x < W; ++x)
                     for (int ch = 0; ch < 3; ++ch) {
-                        float& v = m->grid[((z * H + y) * W + x) * 3 + ch];
+                        float& v = grid[((z * H + y) * W + x) * 3 + ch];
                         const double s = scale[std::size_t(x / n) * c + std::size_t(y / n)];
                         v = float(std::lround(std::clamp((v / s + 1.0) * 0.5, 0.0, 1.0) * 255.0)) /
                             255.0f;
                     }
-    } else {
-        for (float& v : m->grid) v = float(Imath::half(v));
     }
+    m->grid = StoredValues(eightBit ? MaterialTexture::UNorm8 : MaterialTexture::Half, grid.size());
+    m->grid.write(0, grid.data(), grid.size());
     const int perTexel = m->weightsPerTexel();
     m->clusterOf = lpca.clusterOf;
-    m->weights.assign(m->texelCount() * std::size_t(perTexel), 0.0f);
+    const std::size_t texels = m->texelCount();
+    m->weights = StoredValues(MaterialTexture::Half, lpcaWeightCount(texels, perTexel));
     for (std::size_t t = 0; t < m->texelCount(); ++t) {
         const int k = lpca.clusterOf[t];
         double offset = 0;
         for (int i = 0; i < c; ++i) {
-            const double alpha = lpca.weights[t * c + i];
+            const double alpha = lpca.weight(t, i);
             const double s = scale[std::size_t(k) * c + i];
-            m->weights[t * perTexel + i] =
-                float(Imath::half(float(eightBit ? 2 * s * alpha : alpha)));
+            m->weights.set(lpcaWeightIndex(texels, t, i), float(eightBit ? 2 * s * alpha : alpha));
             offset -= s * alpha;
         }
-        if (eightBit) m->weights[t * perTexel + c] = float(Imath::half(float(offset)));
+        if (eightBit) m->weights.set(lpcaWeightIndex(texels, t, c), float(offset));
     }
     m->finishSetup();
     std::ostringstream seconds;

@@ -18,8 +18,9 @@ osg::ref_ptr<LpcaMaterial> LpcaMaterial::ofShape(int width, int height, const Di
     osg::ref_ptr<LpcaMaterial> m = new LpcaMaterial;
     m->setGeometry(width, height, views, lights);
     m->clusterOf.assign(m->texelCount(), 0);
-    m->weights.assign(m->texelCount() * std::size_t(components), 0.0f);
-    m->eigenBrdfs.assign(std::size_t(clusters) * components * m->eigenBrdfSize(), 0.0f);
+    m->weights = StoredValues(MaterialTexture::Half, lpcaWeightCount(m->texelCount(), components));
+    m->eigenBrdfs = StoredValues(MaterialTexture::Half,
+                                 std::size_t(clusters) * components * m->eigenBrdfSize());
     m->finishSetup(clusters, components);
     return m;
 }
@@ -31,7 +32,7 @@ void LpcaMaterial::finishSetup(int clusters, int components) {
     _clusters = clusters;
     _components = components;
     if (clusterOf.size() != texelCount() ||
-        weights.size() != texelCount() * std::size_t(components) ||
+        weights.size() != lpcaWeightCount(texelCount(), components) ||
         eigenBrdfs.size() != std::size_t(clusters) * components * eigenBrdfSize())
         throw Error("lpca: array sizes do not match the model's shape");
     _viewLookup = DirectionLookup(_views);
@@ -46,29 +47,37 @@ glm::vec3 LpcaMaterial::evaluate(int x, int y, const glm::vec3& view,
     const InterpolationWeights wv = _viewLookup.weights(view);
     const InterpolationWeights wl = _lightLookup.weights(light);
     const int k = clusterOf[t];
-    const std::size_t lights = _lights.size();
     glm::vec3 sum(0.0f);
     for (int i = 0; i < _components; ++i) {
-        const float* e = eigenBrdf(k, i);
         glm::vec3 value(0.0f);
         for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b) {
-                const float* rgb = e + (std::size_t(wv.index[a]) * lights + wl.index[b]) * 3;
-                value += (wv.weight[a] * wl.weight[b]) * glm::vec3(rgb[0], rgb[1], rgb[2]);
+                const std::size_t rgb =
+                    eigenBrdfRun(k, i, std::size_t(wv.index[a])) + std::size_t(wl.index[b]) * 3;
+                value += (wv.weight[a] * wl.weight[b]) *
+                         glm::vec3(eigenBrdfs[rgb], eigenBrdfs[rgb + 1], eigenBrdfs[rgb + 2]);
             }
-        sum += weights[t * _components + i] * value;
+        sum += weight(t, i) * value;
     }
     return sum;
+}
+
+float LpcaMaterial::weight(std::size_t texel, int i) const {
+    return weights[lpcaWeightIndex(texelCount(), texel, i)];
 }
 
 void LpcaMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
     const std::size_t n = eigenBrdfSize();
     std::fill(abrdf, abrdf + n, 0.0f);
     const int k = clusterOf[texel];
+    const std::size_t run = _lights.size() * 3;
     for (int i = 0; i < _components; ++i) {
-        const float w = weights[texel * _components + i];
-        const float* e = eigenBrdf(k, i);
-        for (std::size_t j = 0; j < n; ++j) abrdf[j] += w * e[j];
+        const float w = weight(texel, i);
+        for (std::size_t v = 0; v < _views.size(); ++v) {
+            const std::size_t e = eigenBrdfRun(k, i, v);
+            float* out = abrdf + v * run;
+            for (std::size_t j = 0; j < run; ++j) out[j] += w * eigenBrdfs[e + j];
+        }
     }
 }
 
@@ -76,11 +85,12 @@ MemoryFootprint LpcaMaterial::memory() const {
     // Meseth et al. 2003 Table 2 counts: per texel the cluster index (8-bit) and c weights (half);
     // per cluster c Eigen-BRDFs of V*L*3 half values, shared by all texels.
     const double texels = double(texelCount());
-    const double perTexelValues = double(clusterOf.size() + weights.size()) / texels;
+    // The weights' padding to groups of 4 is not counted (the model has c weights).
+    const std::size_t weightCount = texelCount() * std::size_t(_components);
+    const double perTexelValues = double(clusterOf.size() + weightCount) / texels;
     const double sharedValues = double(eigenBrdfs.size()) / texels;
-    const std::uint64_t bytes = std::uint64_t(clusterOf.size()) * 1 +
-                                std::uint64_t(weights.size()) * 2 +
-                                std::uint64_t(eigenBrdfs.size()) * 2;
+    const std::uint64_t bytes =
+        std::uint64_t(clusterOf.size()) * 1 + std::uint64_t(weightCount) * 2 + eigenBrdfs.bytes();
     return {perTexelValues + sharedValues, double(bytes) / texels, bytes};
 }
 
@@ -109,51 +119,39 @@ osg::ref_ptr<osg::Texture> createTextureArray(const MaterialTexture& t) {
 MaterialTexture lpcaClusterTexture(int width, int height,
                                    const std::vector<std::uint8_t>& clusterOf) {
     MaterialTexture t{"cluster", width, height, 1, 1, MaterialTexture::UNorm8, {}};
-    t.data.resize(clusterOf.size());
-    for (std::size_t i = 0; i < clusterOf.size(); ++i) t.data[i] = clusterOf[i] / 255.0f;
+    t.bytes = clusterOf;  // index k is the 8-bit value k / 255
     return t;
 }
 
 MaterialTexture lpcaWeightTexture(int width, int height, int components,
-                                  const std::vector<float>& weights) {
-    const int layers = (components + 3) / 4;
-    const std::size_t texels = std::size_t(width) * height;
-    MaterialTexture t{"weights", width, height, layers, 4, MaterialTexture::Half, {}};
-    t.data.assign(t.valueCount(), 0.0f);
-    for (std::size_t x = 0; x < texels; ++x)
-        for (int i = 0; i < components; ++i)
-            t.data[(std::size_t(i / 4) * texels + x) * 4 + i % 4] = weights[x * components + i];
-    return t;
+                                  const StoredValues& weights) {
+    return weights.texture("weights", width, height, (components + 3) / 4, 4);
 }
 
 std::vector<std::uint8_t> lpcaClusterFromTexture(FittedMaterial& file, int clusters) {
     MaterialTexture& t = file.texture("cluster");
     if (t.channels != 1 || t.depth != 1 || t.kind != MaterialTexture::UNorm8)
         fail(file.source, "texture 'cluster' must be one 8-bit channel");
-    std::vector<std::uint8_t> clusterOf(t.data.size());
-    for (std::size_t i = 0; i < t.data.size(); ++i) {
-        const long k = std::lround(t.data[i] * 255.0f);
+    // The file's bytes are taken as they are (kLoadsBytes); values read as floats are rounded.
+    std::vector<std::uint8_t> clusterOf = std::move(t.bytes);
+    if (clusterOf.empty()) clusterOf.resize(t.storedCount());
+    for (std::size_t i = 0; i < clusterOf.size(); ++i) {
+        const long k = t.data.empty() ? long(clusterOf[i]) : std::lround(t.data[i] * 255.0f);
         if (k < 0 || k >= clusters)
             fail(file.source, "cluster index " + std::to_string(k) + " out of range (" +
                                   std::to_string(clusters) + " clusters)");
         clusterOf[i] = std::uint8_t(k);
     }
-    std::vector<float>().swap(t.data);  // the file's copy is no longer needed
+    t = MaterialTexture{t.name, t.width, t.height, t.depth, t.channels, t.kind, {}};
     return clusterOf;
 }
 
-std::vector<float> lpcaWeightsFromTexture(FittedMaterial& file, int components) {
+StoredValues lpcaWeightsFromTexture(FittedMaterial& file, int components) {
     MaterialTexture& t = file.texture("weights");
     if (t.channels != 4 || t.depth != (components + 3) / 4)
         fail(file.source, "texture 'weights' must have " + std::to_string((components + 3) / 4) +
                               " RGBA layers for " + std::to_string(components) + " components");
-    const std::size_t texels = std::size_t(t.width) * t.height;
-    std::vector<float> weights(texels * components);
-    for (std::size_t x = 0; x < texels; ++x)
-        for (int i = 0; i < components; ++i)
-            weights[x * components + i] = t.data[(std::size_t(i / 4) * texels + x) * 4 + i % 4];
-    std::vector<float>().swap(t.data);  // the file's copy is no longer needed
-    return weights;
+    return StoredValues::take(t, MaterialTexture::Half);
 }
 
 // ---- file ------------------------------------------------------------------------------------
@@ -166,25 +164,8 @@ FittedMaterial LpcaMaterial::toFittedMaterial() const {
     file.textures.push_back(lpcaWeightTexture(_width, _height, _components, weights));
     // One layer per cluster; rows: view-major then component, columns: lights. The same
     // layout as the GPU texture, within GL limits for Bonn (81 x 81c) and UBO2014 (151 x 151c).
-    file.textures.push_back({"eigenBrdfs",
-                             int(_lights.size()),
-                             int(_views.size()) * _components,
-                             _clusters,
-                             3,
-                             MaterialTexture::Half,
-                             {}});
-    MaterialTexture& e = file.textures.back();
-    e.data.resize(e.valueCount());
-    const std::size_t lights = _lights.size();
-    for (int k = 0; k < _clusters; ++k)
-        for (int i = 0; i < _components; ++i)
-            for (std::size_t v = 0; v < _views.size(); ++v)
-                for (std::size_t l = 0; l < lights; ++l)
-                    for (int c = 0; c < 3; ++c)
-                        e.data[(((std::size_t(k) * _views.size() + v) * _components + i) * lights +
-                                l) *
-                                   3 +
-                               c] = eigenBrdf(k, i)[(v * lights + l) * 3 + c];
+    file.textures.push_back(eigenBrdfs.texture("eigenBrdfs", int(_lights.size()),
+                                               int(_views.size()) * _components, _clusters, 3));
     return file;
 }
 
@@ -207,24 +188,12 @@ osg::ref_ptr<LpcaMaterial> LpcaMaterial::fromFile(FittedMaterial file) {
         fail(file.source, "texture 'eigenBrdfs' does not match the directions and shape");
     m->clusterOf = lpcaClusterFromTexture(file, clusters);
     m->weights = lpcaWeightsFromTexture(file, components);
-    // The file's [cluster][view][component][light][rgb] reordered in place to the material's
-    // [cluster][component][view][light][rgb], a cluster at a time through a buffer of one: the
-    // Eigen-BRDFs are held once.
-    const std::size_t run = lights * 3, block = views * std::size_t(components) * run;
-    if (e.data.size() != block * std::size_t(clusters))
-        fail(file.source, "texture 'eigenBrdfs' holds " + std::to_string(e.data.size()) +
-                              " values, " + std::to_string(block * std::size_t(clusters)) +
-                              " expected");
-    std::vector<float> cluster(block);
-    for (int k = 0; k < clusters; ++k) {
-        float* at = e.data.data() + std::size_t(k) * block;
-        std::copy_n(at, block, cluster.data());
-        for (int i = 0; i < components; ++i)
-            for (std::size_t v = 0; v < views; ++v)
-                std::copy_n(cluster.data() + (v * std::size_t(components) + std::size_t(i)) * run,
-                            run, at + (std::size_t(i) * views + v) * run);
-    }
-    m->eigenBrdfs = std::move(e.data);
+    const std::size_t expected =
+        std::size_t(clusters) * views * std::size_t(components) * lights * 3;
+    if (e.storedCount() != expected)
+        fail(file.source, "texture 'eigenBrdfs' holds " + std::to_string(e.storedCount()) +
+                              " values, " + std::to_string(expected) + " expected");
+    m->eigenBrdfs = StoredValues::take(e, MaterialTexture::Half);
     try {
         m->finishSetup(clusters, components);
     } catch (const Error& error) {

@@ -22,6 +22,7 @@
 
 #include "materials/DirectionLookup.h"
 #include "materials/MethodMaterial.h"
+#include "materials/StoredValues.h"
 
 namespace osgBTF {
 
@@ -45,10 +46,12 @@ struct LpcaSettings {
 struct LpcaData {
     /** Per texel (rows bottom-up): cluster index, 0 .. clusters-1. */
     std::vector<std::uint8_t> clusterOf;
-    /** Per texel: c weights, [texel][component]; half values. */
-    std::vector<float> weights;
-    /** Per cluster: c Eigen-BRDFs, [cluster][component][view][light][rgb]; half values. */
-    std::vector<float> eigenBrdfs;
+    // Held as the file and the GPU store them (materials/StoredValues.h), in their layouts, so
+    // that a loaded material takes its file's size in memory.
+    /** Per texel c weights, half: [component / 4][texel][component % 4] (lpcaWeightIndex). */
+    StoredValues weights;
+    /** Per cluster c Eigen-BRDFs, half: [cluster][view][component][light][rgb] (eigenBrdfRun). */
+    StoredValues eigenBrdfs;
 
 protected:
     int _clusters = 0, _components = 0;
@@ -58,6 +61,9 @@ protected:
 class LpcaMaterial : public MethodMaterial<LpcaMaterial, LpcaData> {
 public:
     static constexpr const char* kMethod = "lpca";
+    /** fromFile takes the file's 8-bit and half textures as they are stored. */
+    static constexpr bool kLoadsBytes = true;
+    static constexpr bool kLoadsHalves = true;
 
     LpcaMaterial() = default;
     LpcaMaterial(const LpcaMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
@@ -89,10 +95,15 @@ public:
     const DirectionLookup& lightLookup() const { return _lightLookup; }
     /** Values of one Eigen-BRDF: views * lights * 3. */
     std::size_t eigenBrdfSize() const { return _views.size() * _lights.size() * 3; }
-    /** Eigen-BRDF i of cluster k, [view][light][rgb] (the layout of MeasuredBtf::abrdf). */
-    const float* eigenBrdf(int k, int i) const {
-        return eigenBrdfs.data() + (std::size_t(k) * _components + i) * eigenBrdfSize();
+    /** Where Eigen-BRDF i of cluster k holds measured view `view`: lights * 3 values from there
+     *  in eigenBrdfs, [light][rgb]. */
+    std::size_t eigenBrdfRun(int k, int i, std::size_t view) const {
+        return ((std::size_t(k) * _views.size() + view) * std::size_t(_components) +
+                std::size_t(i)) *
+               _lights.size() * 3;
     }
+    /** Weight i of a texel. */
+    float weight(std::size_t texel, int i) const;
 
     /** Call after changing the arrays' shape by hand: checks sizes, rebuilds the direction
      *  lookups. */
@@ -114,10 +125,18 @@ osg::ref_ptr<osg::Texture> createTextureArray(const MaterialTexture& texture);
 MaterialTexture lpcaClusterTexture(int width, int height,
                                    const std::vector<std::uint8_t>& clusterOf);
 MaterialTexture lpcaWeightTexture(int width, int height, int components,
-                                  const std::vector<float>& weights);
+                                  const StoredValues& weights);
 /** Reads them back; throws Error naming the file for wrong shapes or out-of-range indices. */
 std::vector<std::uint8_t> lpcaClusterFromTexture(FittedMaterial& file, int clusters);
-std::vector<float> lpcaWeightsFromTexture(FittedMaterial& file, int components);
+StoredValues lpcaWeightsFromTexture(FittedMaterial& file, int components);
+/** Where weight i of a texel is in the weight texture's layout, [i / 4][texel][i % 4]. */
+inline std::size_t lpcaWeightIndex(std::size_t texels, std::size_t texel, int i) {
+    return (std::size_t(i / 4) * texels + texel) * 4 + std::size_t(i % 4);
+}
+/** Values of the weight texture of `components` weights per texel (zero-padded to groups of 4). */
+inline std::size_t lpcaWeightCount(std::size_t texels, int components) {
+    return texels * 4 * std::size_t((components + 3) / 4);
+}
 
 /** LPCA's per-vertex environment data are g itself (lights x RGB; g: the environment projected
  *  onto the measured light directions, materials/EnvironmentLighting.h): folding into every

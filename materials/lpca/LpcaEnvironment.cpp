@@ -28,12 +28,13 @@ glm::vec3 evaluateFoldedLpca(const LpcaMaterial& material, const std::vector<flo
         if (!(wv.weight[m] > 0.0f)) continue;
         glm::vec3 value(0.0f);
         for (int q = 0; q < components; ++q) {
-            const float* e = material.eigenBrdf(cluster, q) + std::size_t(wv.index[m]) * lights * 3;
+            const std::size_t e = material.eigenBrdfRun(cluster, q, std::size_t(wv.index[m]));
+            const StoredValues& E = material.eigenBrdfs;
             glm::vec3 folded_q(0.0f);
             for (std::size_t i = 0; i < lights; ++i)
                 folded_q += glm::vec3(folded[i * 3], folded[i * 3 + 1], folded[i * 3 + 2]) *
-                            glm::vec3(e[i * 3], e[i * 3 + 1], e[i * 3 + 2]);
-            value += material.weights[t * std::size_t(components) + std::size_t(q)] * folded_q;
+                            glm::vec3(E[e + i * 3], E[e + i * 3 + 1], E[e + i * 3 + 2]);
+            value += material.weight(t, q) * folded_q;
         }
         sum += wv.weight[m] * value;
     }

@@ -418,13 +418,17 @@ osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const BtfSource& btf, const LpcaSetti
     m->setGeometry(btf.width(), btf.height(), btf.views(), btf.lights());
     for (Eigen::Index i = 0; i < basis.size(); ++i)
         basis.data()[i] = float(Imath::half(basis.data()[i]));
-    m->eigenBrdfs.resize(std::size_t(K) * c * dims);
+    // Column k c + i of the basis is Eigen-BRDF i of cluster k, [view][light][rgb]; the material
+    // holds them as the file does, [cluster][view][component][light][rgb].
+    const std::size_t views = btf.viewCount(), run = btf.lightCount() * 3;
+    m->eigenBrdfs = StoredValues(MaterialTexture::Half, std::size_t(K) * c * dims);
     for (int k = 0; k < K; ++k)
         for (int i = 0; i < c; ++i)
-            std::copy_n(basis.col(Eigen::Index(k) * c + i).data(), dims,
-                        m->eigenBrdfs.data() + (std::size_t(k) * c + i) * dims);
+            for (std::size_t v = 0; v < views; ++v)
+                m->eigenBrdfs.write(((std::size_t(k) * views + v) * c + i) * run,
+                                    basis.col(Eigen::Index(k) * c + i).data() + v * run, run);
     m->clusterOf.resize(texels);
-    m->weights.resize(texels * std::size_t(c));
+    m->weights = StoredValues(MaterialTexture::Half, lpcaWeightCount(texels, c));
     double allError = 0;
     {
         Progress progress("lpca: projecting", texels);
@@ -443,8 +447,8 @@ osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const BtfSource& btf, const LpcaSetti
                 const int k = chunkCluster[j];
                 m->clusterOf[t0 + j] = std::uint8_t(k);
                 for (int i = 0; i < c; ++i)
-                    m->weights[(t0 + j) * c + i] =
-                        float(Imath::half(projections(Eigen::Index(j), Eigen::Index(k) * c + i)));
+                    m->weights.set(lpcaWeightIndex(texels, t0 + j, i),
+                                   projections(Eigen::Index(j), Eigen::Index(k) * c + i));
                 allError += chunkError[j];
             }
             progress.advance(count);

@@ -53,14 +53,16 @@ void PtmMaterial::setShape(int width, int height, DirectionSet views, DirectionS
                     std::to_string(kMaxArrayLayers) + " OpenGL guarantees");
     const std::size_t texels = std::size_t(width) * std::size_t(height);
     const std::size_t colourValues = shape.luminance ? texels * std::size_t(_slots) * 3 : 0;
-    checkMemory(std::uint64_t(texels * layers * 3 + colourValues) * sizeof(float), "ptm model");
+    checkMemory(
+        std::uint64_t(double(texels * layers * 3 + colourValues) * bytesPerValue(shape.storage)),
+        "ptm model");
     _frontView = shape.perView ? 0 : frontView;
     _viewLookup = shape.perView ? DirectionLookup(views) : DirectionLookup();
     _lightVectors.clear();
     for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
     if (allocate) {
-        coefficients.assign(texels * layers * 3, 0.0f);
-        colour.assign(colourValues, 0.0f);
+        coefficients = StoredValues(shape.storage, texels * layers * 3);
+        colour = StoredValues(shape.storage, colourValues);
     }
     setGeometry(width, height, std::move(views), std::move(lights));
 }
@@ -88,14 +90,9 @@ float PtmMaterial::coefficient(std::size_t texel, int slot, int k, int c) const 
 void PtmMaterial::setCoefficient(std::size_t texel, int slot, int k, int c, float value) {
     const std::size_t texels = texelCount();
     if (_shape.luminance)
-        coefficients[((std::size_t(slot) * 2 + k / 3) * texels + texel) * 3 + k % 3] = value;
+        coefficients.set(((std::size_t(slot) * 2 + k / 3) * texels + texel) * 3 + k % 3, value);
     else
-        coefficients[((std::size_t(slot) * kTerms + k) * texels + texel) * 3 + c] = value;
-}
-
-void PtmMaterial::roundToStorage() {
-    for (float& v : coefficients) v = toStorage(v, _shape.storage);
-    for (float& v : colour) v = toStorage(v, _shape.storage);
+        coefficients.set(((std::size_t(slot) * kTerms + k) * texels + texel) * 3 + c, value);
 }
 
 // ---- CPU evaluator -----------------------------------------------------------------------------
@@ -105,20 +102,21 @@ glm::vec3 PtmMaterial::field(std::size_t texel, int slot, float lx, float ly) co
     const float mx = lx * lx, my = ly * ly, mxy = lx * ly;
     const std::size_t texels = texelCount();
     if (_shape.luminance) {
-        const float* a = &coefficients[((std::size_t(slot) * 2) * texels + texel) * 3];
-        const float* b = &coefficients[((std::size_t(slot) * 2 + 1) * texels + texel) * 3];
+        float a[3], b[3], rgb[3];
+        coefficients.read(((std::size_t(slot) * 2) * texels + texel) * 3, 3, a);
+        coefficients.read(((std::size_t(slot) * 2 + 1) * texels + texel) * 3, 3, b);
         float l = b[2];
         l += a[0] * mx;
         l += a[1] * my;
         l += a[2] * mxy;
         l += b[0] * lx;
         l += b[1] * ly;
-        const float* rgb = &colour[(std::size_t(slot) * texels + texel) * 3];
+        colour.read((std::size_t(slot) * texels + texel) * 3, 3, rgb);
         return glm::vec3(rgb[0], rgb[1], rgb[2]) * l;
     }
     const auto term = [&](int k) {
-        const float* p = &coefficients[((std::size_t(slot) * kTerms + k) * texels + texel) * 3];
-        return glm::vec3(p[0], p[1], p[2]);
+        const std::size_t p = ((std::size_t(slot) * kTerms + k) * texels + texel) * 3;
+        return glm::vec3(coefficients[p], coefficients[p + 1], coefficients[p + 2]);
     };
     glm::vec3 sum = term(5);
     sum += term(0) * mx;
@@ -168,7 +166,7 @@ MemoryFootprint PtmMaterial::memory() const {
     // Per-texel arrays only; the view table (views=all) is derived from the direction set, not
     // fitted data, and Boßerhoff and Nicoll 2003 Table 2 has nothing shared to count.
     const double values = double(coefficients.size() + colour.size());
-    const double bytes = values * bytesPerValue(_shape.storage);
+    const double bytes = double(coefficients.bytes() + colour.bytes());
     return {values / double(texelCount()), bytes / double(texelCount()), std::uint64_t(bytes)};
 }
 
@@ -179,10 +177,10 @@ FittedMaterial PtmMaterial::toFittedMaterial() const {
     file.parameters["colour"] = _shape.luminance ? "luminance" : "rgb";
     file.parameters["views"] = _shape.perView ? "all" : "front";
     file.parameters["frontView"] = std::to_string(_frontView);
-    file.textures.push_back({"coefficients", _width, _height, _slots * layersPerSlot(), 3,
-                             _shape.storage, coefficients});
+    file.textures.push_back(
+        coefficients.texture("coefficients", _width, _height, _slots * layersPerSlot(), 3));
     if (_shape.luminance)
-        file.textures.push_back({"colour", _width, _height, _slots, 3, _shape.storage, colour});
+        file.textures.push_back(colour.texture("colour", _width, _height, _slots, 3));
     return file;
 }
 
@@ -212,15 +210,15 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(FittedMaterial file) {
         fail(file.source, e.what());
     }
     // The file is this function's own: its values are taken.
-    const auto take = [&](MaterialTexture& t, int depth, std::vector<float>& into) {
+    const auto take = [&](MaterialTexture& t, int depth, StoredValues& into) {
         if (t.width != m->_width || t.height != m->_height || t.depth != depth || t.channels != 3 ||
             t.kind != shape.storage)
             fail(file.source, "texture '" + t.name + "' must be " + std::to_string(m->_width) +
                                   "x" + std::to_string(m->_height) + ", " + std::to_string(depth) +
                                   " layer(s) of RGB " + storageName(shape.storage));
-        if (std::any_of(t.data.begin(), t.data.end(), [](float v) { return !std::isfinite(v); }))
+        into = StoredValues::take(t, shape.storage);
+        if (!into.allFinite())
             fail(file.source, "texture '" + t.name + "' holds non-finite values");
-        into = std::move(t.data);
     };
     take(coefficients, m->_slots * m->layersPerSlot(), m->coefficients);
     if (shape.luminance) take(file.texture("colour"), m->_slots, m->colour);
@@ -233,8 +231,8 @@ osg::ref_ptr<osg::StateSet> PtmMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
     addTexture(*stateSet,
-               createFloatTextureArray({"coefficients", _width, _height, _slots * layersPerSlot(),
-                                        3, _shape.storage, coefficients},
+               createFloatTextureArray(coefficients.texture("coefficients", _width, _height,
+                                                            _slots * layersPerSlot(), 3),
                                        filtersParameters())
                    .get(),
                "ptmCoefficients", 0);
@@ -243,8 +241,7 @@ osg::ref_ptr<osg::StateSet> PtmMaterial::createStateSet() const {
     if (_shape.luminance)
         addTexture(
             *stateSet,
-            createFloatTextureArray({"colour", _width, _height, _slots, 3, _shape.storage, colour})
-                .get(),
+            createFloatTextureArray(colour.texture("colour", _width, _height, _slots, 3)).get(),
             "ptmColour", 1);
     else
         stateSet->addUniform(new osg::Uniform("ptmColour", 1));

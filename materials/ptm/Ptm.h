@@ -43,6 +43,7 @@
 
 #include "materials/DirectionLookup.h"
 #include "materials/MethodMaterial.h"
+#include "materials/StoredValues.h"
 
 namespace osgBTF {
 
@@ -55,10 +56,11 @@ struct PtmData {
         MaterialTexture::PixelKind storage = MaterialTexture::Half;
     };
 
+    // Held as the file stores them, half or float (Shape::storage; materials/StoredValues.h).
     /** [slot * layersPerSlot() + layer][y][x][3], rows bottom-up (the texture's layout). */
-    std::vector<float> coefficients;
+    StoredValues coefficients;
     /** Luminance only: [slot][y][x][rgb]; empty for rgb. */
-    std::vector<float> colour;
+    StoredValues colour;
 
 protected:
     Shape _shape;
@@ -71,6 +73,8 @@ protected:
 class PtmMaterial : public MethodMaterial<PtmMaterial, PtmData> {
 public:
     static constexpr const char* kMethod = "ptm";
+    /** fromFile takes the file's half textures as they are stored. */
+    static constexpr bool kLoadsHalves = true;
 
     /** Terms of the biquadratic. */
     static constexpr int kTerms = 6;
@@ -118,8 +122,6 @@ public:
     void setCoefficient(std::size_t texel, int slot, int k, int c, float value);
     /** The monomials (lx^2, ly^2, lx ly, lx, ly, 1) of a light direction: a design matrix row. */
     static std::array<double, kTerms> monomials(const glm::vec3& light);
-    /** Rounds every stored value to the storage precision, as the fitter does. */
-    void roundToStorage();
     /** A value at the storage precision (half or float), as the fitter stores it. */
     static float toStorage(double value, MaterialTexture::PixelKind kind);
 

@@ -80,11 +80,12 @@ void storeTexel(PtmMaterial& m, const Design& design, std::size_t texel, int slo
     }
     const Eigen::Matrix<double, PtmMaterial::kTerms, 1> gp = design.gram * stored;
     const double pp = stored.dot(gp);  // <P, P> over the measured lights
-    float* out = &m.colour[(std::size_t(slot) * m.texelCount() + texel) * 3];
+    const std::size_t out = (std::size_t(slot) * m.texelCount() + texel) * 3;
     for (int ch = 0; ch < 3; ++ch)
         // <y_c, P> = (A^T y_c) . a = (A^T A c_c) . a; a zero polynomial (black texel) gets white,
         // which has unit luminance like every other colour.
-        out[ch] = PtmMaterial::toStorage(pp > 0 ? c.row(ch).dot(gp.transpose()) / pp : 1.0, kind);
+        m.colour.set(out + ch, PtmMaterial::toStorage(
+                                   pp > 0 ? c.row(ch).dot(gp.transpose()) / pp : 1.0, kind));
 }
 
 }  // namespace

@@ -30,7 +30,7 @@ struct StoredArray {
     int depth;            ///< layers (a Texture2DArray on the GPU when > 1)
     int channels;
     MaterialTexture::PixelKind kind;
-    std::vector<float> RfMaterial::*member;
+    StoredValues RfMaterial::*member;
 };
 
 /** Without the diffuse term there is no rhoD array (nothing stored, nothing counted). */
@@ -45,8 +45,6 @@ std::vector<StoredArray> storedArrays(std::size_t views, int lobes, RfMaterial::
 }
 
 using rf::lobeValue;
-using rf::toHalf;
-using rf::toUNorm8;
 
 }  // namespace
 
@@ -68,20 +66,18 @@ void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSe
                     " texture layers, more than the " + std::to_string(kMaxArrayLayers) +
                     " OpenGL guarantees");
     const std::size_t texels = std::size_t(width) * std::size_t(height);
+    // 8-bit rho_d, half rho_v and lobes.
     checkMemory(std::uint64_t(texels) *
-                    ((variant.diffuse ? 3 : 0) + views.size() * (3 + 4 * channels * lobeCount)) *
-                    sizeof(float),
+                    ((variant.diffuse ? 3 : 0) + views.size() * (3 + 4 * channels * lobeCount) * 2),
                 "rf model");
     _viewLookup = DirectionLookup(views);
     _lightVectors.clear();
     for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
     _lobes = lobeCount;
     _variant = variant;
-    if (allocate) {
-        rhoD.assign(variant.diffuse ? texels * 3 : 0, 0.0f);
-        rhoV.assign(texels * views.size() * 3, 0.0f);
-        lobes.assign(texels * layers * 4, 0.0f);
-    }
+    if (allocate)
+        for (const StoredArray& a : storedArrays(views.size(), lobeCount, variant))
+            this->*a.member = StoredValues(a.kind, texels * std::size_t(a.depth * a.channels));
     setGeometry(width, height, std::move(views), std::move(lights));
 }
 
@@ -95,12 +91,6 @@ osg::ref_ptr<RfMaterial> RfMaterial::create(int width, int height, DirectionSet 
 osg::ref_ptr<RfMaterial> RfMaterial::create(int width, int height, DirectionSet views,
                                             DirectionSet lights, int lobeCount) {
     return create(width, height, std::move(views), std::move(lights), lobeCount, Variant());
-}
-
-void RfMaterial::roundToStorage() {
-    for (float& v : rhoD) v = toUNorm8(v);
-    for (float& v : rhoV) v = toHalf(v);
-    for (float& v : lobes) v = toHalf(v);
 }
 
 // ---- options ---------------------------------------------------------------------------------
@@ -122,21 +112,23 @@ RfMaterial::Settings RfMaterial::settingsFrom(const FitOptions& options) {
 float RfMaterial::lobeSum(std::size_t texel, std::size_t view, const glm::vec3& light,
                           int channel) const {
     const std::size_t first = (view * std::size_t(lobeChannels()) + channel) * _lobes;
-    float sum = 0;
-    for (int i = 0; i < _lobes; ++i)
-        sum += lobeValue(&lobes[((first + i) * texelCount() + texel) * 4], light);
+    float sum = 0, lobe[4];
+    for (int i = 0; i < _lobes; ++i) {
+        lobes.read(((first + i) * texelCount() + texel) * 4, 4, lobe);
+        sum += lobeValue(lobe, light);
+    }
     return sum;
 }
 
 glm::vec3 RfMaterial::reflectanceField(std::size_t texel, std::size_t view,
                                        const glm::vec3& light) const {
-    const float* rho = &rhoV[(view * texelCount() + texel) * 3];
+    const std::size_t rho = (view * texelCount() + texel) * 3;
     // rho_c times the lobe sum of channel c, in the shader's order (rf.frag).
     const glm::vec3 sum =
         _variant.rgb ? glm::vec3(lobeSum(texel, view, light, 0), lobeSum(texel, view, light, 1),
                                  lobeSum(texel, view, light, 2))
                      : glm::vec3(lobeSum(texel, view, light));
-    return glm::vec3(rho[0], rho[1], rho[2]) * sum;
+    return glm::vec3(rhoV[rho], rhoV[rho + 1], rhoV[rho + 2]) * sum;
 }
 
 glm::vec3 RfMaterial::diffuse(std::size_t texel) const {
@@ -171,11 +163,11 @@ MemoryFootprint RfMaterial::memory() const {
     // data (Meseth et al. 2003 Table 2 does not count it either).
     MemoryFootprint footprint;
     for (const StoredArray& a : storedArrays(_views.size(), _lobes, _variant)) {
-        const std::vector<float>& data = this->*a.member;
-        const double values = double(data.size()) / double(texelCount());
-        footprint.valuesPerTexel += values;
-        footprint.bytesPerTexel += values * bytesPerValue(a.kind);
-        footprint.totalBytes += std::uint64_t(double(data.size()) * bytesPerValue(a.kind));
+        const StoredValues& values = this->*a.member;
+        const double perTexel = double(values.size()) / double(texelCount());
+        footprint.valuesPerTexel += perTexel;
+        footprint.bytesPerTexel += perTexel * bytesPerValue(a.kind);
+        footprint.totalBytes += values.bytes();
     }
     return footprint;
 }
@@ -189,7 +181,7 @@ FittedMaterial RfMaterial::toFittedMaterial() const {
     file.parameters["colour"] = _variant.rgb ? "rgb" : "luminance";
     for (const StoredArray& a : storedArrays(_views.size(), _lobes, _variant))
         file.textures.push_back(
-            {a.name, _width, _height, a.depth, a.channels, a.kind, this->*a.member});
+            (this->*a.member).texture(a.name, _width, _height, a.depth, a.channels));
     return file;
 }
 
@@ -231,9 +223,10 @@ osg::ref_ptr<RfMaterial> RfMaterial::fromFile(FittedMaterial file) {
                                   ", " + std::to_string(a.depth) + " layer(s) of " +
                                   std::to_string(a.channels) + " channels, stored as " +
                                   (a.kind == MaterialTexture::UNorm8 ? "8-bit" : "half"));
-        if (std::any_of(t.data.begin(), t.data.end(), [](float v) { return !std::isfinite(v); }))
+        StoredValues& values = (*m).*a.member;
+        values = StoredValues::take(t, a.kind);
+        if (!values.allFinite())
             fail(file.source, std::string("texture '") + a.name + "' holds non-finite values");
-        (*m).*a.member = std::move(t.data);
     }
     return m;
 }
@@ -252,8 +245,8 @@ osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
         addTexture(*stateSet, createFloatTexture(black).get(), "rfRhoD", unit++);
     }
     for (const StoredArray& a : storedArrays(_views.size(), _lobes, _variant)) {
-        const MaterialTexture t{a.name,     _width, _height,        a.depth,
-                                a.channels, a.kind, this->*a.member};
+        const MaterialTexture t =
+            (this->*a.member).texture(a.name, _width, _height, a.depth, a.channels);
         addTexture(*stateSet, createFloatTexture(t).get(), a.sampler, unit++);
     }
     _viewLookup.addToStateSet(*stateSet, "rfViewTable", unit);

@@ -48,6 +48,7 @@
 
 #include "materials/DirectionLookup.h"
 #include "materials/MethodMaterial.h"
+#include "materials/StoredValues.h"
 
 namespace osgBTF {
 
@@ -60,12 +61,14 @@ struct RfData {
         bool rgb = false;     ///< k lobes per colour channel instead of k luminance lobes
     };
 
-    /** rho_d: [y][x][rgb], rows bottom-up; multiples of 1/255. Empty without the diffuse term. */
-    std::vector<float> rhoD;
-    /** rho_v: [view][y][x][rgb]. */
-    std::vector<float> rhoV;
-    /** Lobes: [(view * lobeChannels() + channel) * lobeCount() + lobe][y][x][a, b, c, n]. */
-    std::vector<float> lobes;
+    // Held as the file stores them (materials/StoredValues.h): a loaded material takes its
+    // file's size in memory, and every value set is rounded as the file and the GPU hold it.
+    /** rho_d: [y][x][rgb], rows bottom-up; 8-bit. Empty without the diffuse term. */
+    StoredValues rhoD;
+    /** rho_v: [view][y][x][rgb], half. */
+    StoredValues rhoV;
+    /** Lobes: [(view * lobeChannels() + channel) * lobeCount() + lobe][y][x][a, b, c, n], half. */
+    StoredValues lobes;
 
 protected:
     int _lobes = 0;
@@ -77,6 +80,9 @@ protected:
 class RfMaterial : public MethodMaterial<RfMaterial, RfData> {
 public:
     static constexpr const char* kMethod = "rf";
+    /** fromFile takes the file's 8-bit and half textures as they are stored. */
+    static constexpr bool kLoadsBytes = true;
+    static constexpr bool kLoadsHalves = true;
 
     /** Fit settings; see settingsFrom() for the option names. */
     struct Settings {
@@ -134,9 +140,6 @@ public:
      *  luminance lobes, 0..2 for rgb). */
     float lobeSum(std::size_t texel, std::size_t view, const glm::vec3& light,
                   int channel = 0) const;
-    /** Rounds every array to its storage precision (rho_d to 1/255 in [0, 1], the rest to half),
-     *  as the fitter does; call it after setting values by hand. */
-    void roundToStorage();
 
 protected:
     ~RfMaterial() override = default;

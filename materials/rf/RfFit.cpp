@@ -343,7 +343,7 @@ private:
             for (int i = 0; i < k; ++i) {
                 for (int a = 0; a < 3; ++a) p[4 * i + a] = toHalf(p[4 * i + a]);
                 p[4 * i + 3] = std::clamp(toHalf(p[4 * i + 3]), nLow, nHigh);
-                std::copy_n(p + 4 * i, 4, &m.lobes[((g * k + i) * texels + texel) * 4]);
+                m.lobes.write(((g * k + i) * texels + texel) * 4, p + 4 * i, 4);
             }
             for (std::size_t l = 0; l < _lights; ++l) {
                 float s = 0;
@@ -383,14 +383,14 @@ private:
                         gg += g * g;
                     }
                 d = toUNorm8(gg > 1e-12 ? float(eg / gg) : 0.0f);
-                m.rhoD[texel * 3 + c] = d;
+                m.rhoD.set(texel * 3 + c, d);
             }
             for (std::size_t v = 0; v < _views; ++v) {
                 double sy = 0;
                 for (std::size_t l = 0; l < _lights; ++l)
                     sy += Sc[v * stride + l] * (abrdf[(v * _lights + l) * 3 + c] - d);
                 const float rho = SS[v] > 1e-20 ? toHalf(float(std::max(0.0, sy / SS[v]))) : 0.0f;
-                m.rhoV[(v * texels + texel) * 3 + c] = rho;
+                m.rhoV.set((v * texels + texel) * 3 + c, rho);
                 for (std::size_t l = 0; l < _lights; ++l) {
                     const double r =
                         abrdf[(v * _lights + l) * 3 + c] - d - rho * Sc[v * stride + l];

@@ -15,7 +15,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::create(int width, int height, int lobeC
     osg::ref_ptr<SlafMaterial> m = new SlafMaterial;
     m->setGeometry(width, height, views, lights);
     m->initLobes(lobeCount);
-    m->scale.assign(m->texelCount() * views.size() * 3, 1.0f);
+    m->scale = StoredValues(MaterialTexture::Half, m->texelCount() * views.size() * 3, 1.0f);
     m->prepare();
     return m;
 }
@@ -33,8 +33,8 @@ glm::vec3 SlafMaterial::evaluate(int x, int y, const glm::vec3& view,
     const InterpolationWeights w = _viewLookup.weights(view);
     glm::vec3 T(0.0f);
     for (int i = 0; i < 3; ++i) {
-        const float* s = &scale[(std::size_t(w.index[i]) * texels + t) * 3];
-        T += w.weight[i] * glm::vec3(s[0], s[1], s[2]);
+        const std::size_t s = (std::size_t(w.index[i]) * texels + t) * 3;
+        T += w.weight[i] * glm::vec3(scale[s], scale[s + 1], scale[s + 2]);
     }
     return T * bracket(t, view, light);
 }
@@ -43,8 +43,8 @@ void SlafMaterial::evaluateMeasured(std::size_t t, float* abrdf) const {
     const std::size_t texels = texelCount();
     for (std::size_t v = 0; v < _views.size(); ++v) {
         const glm::vec3 view = _views.vector(v);
-        const float* s = &scale[(v * texels + t) * 3];
-        const glm::vec3 T(s[0], s[1], s[2]);
+        const std::size_t s = (v * texels + t) * 3;
+        const glm::vec3 T(scale[s], scale[s + 1], scale[s + 2]);
         for (std::size_t l = 0; l < _lights.size(); ++l) {
             const glm::vec3 value = T * bracket(t, view, _lights.vector(l));
             *abrdf++ = value.r;
@@ -65,8 +65,7 @@ MemoryFootprint SlafMaterial::memory() const {
 FittedMaterial SlafMaterial::toFittedMaterial() const {
     FittedMaterial file = writeCommon();
     writeLobes(file);
-    file.textures.push_back(
-        {"scale", _width, _height, int(_views.size()), 3, MaterialTexture::Half, scale});
+    file.textures.push_back(scale.texture("scale", _width, _height, int(_views.size()), 3));
     return file;
 }
 
@@ -76,7 +75,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fromFile(FittedMaterial file) {
     m->readLobeParameters(file);
     if (m->_views.size() < 3) fail(file.source, "slaf needs at least 3 view directions");
     m->readLobeTextures(file);
-    m->scale = m->readTexture(file, "scale", int(m->_views.size()), 3);
+    m->scale = m->readTexture(file, "scale", int(m->_views.size()), 3, MaterialTexture::Half);
     m->prepare();
     return m;
 }
@@ -88,11 +87,10 @@ osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
     addCommonState(*stateSet, *this);
     addLobeState(*stateSet, kMethod);
     // T as a 2D array, one layer per measured view (81 or 151 layers, well below GL's 2048).
-    addTexture(*stateSet,
-               createFloatTexture(
-                   {"scale", _width, _height, int(_views.size()), 3, MaterialTexture::Half, scale})
-                   .get(),
-               "slafScale", 3);
+    addTexture(
+        *stateSet,
+        createFloatTexture(scale.texture("scale", _width, _height, int(_views.size()), 3)).get(),
+        "slafScale", 3);
     _viewLookup.addToStateSet(*stateSet, "slafViewTable", 4);
     return stateSet;
 }

@@ -29,8 +29,8 @@ namespace osgBTF {
 
 /** SlafMaterial's members beyond LobeMaterial's (materials/MethodMaterial.h). */
 struct SlafData {
-    /** [view][y][x][rgb], half-representable values >= 0. */
-    std::vector<float> scale;
+    /** T: [view][y][x][rgb], half, >= 0. */
+    StoredValues scale;
 
 protected:
     DirectionLookup _viewLookup;
@@ -39,6 +39,9 @@ protected:
 class SlafMaterial : public MethodMaterial<SlafMaterial, SlafData, LobeMaterial> {
 public:
     static constexpr const char* kMethod = "slaf";
+    /** fromFile takes the file's 8-bit and half textures as they are stored. */
+    static constexpr bool kLoadsBytes = true;
+    static constexpr bool kLoadsHalves = true;
 
     SlafMaterial() = default;
     SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)

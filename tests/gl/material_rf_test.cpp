@@ -56,8 +56,8 @@ TEST(RfGpu, VariantsMatchCpu) {
         osg::ref_ptr<RfMaterial> m = RfMaterial::create(8, 6, bonn, bonn, 2, variant);
         std::mt19937 rng(7);
         std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-        for (float& v : m->rhoD) v = 0.1f * unit(rng);
-        for (float& v : m->rhoV) v = 0.2f + 0.6f * unit(rng);
+        for (std::size_t i = 0; i < m->rhoD.size(); ++i) m->rhoD.set(i, 0.1f * unit(rng));
+        for (std::size_t i = 0; i < m->rhoV.size(); ++i) m->rhoV.set(i, 0.2f + 0.6f * unit(rng));
         const std::size_t texels = m->texelCount();
         const std::size_t groups = bonn.size() * std::size_t(m->lobeChannels());
         for (std::size_t g = 0; g < groups; ++g)
@@ -66,10 +66,9 @@ TEST(RfGpu, VariantsMatchCpu) {
                     const Direction axis{unit(rng) * (i == 0 ? 30.0f : 70.0f), unit(rng) * 360};
                     const float n = i == 0 ? 0.5f + 1.5f * unit(rng) : 4.0f + 28.0f * unit(rng);
                     const glm::vec3 a = axis.toVector() * (0.8f + 0.2f * unit(rng));
-                    float* p = &m->lobes[((g * 2 + i) * texels + t) * 4];
-                    p[0] = a.x, p[1] = a.y, p[2] = a.z, p[3] = n;
+                    const float lobe[] = {a.x, a.y, a.z, n};
+                    m->lobes.write(((g * 2 + i) * texels + t) * 4, lobe, 4);
                 }
-        m->roundToStorage();
         const std::string name = std::string(variant.diffuse ? "diffuse=1" : "diffuse=0") +
                                  (variant.rgb ? " colour=rgb" : " colour=luminance");
         // Two measured pairs and two between the measured views (one beyond the outer ring).

@@ -48,7 +48,7 @@ osg::ref_ptr<LambertMaterial> constantLambert(float rho) {
     sample.width = 4;
     sample.height = 4;
     osg::ref_ptr<LambertMaterial> material = LambertMaterial::fit(makeSampleBtf(sample), {});
-    std::fill(material->albedo.begin(), material->albedo.end(), rho);
+    material->albedo = StoredValues(MaterialTexture::Half, material->albedo.size(), rho);
     return material;
 }
 
