@@ -46,7 +46,8 @@ void NeuralMaterial::setShape(int width, int height, const DirectionSet& views,
     setNetworkShape(latentSize, hiddenLayers, units);
 }
 
-void NeuralMaterial::setNetworkShape(int latentSize, int hiddenLayers, int units) {
+void NeuralMaterial::setNetworkShape(int latentSize, int hiddenLayers, int units,
+                                     bool allocateLatent) {
     if (latentSize < 4 || latentSize > kMaxLatent || latentSize % 4 != 0)
         throw Error("neural: the latent size must be a multiple of 4 in 4.." +
                     std::to_string(kMaxLatent) + ", got " + std::to_string(latentSize));
@@ -59,8 +60,8 @@ void NeuralMaterial::setNetworkShape(int latentSize, int hiddenLayers, int units
     _latentSize = latentSize;
     _hiddenLayers = hiddenLayers;
     _units = units;
-    latent = {"latent", _width, _height, latentSize / 4, 4, MaterialTexture::Half, {}};
-    latent.data.assign(latent.valueCount(), 0.0f);
+    latent = StoredValues(MaterialTexture::Half,
+                          allocateLatent ? texelCount() * std::size_t(latentSize) : 0);
     const int columns = 1 + std::max(inputs(), units) / 4;
     decoder = {"decoder", columns, hiddenLayers * units + 3, 1, 4, MaterialTexture::Float, {}};
     decoder.data.assign(decoder.valueCount(), 0.0f);
@@ -89,7 +90,7 @@ glm::vec3 NeuralMaterial::decode(const float* inputs) const {
 glm::vec3 NeuralMaterial::evaluate(int x, int y, const glm::vec3& view,
                                    const glm::vec3& light) const {
     float in[kMaxLatent + kDirectionFeatures];
-    for (int i = 0; i < _latentSize; ++i) in[i] = latent.data[latentIndex(x, y, i)];
+    for (int i = 0; i < _latentSize; ++i) in[i] = latent[latentIndex(x, y, i)];
     directionFeatures(view, light, in + _latentSize);
     return decode(in) * light.z;
 }
@@ -97,7 +98,7 @@ glm::vec3 NeuralMaterial::evaluate(int x, int y, const glm::vec3& view,
 MemoryFootprint NeuralMaterial::memory() const {
     const double texels = double(_width) * _height;
     const std::uint64_t shared = std::uint64_t(decoder.valueCount()) * 4;
-    const std::uint64_t perTexel = std::uint64_t(latent.valueCount()) * 2;
+    const std::uint64_t perTexel = latent.bytes();
     return {double(_latentSize) + double(decoder.valueCount()) / texels,
             2.0 * _latentSize + double(shared) / texels, perTexel + shared, shared};
 }
@@ -107,7 +108,7 @@ FittedMaterial NeuralMaterial::toFittedMaterial() const {
     file.parameters["latent"] = std::to_string(_latentSize);
     file.parameters["layers"] = std::to_string(_hiddenLayers);
     file.parameters["units"] = std::to_string(_units);
-    file.textures.push_back(latent);
+    file.textures.push_back(latentTexture());
     file.textures.push_back(decoder);
     return file;
 }
@@ -127,11 +128,14 @@ osg::ref_ptr<NeuralMaterial> NeuralMaterial::fromFile(FittedMaterial file) {
         }
     }
     try {
-        m->setNetworkShape(shape[0], shape[1], shape[2]);
+        m->setNetworkShape(shape[0], shape[1], shape[2], false);  // the file's latents below
     } catch (const Error& e) {
         fail(file.source, e.what());
     }
-    for (MaterialTexture* expected : {&m->latent, &m->decoder}) {
+    const MaterialTexture latentShape{
+        "latent", m->_width, m->_height, m->_latentSize / 4, 4, MaterialTexture::Half, {}};
+    const MaterialTexture* const shapes[] = {&latentShape, &m->decoder};
+    for (const MaterialTexture* expected : shapes) {
         MaterialTexture& got = file.texture(expected->name);  // the file is ours: taken
         if (got.width != expected->width || got.height != expected->height ||
             got.depth != expected->depth || got.channels != expected->channels ||
@@ -143,21 +147,23 @@ osg::ref_ptr<NeuralMaterial> NeuralMaterial::fromFile(FittedMaterial file) {
                                   (expected->kind == MaterialTexture::Half ? "half" : "float") +
                                   " for latent " + std::to_string(shape[0]) + ", layers " +
                                   std::to_string(shape[1]) + ", units " + std::to_string(shape[2]));
-        expected->data = std::move(got.data);
+        if (expected == &latentShape)
+            m->latent = StoredValues::take(got, MaterialTexture::Half);
+        else
+            m->decoder.data = std::move(got.data);
     }
     for (float v : m->decoder.data)
         if (!std::isfinite(v))
             fail(file.source, "texture 'decoder' holds a value that is not finite");
-    for (float v : m->latent.data)
-        if (!std::isfinite(v))
-            fail(file.source, "texture 'latent' holds a value that is not finite");
+    if (!m->latent.allFinite())
+        fail(file.source, "texture 'latent' holds a value that is not finite");
     return m;
 }
 
 osg::ref_ptr<osg::StateSet> NeuralMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
-    addTexture(*stateSet, createFloatTextureArray(latent).get(), "neuralLatent", 0);
+    addTexture(*stateSet, createFloatTextureArray(latentTexture()).get(), "neuralLatent", 0);
     addTexture(*stateSet, createFloatTexture(decoder).get(), "neuralDecoder", 1);
     stateSet->addUniform(new osg::Uniform("neuralLatentGroups", _latentSize / 4));
     stateSet->addUniform(new osg::Uniform("neuralHiddenLayers", _hiddenLayers));

@@ -15,14 +15,15 @@
 #include <vector>
 
 #include "materials/MethodMaterial.h"
+#include "materials/StoredValues.h"
 
 namespace osgBTF {
 
 /** NeuralMaterial's members (materials/MethodMaterial.h). */
 struct NeuralData {
-    /** Latent codes: L/4 layers of RGBA half values, latent k of a texel in layer k / 4, channel
-     *  k % 4 (rows bottom-up). Held as the floats the halves are. */
-    MaterialTexture latent;
+    /** Latent codes, half, as the file stores them (materials/StoredValues.h): L/4 layers of
+     *  RGBA, latent k of a texel in layer k / 4, channel k % 4 (rows bottom-up; latentIndex). */
+    StoredValues latent;
     /** The decoder, one row per neuron (the hidden layers' W each, then the 3 outputs), RGBA float:
      *  texel 0 of a row is (bias, 0, 0, 0), texels 1.. the neuron's input weights in groups of 4.
      */
@@ -37,6 +38,8 @@ protected:
 class NeuralMaterial : public MethodMaterial<NeuralMaterial, NeuralData> {
 public:
     static constexpr const char* kMethod = "neural";
+    /** fromFile takes the file's half latents as they are stored. */
+    static constexpr bool kLoadsHalves = true;
     /** Direction features the decoder reads after the latents (directionFeatures). */
     static constexpr int kDirectionFeatures = 8;
     static constexpr int kMaxLatent = 32, kMaxUnits = 64, kMaxHiddenLayers = 4;
@@ -56,9 +59,14 @@ public:
     /** Sets the texel size and directions, then setNetworkShape. */
     void setShape(int width, int height, const DirectionSet& views, const DirectionSet& lights,
                   int latentSize, int hiddenLayers, int units);
-    /** Sets the network's shape and sizes both textures (zero-filled) for the material's texels.
-     *  Throws Error for a shape outside the limits above. */
-    void setNetworkShape(int latentSize, int hiddenLayers, int units);
+    /** Sets the network's shape and sizes both textures (zero-filled) for the material's texels;
+     *  without `allocateLatent` the latents stay empty (a file brings them). Throws Error for a
+     *  shape outside the limits above. */
+    void setNetworkShape(int latentSize, int hiddenLayers, int units, bool allocateLatent = true);
+    /** The latent texture as the file and the GPU hold it (`latent` copied into its shape). */
+    MaterialTexture latentTexture() const {
+        return latent.texture("latent", _width, _height, _latentSize / 4, 4);
+    }
 
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     MemoryFootprint memory() const override;
@@ -76,7 +84,7 @@ public:
     int layerOutputs(int k) const { return k == _hiddenLayers ? 3 : _units; }
     /** The decoder row of neuron j of layer k. */
     int decoderRow(int k, int j) const { return k * _units + j; }
-    /** Latent i of texel (x, y) in latent.data. */
+    /** Latent i of texel (x, y) in latent. */
     std::size_t latentIndex(int x, int y, int i) const {
         return ((std::size_t(i / 4) * _height + y) * _width + x) * 4 + std::size_t(i % 4);
     }

@@ -188,7 +188,7 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
         for (int x = 0; x < m.width(); ++x) {
             const std::size_t t = std::size_t(y) * m.width() + x;
             for (int i = 0; i < latentSize; ++i)
-                m.latent.data[m.latentIndex(x, y, i)] = float(Imath::half(z[t * latentSize + i]));
+                m.latent.set(m.latentIndex(x, y, i), z[t * latentSize + i]);
         }
     for (int k = 0; k <= m.hiddenLayers(); ++k) {
         const torch::Tensor w = decoder.layers[k]->weight.detach().contiguous();
