@@ -717,18 +717,18 @@ glm::vec3 StreamedFmfMaterial::evaluateResidentFiltered(float u, float v, float 
     const int count = fmf->directionCombinations(view, light, images, weights);
     // FmfMaterial::factorSums with the filtered values in place of a texel's SxV row: the U rows
     // blended per group of 4 components, then one dot product (fmf_eval.glsl's order).
-    const BtfFactor& f = fmf->factors().factors[0];
-    const int k = int(f.U.cols());
+    const int k = fmf->factors().components(0);
+    std::vector<float> rows(std::size_t(count) * std::size_t(k));
     float sums[3];
     for (int c = 0; c < 3; ++c) {
+        for (int i = 0; i < count; ++i)
+            fmf->uRow(images[std::size_t(i)], c, rows.data() + std::size_t(i) * std::size_t(k));
         float sum = 0.0f;
         for (int g = 0; g < k; g += 4) {
             float blended[4] = {0, 0, 0, 0};
             const int n = std::min(4, k - g);
             for (int i = 0; i < count; ++i) {
-                const float* row = f.U.data() +
-                                   (images[std::size_t(i)] * 3 + std::size_t(c)) * std::size_t(k) +
-                                   std::size_t(g);
+                const float* row = rows.data() + std::size_t(i) * std::size_t(k) + std::size_t(g);
                 for (int j = 0; j < n; ++j) blended[j] += weights[std::size_t(i)] * row[j];
             }
             for (int j = 0; j < n; ++j) sum += blended[j] * sxv[std::size_t(g + j)];

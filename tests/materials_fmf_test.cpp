@@ -168,8 +168,12 @@ TEST(Fmf, RendersEveryFactorVariantAsStoredAtMeasuredDirections) {
         for (auto storage : {MaterialTexture::Float, MaterialTexture::Half}) {
             osg::ref_ptr<FmfMaterial> m = FmfMaterial::fromFactors(f, storage);
             const FactoredBtf stored = m->completeFactors();
-            // SxV is kept once, as the GPU texture: no copy stays in the factors.
-            for (const BtfFactor& kept : m->factors().factors) EXPECT_EQ(kept.SxV.size(), 0);
+            // U and SxV are kept once, as the GPU textures: no copy stays in the factors.
+            for (const BtfFactor& kept : m->factors().factors) {
+                EXPECT_EQ(kept.SxV.size(), 0);
+                EXPECT_EQ(kept.U.size(), 0);
+            }
+            EXPECT_EQ(m->u().halves.empty(), storage == MaterialTexture::Float);
             EXPECT_EQ(m->width(), 5);
             EXPECT_EQ(m->height(), 4);
             EXPECT_EQ(stored.components(2),
@@ -310,16 +314,16 @@ TEST(Fmf, SaveLoadRoundTripIsExact) {
     // assignFrom and the osg copy keep the factors.
     osg::ref_ptr<FmfMaterial> copy = new FmfMaterial;
     copy->assignFrom(*materials[0]);
-    EXPECT_EQ(copy->factors().factors[1].U, materials[0]->factors().factors[1].U);
+    EXPECT_EQ(copy->completeFactors().factors[1].U, materials[0]->completeFactors().factors[1].U);
     osg::ref_ptr<FmfMaterial> cloned =
         static_cast<FmfMaterial*>(materials[1]->clone(osg::CopyOp::SHALLOW_COPY));
     EXPECT_EQ(cloned->completeFactors().factors[0].SxV,
               materials[1]->completeFactors().factors[0].SxV);
 }
 
-TEST(Fmf, LoadingTakesTheFilesSxvTextureWithThePaddingZeroed) {
-    // What loadMaterial hands over: the sxv texture as halves, moved into the material (its
-    // padding beyond rank 3 is garbage here, which must not reach the renders).
+TEST(Fmf, LoadingTakesTheFilesUAndSxvTexturesWithThePaddingZeroed) {
+    // What loadMaterial hands over: the u and sxv textures as halves, moved into the material
+    // (their padding beyond rank 3 is garbage here, which must not reach the renders).
     FittedMaterial file = FmfMaterial::fit(test::sampleBtf(4, 3), FitOptions::parse("components=3"))
                               ->toFittedMaterial();
     for (MaterialTexture& t : file.textures)
@@ -334,21 +338,36 @@ TEST(Fmf, LoadingTakesTheFilesSxvTextureWithThePaddingZeroed) {
     ASSERT_EQ(sxv->depth, 1);  // rank 3: one layer, component 3 is padding
     const Imath::half* before = sxv->halves.data();
     for (std::size_t texel = 0; texel < 12; ++texel) sxv->halves[texel * 4 + 3] = 7.0f;
+    MaterialTexture* u = &file.texture("u");
+    ASSERT_EQ(u->width, 1);  // one group of 4 per (view, light, channel) row
+    const Imath::half* uBefore = u->halves.data();
+    for (std::size_t row = 0; row < u->halves.size() / 4; ++row) u->halves[row * 4 + 3] = -5.0f;
     const FittedMaterial copy = file;
     osg::ref_ptr<FmfMaterial> m = FmfMaterial::fromFile(std::move(file));
     const MaterialTexture kept = m->sxvTexture();
     ASSERT_EQ(kept.data.size(), copy.texture("sxv").halves.size());
     for (std::size_t i = 0; i < kept.data.size(); ++i)
         EXPECT_EQ(kept.data[i], i % 4 == 3 ? 0.0f : float(copy.texture("sxv").halves[i])) << i;
-    // Held, not copied: the material's texture is the file's array.
+    const MaterialTexture keptU = m->uTexture();
+    ASSERT_EQ(keptU.data.size(), copy.texture("u").halves.size());
+    for (std::size_t i = 0; i < keptU.data.size(); ++i)
+        EXPECT_EQ(keptU.data[i], i % 4 == 3 ? 0.0f : float(copy.texture("u").halves[i])) << i;
+    // Held, not copied: the material's textures are the file's arrays.
     EXPECT_EQ(m->sxv().halves.data(), before);
     EXPECT_TRUE(m->sxv().data.empty());
+    EXPECT_EQ(m->u().halves.data(), uBefore);
+    EXPECT_TRUE(m->u().data.empty());
     FittedMaterial infinite = copy;
     for (MaterialTexture& t : infinite.textures)
         if (t.name == "sxv") t.halves[5] = std::numeric_limits<Imath::half>::infinity();
     infinite.source = "inf.btfmat";
     EXPECT_EQ(test::errorOf([&] { FmfMaterial::fromFile(infinite); }),
               "inf.btfmat: fmf: SxV value inf exceeds the half range (65504); use storage=float");
+    FittedMaterial infiniteU = copy;
+    infiniteU.texture("u").halves[6] = -std::numeric_limits<Imath::half>::infinity();
+    infiniteU.source = "inf.btfmat";
+    EXPECT_EQ(test::errorOf([&] { FmfMaterial::fromFile(infiniteU); }),
+              "inf.btfmat: fmf: U value -inf exceeds the half range (65504); use storage=float");
 }
 
 TEST(Fmf, FileWithMismatchedTexturesIsRefused) {

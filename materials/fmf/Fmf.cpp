@@ -47,15 +47,6 @@ void checkHalfRange(float value, const std::string& source, const char* name) {
                          " exceeds the half range (65504); use storage=float");
 }
 
-/** Rounds every value to half in place; throws when one does not fit. */
-void roundToHalf(FactorMatrix& m, const std::string& source, const char* name) {
-    float* data = m.data();
-    for (Eigen::Index i = 0; i < m.size(); ++i) {
-        checkHalfRange(data[i], source, name);
-        data[i] = float(Imath::half(data[i]));
-    }
-}
-
 /** Throws Error "<source>: fmf: ..." for unorm8 storage or a layout beyond the GPU's limits. */
 void checkLayout(const FactoredBtf& factors, MaterialTexture::PixelKind storage) {
     const std::string& source = factors.source;
@@ -147,6 +138,48 @@ MaterialTexture moveSxvToTexture(FactoredBtf& factors, MaterialTexture::PixelKin
     return t;
 }
 
+/** The U texture's size (no data): a layer per measured view, a row per (light, channel), the
+ *  largest factor's components in groups of 4, RGBA. */
+MaterialTexture uShapeOf(const FactoredBtf& factors, MaterialTexture::PixelKind storage) {
+    const int maxGroups =
+        std::max({groupsOf(factors.components(0)), groupsOf(factors.components(1)),
+                  groupsOf(factors.components(2))});
+    return {"u",     maxGroups, int(factors.lights.size() * 3), int(factors.views.size()), 4,
+            storage, {}};
+}
+
+/** U of `factors` as the GPU texture (uShapeOf): row image * 3 + c holds channel c's U row (Fmf:
+ *  row image * 3 + c of the factor; Dfmf: row image of factor c), zero beyond its rank; half
+ *  storage rounds to half (throws when a value does not fit) and fills `halves`. The factors' U
+ *  matrices are left empty (0 rows). */
+MaterialTexture moveUToTexture(FactoredBtf& factors, MaterialTexture::PixelKind storage) {
+    MaterialTexture t = uShapeOf(factors, storage);
+    const bool half = storage == MaterialTexture::Half;
+    if (half)
+        t.halves.assign(t.valueCount(), Imath::half(0.0f));
+    else
+        t.data.assign(t.valueCount(), 0.0f);
+    const bool fmf = factors.model == FactorModel::Fmf;
+    const std::size_t rowValues = std::size_t(t.width) * 4;
+    for (std::size_t image = 0; image < factors.imageCount(); ++image)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const BtfFactor& f = factors.factors[fmf ? 0 : c];
+            const std::size_t k = std::size_t(f.U.cols());
+            const float* row = f.U.data() + (fmf ? image * 3 + c : image) * k;
+            const std::size_t first = (image * 3 + c) * rowValues;
+            for (std::size_t j = 0; j < k; ++j) {
+                if (half) {
+                    checkHalfRange(row[j], factors.source, "U");
+                    t.halves[first + j] = Imath::half(row[j]);
+                } else {
+                    t.data[first + j] = row[j];
+                }
+            }
+        }
+    for (BtfFactor& factor : factors.factors) factor.U = FactorMatrix(0, factor.U.cols());
+    return t;
+}
+
 }  // namespace
 
 int FmfMaterial::groups(int channel) const {
@@ -163,18 +196,17 @@ int FmfMaterial::layerOffset(int channel) const {
 void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage) {
     factors.validate();
     checkLayout(factors, storage);
-    const std::string& source = factors.source;
-    if (storage == MaterialTexture::Half)
-        for (BtfFactor& f : factors.factors) roundToHalf(f.U, source, "U");
+    MaterialTexture u = moveUToTexture(factors, storage);
     MaterialTexture sxv = moveSxvToTexture(factors, storage);
-    adopt(std::move(factors), std::move(sxv));
+    adopt(std::move(factors), std::move(u), std::move(sxv));
 }
 
-void FmfMaterial::adopt(FactoredBtf factors, MaterialTexture sxv) {
+void FmfMaterial::adopt(FactoredBtf factors, MaterialTexture u, MaterialTexture sxv) {
     setGeometry(factors.width, factors.height, factors.views, factors.lights);
     _storage = sxv.kind;
     _factors = std::make_shared<const FactoredBtf>(std::move(factors));
     _sxv = std::make_shared<const MaterialTexture>(std::move(sxv));
+    _u = std::make_shared<const MaterialTexture>(std::move(u));
     try {
         _viewLookup = DirectionLookup(_views);
         _lightLookup = _lights == _views ? _viewLookup : DirectionLookup(_lights);
@@ -186,13 +218,29 @@ void FmfMaterial::adopt(FactoredBtf factors, MaterialTexture sxv) {
 
 FactoredBtf FmfMaterial::completeFactors() const {
     FactoredBtf complete = *_factors;
+    const bool fmf = complete.model == FactorModel::Fmf;
+    const std::size_t images = complete.imageCount();
     for (std::size_t f = 0; f < complete.factors.size(); ++f) {
+        FactorMatrix& u = complete.factors[f].U;
+        u.resize(Eigen::Index(fmf ? images * 3 : images), u.cols());
+        for (std::size_t image = 0; image < images; ++image)
+            for (int c = fmf ? 0 : int(f); c < (fmf ? 3 : int(f) + 1); ++c)
+                uRow(image, c,
+                     u.row(Eigen::Index(fmf ? image * 3 + std::size_t(c) : image)).data());
         FactorMatrix& sxv = complete.factors[f].SxV;
         sxv.resize(Eigen::Index(complete.texelCount()), complete.factors[f].U.cols());
         for (Eigen::Index row = 0; row < sxv.rows(); ++row)
             sxvRow(f, std::size_t(row), sxv.row(row).data());
     }
     return complete;
+}
+
+void FmfMaterial::uRow(std::size_t image, int channel, float* out) const {
+    const int k = _factors->components(channel);
+    withValues(*_u, [&](const auto* values) {
+        const auto* row = values + (image * 3 + std::size_t(channel)) * uRowValues();
+        for (int j = 0; j < k; ++j) out[j] = float(row[j]);
+    });
 }
 
 void FmfMaterial::sxvRow(std::size_t factor, std::size_t row, float* out) const {
@@ -242,27 +290,26 @@ void FmfMaterial::factorSums(std::size_t texel, const std::size_t* images, const
                              int count, float sums[3]) const {
     // As fmf.frag: per group of 4 components, the U rows blended over the combinations,
     // then one dot product with the texel's SxV (the same order of operations as the GPU).
-    const bool fmf = _factors->model == FactorModel::Fmf;
-    const std::size_t texels = texelCount();
+    const std::size_t texels = texelCount(), rowValues = uRowValues();
     for (int c = 0; c < 3; ++c) {
-        const std::size_t factor = fmf ? 0 : std::size_t(c);
-        const BtfFactor& f = _factors->factors[factor];
-        const int k = int(f.U.cols());
+        const int k = _factors->components(c);
         withValues(*_sxv, [&](const auto* values) {
-            float sum = 0.0f;
-            for (int g = 0; g < k; g += 4) {
-                const auto* group =
-                    values + (std::size_t(layerOffset(c) + g / 4) * texels + texel) * 4;
-                float blended[4] = {0, 0, 0, 0};
-                const int n = std::min(4, k - g);
-                for (int i = 0; i < count; ++i) {
-                    const std::size_t uRow = fmf ? images[i] * 3 + std::size_t(c) : images[i];
-                    const float* u = f.U.data() + uRow * std::size_t(k) + std::size_t(g);
-                    for (int j = 0; j < n; ++j) blended[j] += weights[i] * u[j];
+            withValues(*_u, [&](const auto* uValues) {
+                float sum = 0.0f;
+                for (int g = 0; g < k; g += 4) {
+                    const auto* group =
+                        values + (std::size_t(layerOffset(c) + g / 4) * texels + texel) * 4;
+                    float blended[4] = {0, 0, 0, 0};
+                    const int n = std::min(4, k - g);
+                    for (int i = 0; i < count; ++i) {
+                        const auto* u =
+                            uValues + (images[i] * 3 + std::size_t(c)) * rowValues + std::size_t(g);
+                        for (int j = 0; j < n; ++j) blended[j] += weights[i] * float(u[j]);
+                    }
+                    for (int j = 0; j < n; ++j) sum += blended[j] * float(group[j]);
                 }
-                for (int j = 0; j < n; ++j) sum += blended[j] * float(group[j]);
-            }
-            sums[c] = sum;
+                sums[c] = sum;
+            });
         });
     }
 }
@@ -298,59 +345,46 @@ void FmfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
     const int x = int(texel % std::size_t(_width)), y = int(texel / std::size_t(_width));
     const std::size_t row = _factors->factorRow(x, y), images = _factors->imageCount();
     const bool fmf = _factors->model == FactorModel::Fmf;
-    Eigen::VectorXf products[3];
-    Eigen::VectorXf sxv;
+    std::vector<float> sxv[3];
     for (std::size_t f = 0; f < _factors->factors.size(); ++f) {
-        const BtfFactor& factor = _factors->factors[f];
-        sxv.resize(factor.U.cols());
-        sxvRow(f, row, sxv.data());
-        products[f].noalias() = factor.U * sxv;
+        sxv[f].resize(std::size_t(_factors->factors[f].U.cols()));
+        sxvRow(f, row, sxv[f].data());
     }
-    for (std::size_t i = 0; i < images; ++i) {
-        float sums[3];
-        for (int c = 0; c < 3; ++c)
-            sums[c] = fmf ? products[0](Eigen::Index(i * 3 + std::size_t(c)))
-                          : products[c](Eigen::Index(i));
-        _factors->decodeColor(sums, abrdf);
-        const float scale = _factors->cosineScale(_lights.vector(i % _lights.size()).z);
-        for (int c = 0; c < 3; ++c) abrdf[c] *= scale;
-        abrdf += 3;
-    }
+    const std::size_t rowValues = uRowValues();
+    withValues(*_u, [&](const auto* u) {
+        for (std::size_t i = 0; i < images; ++i) {
+            // Each channel's U row times the texel's SxV row of its factor.
+            float sums[3];
+            for (int c = 0; c < 3; ++c) {
+                const std::vector<float>& s = sxv[fmf ? 0 : c];
+                const auto* uRow = u + (i * 3 + std::size_t(c)) * rowValues;
+                float sum = 0.0f;
+                for (std::size_t j = 0; j < s.size(); ++j) sum += float(uRow[j]) * s[j];
+                sums[c] = sum;
+            }
+            _factors->decodeColor(sums, abrdf);
+            const float scale = _factors->cosineScale(_lights.vector(i % _lights.size()).z);
+            for (int c = 0; c < 3; ++c) abrdf[c] *= scale;
+            abrdf += 3;
+        }
+    });
 }
 
 // ---- textures, memory, files ---------------------------------------------------------------
 
 namespace {
 
-/** U's layer for measured view `view`: texel (group g, light * 3 + channel) = components
- *  4g..4g+3 of that (view, light, channel) row, zero beyond the factor's rank. */
-void writeULayer(const FactoredBtf& factors, int maxGroups, std::size_t view, float* out) {
-    const std::size_t nL = factors.lights.size(), rowValues = std::size_t(maxGroups) * 4;
-    std::fill_n(out, nL * 3 * rowValues, 0.0f);
-    const bool fmf = factors.model == FactorModel::Fmf;
-    for (std::size_t light = 0; light < nL; ++light) {
-        const std::size_t image = view * nL + light;
-        for (std::size_t c = 0; c < 3; ++c) {
-            const BtfFactor& f = factors.factors[fmf ? 0 : c];
-            const Eigen::Index uRow = Eigen::Index(fmf ? image * 3 + c : image);
-            std::copy_n(f.U.row(uRow).data(), f.U.cols(), out + (light * 3 + c) * rowValues);
-        }
-    }
-}
-
-/** Layer `layer` of the SxV texture `sxv` as floats. */
-void copySxvLayer(const MaterialTexture& sxv, int layer, float* out) {
-    const std::size_t values = std::size_t(sxv.width) * std::size_t(sxv.height) * 4;
-    withValues(sxv, [&](const auto* from) {
-        std::copy_n(from + std::size_t(layer) * values, values, out);
-    });
+/** Layer `layer` of the RGBA texture `t` (U's or SxV's) as floats. */
+void copyLayer(const MaterialTexture& t, int layer, float* out) {
+    const std::size_t values = std::size_t(t.width) * std::size_t(t.height) * 4;
+    withValues(
+        t, [&](const auto* from) { std::copy_n(from + std::size_t(layer) * values, values, out); });
 }
 
 }  // namespace
 
 MaterialTexture FmfMaterial::uShape() const {
-    const int maxGroups = std::max({groups(0), groups(1), groups(2)});
-    return {"u", maxGroups, int(_lights.size() * 3), int(_views.size()), 4, _storage, {}};
+    return uShapeOf(*_factors, _storage);
 }
 
 MaterialTexture FmfMaterial::sxvShape() const {
@@ -362,7 +396,7 @@ MaterialTexture FmfMaterial::uTexture() const {
     t.data.resize(t.valueCount());
     const std::size_t layerValues = std::size_t(t.width) * std::size_t(t.height) * 4;
     for (int view = 0; view < t.depth; ++view)
-        writeULayer(*_factors, t.width, std::size_t(view), t.data.data() + view * layerValues);
+        copyLayer(*_u, view, t.data.data() + std::size_t(view) * layerValues);
     return t;
 }
 
@@ -371,7 +405,7 @@ MaterialTexture FmfMaterial::sxvTexture() const {
     t.data.resize(t.valueCount());
     const std::size_t layerValues = std::size_t(t.width) * std::size_t(t.height) * 4;
     for (int layer = 0; layer < t.depth; ++layer)
-        copySxvLayer(*_sxv, layer, t.data.data() + layer * layerValues);
+        copyLayer(*_sxv, layer, t.data.data() + std::size_t(layer) * layerValues);
     return t;
 }
 
@@ -505,20 +539,12 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(FittedMaterial file) {
                                   std::to_string(t->valueCount()) + " expected");
 
     factors.factors.resize(fmf ? 1 : 3);
-    const FactorMatrix::Index images = FactorMatrix::Index(nV * nL);
     for (std::size_t f = 0; f < factors.factors.size(); ++f) {
         BtfFactor& factor = factors.factors[f];
         const int k = int(ks[f]);
-        factor.U.resize(fmf ? images * 3 : images, k);
-        factor.SxV.resize(0, k);  // SxV stays in the texture
+        factor.U.resize(0, k);    // U stays in its texture
+        factor.SxV.resize(0, k);  // and SxV in its
         factor.S = Eigen::VectorXf::Zero(k);
-        for (Eigen::Index row = 0; row < factor.U.rows(); ++row) {
-            const std::size_t image = fmf ? std::size_t(row) / 3 : std::size_t(row);
-            const std::size_t c = fmf ? std::size_t(row) % 3 : f;
-            const std::size_t y = (image % nL) * 3 + c, view = image / nL;
-            const std::size_t first = (view * nL * 3 + y) * std::size_t(maxGroups) * 4;
-            for (int j = 0; j < k; ++j) factor.U(row, j) = u.value(first + std::size_t(j));
-        }
     }
     if (const MaterialTexture* s = file.findTexture("singularValues"))
         if (s->channels == 1 && s->height == int(factors.factors.size()))
@@ -526,21 +552,37 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(FittedMaterial file) {
                 for (Eigen::Index j = 0; j < factors.factors[f].S.size() && j < s->width; ++j)
                     factors.factors[f].S(j) = s->value(f * std::size_t(s->width) + std::size_t(j));
     if (!fmf) FactoredBtf::checkColorModel(file.source, factors.colorModel);
-    // The file is this function's own: the SxV texture is taken, not copied, with the values
-    // beyond each factor's rank set to zero as a fit writes them (the GPU multiplies them by U's
-    // zeros, but not an infinity). A half file holds nothing beyond half's range but infinity.
+    // The file is this function's own: the U and SxV textures are taken, not copied, with the
+    // values beyond each factor's rank set to zero as a fit writes them (the GPU multiplies the
+    // two, and 0 times an infinity is not 0). A half file holds nothing beyond half's range but
+    // infinity.
+    MaterialTexture& ownU = file.texture("u");
     MaterialTexture& own = file.texture("sxv");
-    if (own.kind == MaterialTexture::Half) {
-        for (BtfFactor& factor : factors.factors) roundToHalf(factor.U, file.source, "U");
-        if (own.halves.empty()) {  // a FittedMaterial made in memory, with float values
-            own.halves.resize(own.data.size());
-            for (std::size_t i = 0; i < own.data.size(); ++i) {
-                checkHalfRange(own.data[i], file.source, "SxV");
-                own.halves[i] = Imath::half(own.data[i]);
-            }
-            std::vector<float>().swap(own.data);
+    const auto toHalves = [&](MaterialTexture& t, const char* name) {
+        if (t.kind != MaterialTexture::Half || !t.halves.empty()) return;
+        // A FittedMaterial made in memory, with float values.
+        t.halves.resize(t.data.size());
+        for (std::size_t i = 0; i < t.data.size(); ++i) {
+            checkHalfRange(t.data[i], file.source, name);
+            t.halves[i] = Imath::half(t.data[i]);
         }
-    }
+        std::vector<float>().swap(t.data);
+    };
+    toHalves(ownU, "U");
+    toHalves(own, "SxV");
+    const std::size_t rowValues = std::size_t(maxGroups) * 4;
+    for (std::size_t row = 0; row < nV * nL * 3; ++row)
+        for (std::size_t j = std::size_t(ks[fmf ? 0 : row % 3]); j < rowValues; ++j) {
+            if (ownU.halves.empty())
+                ownU.data[row * rowValues + j] = 0.0f;
+            else
+                ownU.halves[row * rowValues + j] = Imath::half(0.0f);
+        }
+    const auto infiniteU = std::find_if(ownU.halves.begin(), ownU.halves.end(),
+                                        [](Imath::half h) { return h.isInfinity(); });
+    if (infiniteU != ownU.halves.end())
+        fail(file.source, "fmf: U value " + floatText(float(*infiniteU)) +
+                              " exceeds the half range (65504); use storage=float");
     int layer = 0;
     for (float k : ks) {
         const int padded = groupsOf(int(k)) * 4;
@@ -563,7 +605,7 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fromFile(FittedMaterial file) {
                               " exceeds the half range (65504); use storage=float");
     try {
         checkLayout(factors, own.kind);
-        m->adopt(std::move(factors), std::move(own));
+        m->adopt(std::move(factors), std::move(ownU), std::move(own));
     } catch (const Error& e) {
         fail(file.source, e.what());
     }
@@ -577,21 +619,17 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
     // Generated layer by layer from the shared factors: no copy of the textures stays in host
     // memory (a full-size UBO2014 file's are 110 MB as halves, 220 MB as the floats uploaded).
     const MaterialTexture u = uShape();
-    addTexture(
-        *stateSet,
-        createGeneratedTextureArray(u,
-                                    [factors = _factors, groups = u.width](int view, float* out) {
-                                        writeULayer(*factors, groups, std::size_t(view), out);
-                                    })
-            .get(),
-        "fmfU", 0);
-    addTexture(
-        *stateSet,
-        createGeneratedTextureArray(
-            sxvShape(), [sxv = _sxv](int layer, float* out) { copySxvLayer(*sxv, layer, out); },
-            filtersParameters())
-            .get(),
-        "fmfSxV", 1);
+    addTexture(*stateSet,
+               createGeneratedTextureArray(
+                   u, [texture = _u](int view, float* out) { copyLayer(*texture, view, out); })
+                   .get(),
+               "fmfU", 0);
+    addTexture(*stateSet,
+               createGeneratedTextureArray(
+                   sxvShape(), [sxv = _sxv](int layer, float* out) { copyLayer(*sxv, layer, out); },
+                   filtersParameters())
+                   .get(),
+               "fmfSxV", 1);
     _viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
     _lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
     const bool fmf = _factors->model == FactorModel::Fmf;

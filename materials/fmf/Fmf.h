@@ -47,6 +47,11 @@ protected:
      *  `data` under float storage; the factors' SxV matrices stay empty (0 rows). A file's
      *  texture is taken as it is: loading holds it once. Shared like _factors. */
     std::shared_ptr<const MaterialTexture> _sxv = std::make_shared<const MaterialTexture>();
+    /** U the same way: the "u" texture (uShape(): a layer per view, a row per (light, channel),
+     *  the components in groups of 4, zero beyond a factor's rank), halves or floats as stored;
+     *  the factors' U matrices stay empty (0 rows). A full-size UBO2014 file's 27 MiB of floats
+     *  are 14 as halves. Shared like _factors. */
+    std::shared_ptr<const MaterialTexture> _u = std::make_shared<const MaterialTexture>();
     MaterialTexture::PixelKind _storage = MaterialTexture::Half;
     DirectionLookup _viewLookup, _lightLookup;
 };
@@ -76,12 +81,20 @@ public:
     static osg::ref_ptr<FmfMaterial> fromFile(FittedMaterial file);
     static constexpr bool kLoadsHalves = true;
 
-    /** The factors as rendered (half storage: the rounded values): their description, U and S.
-     *  Each factor's SxV matrix is empty (the material keeps SxV as the GPU texture): sxvRow()
-     *  reads it, completeFactors() gives everything. */
+    /** The factors as rendered (half storage: the rounded values): their description and S.
+     *  Each factor's U and SxV matrices are empty, 0 rows by its components (the material keeps
+     *  them as the GPU textures): uRow() and sxvRow() read them, completeFactors() gives
+     *  everything. */
     const FactoredBtf& factors() const { return *_factors; }
     /** SxV as kept: the GPU's texture (sxvTexture()'s layout), halves or floats as stored. */
     const MaterialTexture& sxv() const { return *_sxv; }
+    /** U as kept: the GPU's texture (uShape()'s layout), halves or floats as stored; the row of
+     *  (image, channel c) starts at value (image * 3 + c) * uRowValues(). */
+    const MaterialTexture& u() const { return *_u; }
+    std::size_t uRowValues() const { return std::size_t(_u->width) * 4; }
+    /** U's row for measured image `image` (view * lights + light) and colour channel c as floats:
+     *  components(c) values (Fmf: row image * 3 + c of the factor; Dfmf: row image of factor c). */
+    void uRow(std::size_t image, int channel, float* out) const;
     /** A copy of the factors with SxV (as floats), e.g. to write them or fit from them. */
     FactoredBtf completeFactors() const;
     /** Factor f's SxV row `row` (FactoredBtf::factorRow) as floats: components(f) values. */
@@ -131,9 +144,9 @@ private:
     MaterialTexture sxvShape() const;
     /** Sets the factors after checks and rounding, SxV moved into the texture. */
     void setFactors(FactoredBtf factors, MaterialTexture::PixelKind storage);
-    /** Sets factors whose SxV matrices are empty and the texture that holds SxV (checked by
-     *  the caller); prepares the direction lookups. */
-    void adopt(FactoredBtf factors, MaterialTexture sxv);
+    /** Sets factors whose U and SxV matrices are empty and the textures that hold them (checked
+     *  by the caller); prepares the direction lookups. */
+    void adopt(FactoredBtf factors, MaterialTexture u, MaterialTexture sxv);
     /** Index of texel (x, y) (y from the bottom) in the SxV texture's layers. */
     std::size_t sxvTexel(int x, int y) const {
         return std::size_t(y) * std::size_t(_width) + std::size_t(x);

@@ -24,9 +24,8 @@ std::vector<float> foldFmf(const FmfMaterial& material, const std::vector<glm::v
             "environment: fmf with dynamic-range reduction (log values) is not linear "
             "in the light and has no folded environment lighting");
     checkProjected(material, g);
-    const FactorMatrix& u = f.factors[0].U;
     const std::size_t lights = material.lights().size(), views = material.views().size();
-    const std::size_t k = std::size_t(u.cols());
+    const std::size_t k = std::size_t(f.components(0));
     // evaluate() at a measured light l_i divides by its cosine when the data hold it: a constant
     // per light, so it scales g_i.
     std::vector<glm::dvec3> scaled(lights);
@@ -34,12 +33,13 @@ std::vector<float> foldFmf(const FmfMaterial& material, const std::vector<glm::v
         scaled[i] = glm::dvec3(g[i]) * double(f.cosineScale(material.lights().vector(i).z));
     std::vector<float> folded(views * k * 3, 0.0f);
     std::vector<double> sum(k * 3);
+    std::vector<float> row(k);
     for (std::size_t j = 0; j < views; ++j) {
         std::fill(sum.begin(), sum.end(), 0.0);
         for (std::size_t i = 0; i < lights; ++i)
             for (int c = 0; c < 3; ++c) {
                 if (scaled[i][c] == 0.0) continue;
-                const float* row = u.data() + ((j * lights + i) * 3 + std::size_t(c)) * k;
+                material.uRow(j * lights + i, c, row.data());
                 for (std::size_t q = 0; q < k; ++q)
                     sum[q * 3 + std::size_t(c)] += scaled[i][c] * row[q];
             }
