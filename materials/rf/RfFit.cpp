@@ -21,8 +21,13 @@ namespace osgBTF {
 
 namespace {
 using rf::lobeValue;
-using rf::toHalf;
-using rf::toUNorm8;
+/** What the file and the GPU hold of a value: rf's 8-bit rho_d and half rho_v and lobes. */
+float toHalf(float v) {
+    return StoredValues::round(MaterialTexture::Half, v);
+}
+float toUNorm8(float v) {
+    return StoredValues::round(MaterialTexture::UNorm8, v);
+}
 }  // namespace
 
 // ---- fitter ----------------------------------------------------------------------------------
