@@ -34,6 +34,10 @@ ErrorSummary errorOfMaterial(const MeasuredBtf& btf, const Material& m) {
                         [&](std::size_t texel, float* out) { m.evaluateMeasured(texel, out); });
 }
 
+// An eighth of this limit holds 16 texels' ABRDFs (81 x 81 pairs, RGB floats): an 8 x 8 sample
+// is fitted in 4 blocks.
+constexpr std::uint64_t kFourBlocksOf8x8 = 8ull * 16 * 81 * 81 * 3 * 4;
+
 struct MemoryLimitGuard {
     std::uint64_t saved = memoryLimit();
     ~MemoryLimitGuard() { setMemoryLimit(saved); }
@@ -185,8 +189,7 @@ TEST(Neural, TheSameSeedFitsTheSameMaterialAndAnotherSeedAnother) {
 TEST(Neural, AMemoryLimitSplitsTheMeasuredDataIntoBlocks) {
     const MeasuredBtf btf = test::sampleBtf(8, 8);
     MemoryLimitGuard guard;
-    // An eighth of the limit holds 16 texels' ABRDFs (81 x 81 pairs, RGB floats): 4 blocks.
-    setMemoryLimit(8ull * 16 * 81 * 81 * 3 * 4);
+    setMemoryLimit(kFourBlocksOf8x8);
     const std::string options = "latent=4 units=8 layers=1 batch=64";
     const osg::ref_ptr<NeuralMaterial> m = fit(btf, options + " steps=8");
     EXPECT_EQ(m->fitInfo.at("blocks"), "4");
@@ -201,9 +204,10 @@ TEST(Neural, AMemoryLimitSplitsTheMeasuredDataIntoBlocks) {
 TEST(Neural, AFitInBlocksLearnsTheSampleBelowTheLambertBaseline) {
     const MeasuredBtf btf = test::sampleBtf(8, 8);
     MemoryLimitGuard guard;
-    setMemoryLimit(8ull * 16 * 81 * 81 * 3 * 4);
+    setMemoryLimit(kFourBlocksOf8x8);
     const osg::ref_ptr<NeuralMaterial> m = fit(btf, "latent=4 units=16 steps=2000 batch=1024");
     EXPECT_EQ(m->fitInfo.at("blocks"), "4");
+    EXPECT_EQ(m->fitInfo.at("blocksRead"), "4");
     setMemoryLimit(guard.saved);
     const ErrorSummary neural = errorOfMaterial(btf, *m);
     const ErrorSummary lambert = errorOfMaterial(btf, *LambertMaterial::fit(btf, FitOptions()));
