@@ -18,6 +18,7 @@
 #include "core/CoordinateMap.h"
 #include "core/Error.h"
 #include "core/FittedMaterialFile.h"
+#include "core/ImageCodecs.h"
 #include "core/MeasuredBtf.h"
 #include "core/Progress.h"
 #include "loaders/Ubo2003.h"
@@ -157,6 +158,16 @@ void setUp(const std::string& fixtures) {
     setMemoryLimit(kMemoryLimit);
     Progress::setEnabled(false);
     osg::setNotifyLevel(osg::FATAL);
+    // One-time loads outside any input's time: libFuzzer's per-input timeout once fired on the
+    // first input of fuzz_ubo2003_zip and fuzz_plugin_names on a busy machine, inside dlopen of
+    // the image codecs module (OpenImageIO, under ASan) and of OSG's own plugins (issue 47).
+    try {
+        imageCodecs();
+    } catch (const Error&) {
+        // Then each input that needs it gets the same Error, as without this.
+    }
+    reader("btfmat");
+    osgDB::Registry::instance()->getReaderWriterForExtension("osgt");
 }
 
 void ubo2003Zip(const std::uint8_t* data, std::size_t size) {

@@ -66,6 +66,10 @@ osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method);
  *  coordinate-map variant's). Built once per process, method and variant; used by MaterialNode
  *  below an osgShadow::ShadowedScene. */
 osg::ref_ptr<osg::Program> shadowMapProgram(const std::string& method, bool coordinateMap);
+/** What MaterialNode draws with in a shadow technique's depth pass, for every method: the
+ *  fixed-function position and an empty fragment stage (shaders/common/depth_only.*), so a depth
+ *  map costs what it costs for a plain textured node. One per process. */
+osg::ref_ptr<osg::Program> depthOnlyProgram();
 
 /** Throws Error "MAPNAME: made for a WxH sample, but material 'MATERIAL' is wxh"
  *  (MATERIAL: its source file, else its method) when the map does not point into the

@@ -1,10 +1,12 @@
 // osgBTF: one osg::Program per method and variant (plain, through a coordinate map, under a shadow
 // map) for the whole process: every material of a method shares it, so OSG compiles it once per
-// context. Declared beside their users: methodProgram (MethodRegistry.h), coordinateMapProgram and
-// shadowMapProgram (CoordinateMapRendering.h), releaseCachedPrograms (MaterialState.h).
+// context. Declared beside their users: methodProgram (MethodRegistry.h), coordinateMapProgram,
+// shadowMapProgram and depthOnlyProgram (CoordinateMapRendering.h), releaseCachedPrograms
+// (MaterialState.h).
 #include <map>
 #include <mutex>
 #include <tuple>
+#include <utility>
 
 #include <osg/Shader>
 
@@ -25,6 +27,7 @@ namespace {
 struct ProgramCache {
     std::mutex mutex;
     std::map<std::tuple<std::string, bool, bool>, osg::ref_ptr<osg::Program>> programs;
+    osg::ref_ptr<osg::Program> depthOnly;
 };
 
 ProgramCache& programCache() {
@@ -65,6 +68,24 @@ osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordi
 
 }  // namespace
 
+osg::ref_ptr<osg::Program> depthOnlyProgram() {
+    ProgramCache& cache = programCache();
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    if (!cache.depthOnly) {
+        osg::ref_ptr<osg::Program> created = new osg::Program;
+        created->setName("osgBTF_depthOnly");
+        for (const auto& [type, name] :
+             {std::pair{osg::Shader::VERTEX, "common/depth_only.vert"},
+              std::pair{osg::Shader::FRAGMENT, "common/depth_only.frag"}}) {
+            osg::ref_ptr<osg::Shader> shader = new osg::Shader(type, shaderSource(name));
+            shader->setName(shaderOrigin(name));
+            created->addShader(shader);
+        }
+        cache.depthOnly = created;
+    }
+    return cache.depthOnly;
+}
+
 osg::ref_ptr<osg::Program> methodProgram(const std::string& method) {
     return programVariant(method, false);
 }
@@ -74,6 +95,7 @@ void releaseCachedPrograms(osg::State* state) {
         ProgramCache& cache = programCache();
         std::lock_guard<std::mutex> lock(cache.mutex);
         for (const auto& entry : cache.programs) entry.second->releaseGLObjects(state);
+        if (cache.depthOnly) cache.depthOnly->releaseGLObjects(state);
     }
     releaseCachedEnvironmentPrograms(state);
 }

@@ -739,17 +739,14 @@ void protectOwnAttributes(osg::StateSet& state, const std::vector<osg::StateAttr
         if (own[i]) state.setTextureAttribute(unsigned(i - 1), own[i], protect);
 }
 
-}  // namespace
-
-osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
-    // Below a ShadowedScene, and not in its technique's depth pass: ShadowMap culls the shadowed
-    // scene twice, once for the view (its StateSet with the depth texture and TexGen pushed) and
-    // once below its own render-to-texture Camera, which then follows the ShadowedScene on the
-    // node path; ViewDependentShadowMap likewise, once per map, below its shadow cameras. That
-    // pass only needs depth, and must not sample the texture it writes.
-    const osg::NodePath& path = cv.getNodePath();
+/** The innermost ShadowedScene on `path` (null: none), and whether this cull is its technique's
+ *  depth pass: ShadowMap culls the shadowed scene twice, once for the view (its StateSet with the
+ *  depth texture and TexGen pushed) and once below its own render-to-texture Camera, which then
+ *  follows the ShadowedScene on the node path; ViewDependentShadowMap likewise, once per map,
+ *  below its shadow cameras. */
+osgShadow::ShadowedScene* enclosingShadowedScene(const osg::NodePath& path, bool& depthPass) {
     osgShadow::ShadowedScene* scene = nullptr;
-    bool depthPass = false;
+    depthPass = false;
     for (osg::Node* node : path) {
         if (auto* shadowed = dynamic_cast<osgShadow::ShadowedScene*>(node)) {
             scene = shadowed;
@@ -758,6 +755,29 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
             depthPass = true;
         }
     }
+    return scene;
+}
+
+/** What a depth pass draws the node's geometry with instead of the material (depthOnlyProgram),
+ *  shared by every node. Not PROTECTED: a technique that binds its own depth program with
+ *  OVERRIDE keeps it. Never destroyed, like the other shared state. */
+osg::StateSet* depthPassStateSet() {
+    static osg::StateSet* const state = [] {
+        auto* created = new osg::StateSet;
+        created->ref();
+        created->setAttribute(depthOnlyProgram().get(), osg::StateAttribute::ON);
+        return created;
+    }();
+    return state;
+}
+
+}  // namespace
+
+osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
+    // Below a ShadowedScene, and not in its technique's depth pass (traverse draws that pass
+    // without the material: it only needs depth, and must not sample the texture it writes).
+    bool depthPass = false;
+    osgShadow::ShadowedScene* scene = enclosingShadowedScene(cv.getNodePath(), depthPass);
     if (!scene || depthPass || !scene->getShadowTechnique()) return nullptr;
     const std::vector<osg::StateAttribute*> own = ownAttributes(
         {materialStateSet(), _nodeStateSet.get(), _terminatorStateSet.get(), _mapStateSet.get()});
@@ -836,17 +856,28 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
         if (material) {
             if (auto* compile = dynamic_cast<osgUtil::GLObjectsVisitor*>(&nv)) {
                 compile->apply(*material);
+                compile->apply(*depthPassStateSet());
                 compile->apply(*_nodeStateSet);
                 if (_terminatorStateSet) compile->apply(*_terminatorStateSet);
                 if (_mapStateSet) compile->apply(*_mapStateSet);
             } else if (auto* collect = dynamic_cast<osgUtil::StateToCompile*>(&nv)) {
                 collect->apply(*material);
+                collect->apply(*depthPassStateSet());
                 collect->apply(*_nodeStateSet);
                 if (_terminatorStateSet) collect->apply(*_terminatorStateSet);
                 if (_mapStateSet) collect->apply(*_mapStateSet);
             }
         }
         osg::Group::traverse(nv);
+        return;
+    }
+    bool depthPass = false;
+    if (enclosingShadowedScene(cv->getNodePath(), depthPass) && depthPass) {
+        // A shadow technique's depth pass (VDSM's maps are 2048 x 2048 each): running the BTF
+        // program there cost more than the view itself (issue 47).
+        cv->pushStateSet(depthPassStateSet());
+        osg::Group::traverse(nv);
+        cv->popStateSet();
         return;
     }
     cv->pushStateSet(_material->sharedStateSet());

@@ -12,6 +12,7 @@
 #include "core/ErrorMetrics.h"
 #include "harness/Compare.h"
 #include "harness/Pictures.h"
+#include "harness/SoakSampling.h"
 #include "loaders/LoadBtf.h"
 #include "materials/Material.h"
 #include "tests/TestUtil.h"
@@ -292,6 +293,40 @@ TEST(Harness, ErrorMapColoursAndPlotAreWellFormed) {
     EXPECT_NE(svg.find("a&lt;b"), std::string::npos);
     EXPECT_NE(svg.find(">pca</text>"), std::string::npos);
     EXPECT_EQ(count(svg, "<circle"), 2u);
+}
+
+namespace {
+
+SoakSample soakSample(int frame, int textures, double rssMiB = 100) {
+    SoakSample s;
+    s.frame = frame;
+    s.textures = textures;
+    s.osgTextureObjects = unsigned(textures);
+    s.rssMiB = rssMiB;
+    return s;
+}
+
+std::string soakGrowth(const std::vector<SoakSample>& samples) {
+    return growthAfterWarmup(
+        samples, [](const SoakSample& s) { return s.frame <= 300; }, 3.0, 0);
+}
+
+}  // namespace
+
+TEST(SoakGrowth, OneLateDeletionIsNotGrowthButATextureThatStaysIs) {
+    // Warm-up at 5 textures. One sample at 6 and back to 5 (OSG deleted a reload's texture a
+    // frame late): flat. 6 from then on: grown, named at the first frame it stayed.
+    EXPECT_EQ(soakGrowth({soakSample(0, 5), soakSample(300, 5), soakSample(600, 6),
+                          soakSample(650, 5), soakSample(700, 5)}),
+              "");
+    EXPECT_EQ(soakGrowth({soakSample(0, 5), soakSample(300, 5), soakSample(600, 6),
+                          soakSample(650, 6), soakSample(700, 6)}),
+              "frame 600: GL textures 6 > 5 + 0; frame 600: OSG texture objects 6 > 5 + 0; "
+              "frame 650: GL textures 6 > 5 + 0; frame 650: OSG texture objects 6 > 5 + 0; ");
+    // The RSS is judged sample by sample, as before.
+    EXPECT_EQ(soakGrowth({soakSample(0, 5), soakSample(300, 5), soakSample(600, 5, 104),
+                          soakSample(650, 5)}),
+              "frame 600: RSS MiB 104 > 100 + 3; ");
 }
 
 }  // namespace OSGBTF_TEST_FILE

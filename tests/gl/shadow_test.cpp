@@ -6,6 +6,8 @@
 // Built twice (EGL and OSMesa).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <mutex>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -25,7 +27,9 @@
 #include <osgUtil/CullVisitor>
 
 #include "core/Directions.h"
+#include "harness/ShadowScene.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/CoordinateMapRendering.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
@@ -542,5 +546,114 @@ TEST_F(ShadowMapGpu, AnotherTechniqueIsNamedOnceAndTheNodeDrawsWithoutCastShadow
     expectNamedOnce(capture.text(), "ShadowTexture");
     EXPECT_GT(centre(*image), 0.0f);
 }
+
+}  // namespace OSGBTF_TEST_FILE
+
+namespace OSGBTF_TEST_FILE {
+
+namespace {
+
+/** Records, for each draw of the drawable it is set on, the camera drawing it and the program
+ *  in use: what each pass runs for that geometry. */
+class ProgramRecorder : public osg::Drawable::DrawCallback {
+public:
+    struct Draw {
+        const osg::Camera* camera;
+        std::string program;  ///< empty: fixed function
+    };
+    void drawImplementation(osg::RenderInfo& info, const osg::Drawable* drawable) const override {
+        const osg::Program::PerContextProgram* applied =
+            info.getState()->getLastAppliedProgramObject();
+        std::lock_guard<std::mutex> lock(_mutex);
+        _draws.push_back({info.getCurrentCamera(), applied && applied->getProgram()
+                                                       ? applied->getProgram()->getName()
+                                                       : std::string()});
+        drawable->drawImplementation(info);
+    }
+    std::vector<Draw> draws() const {
+        std::lock_guard<std::mutex> lock(_mutex);
+        return _draws;
+    }
+
+private:
+    mutable std::mutex _mutex;
+    mutable std::vector<Draw> _draws;
+};
+
+/** Wall ms per frame of `scene` (the least of two medians of `frames` frames, so a moment of
+ *  load on the machine does not decide it). */
+double frameMs(osg::Node* scene, int frames) {
+    HeadlessRenderer& renderer = sharedRenderer();
+    renderer.setScene(scene);
+    double best = 1e30;
+    for (int round = 0; round < 2; ++round)
+        best = std::min(best, renderer.timePasses(frames).wallMs);
+    return best;
+}
+
+}  // namespace
+
+class ShadowDepthPass : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ShadowDepthPass, RunsNoBtfProgram) {
+    // The technique with OSG's defaults (VDSM: a 2048 x 2048 map fitted to the view). Each draw of
+    // the ground names its camera and program: in the view, the material's shadow-map variant; in
+    // any other camera (the technique's depth pass), never a BTF program.
+    osg::ref_ptr<PcaMaterial> material = pcaSample();
+    const ShadowScene scene = makeShadowScene(material.get(), GetParam());
+    osg::ref_ptr<ProgramRecorder> recorder = new ProgramRecorder;
+    scene.groundGeometry->setDrawCallback(recorder.get());
+    scene.groundGeometry->setUseDisplayList(false);
+    HeadlessRenderer& renderer = sharedRenderer();
+    renderer.render(scene.root.get(), shadowSceneCamera(96, 72));
+    renderer.render();
+    const osg::Camera* view = &renderer.camera();
+    int viewDraws = 0, depthDraws = 0;
+    for (const ProgramRecorder::Draw& draw : recorder->draws()) {
+        if (draw.camera == view) {
+            ++viewDraws;
+            EXPECT_EQ(draw.program, shadowMapProgram("pca", false)->getName());
+        } else {
+            ++depthDraws;
+            EXPECT_TRUE(draw.program.empty() || draw.program == depthOnlyProgram()->getName())
+                << "the depth pass ran '" << draw.program << "'";
+        }
+    }
+    EXPECT_EQ(viewDraws, 2);  // once a frame
+    // The ground casts shadows too (the default masks): each frame draws it into the map once.
+    EXPECT_EQ(depthDraws, 2);
+    scene.groundGeometry->setDrawCallback(nullptr);
+}
+
+TEST_P(ShadowDepthPass, ABtfGroundCostsAboutWhatItCostsWithoutShadows) {
+    // What a BTF ground costs per frame over a plain textured one, under the technique and with
+    // none: the technique adds its own passes, and those must not run the BTF (depth passes draw
+    // depth only), so the extra cost stays what it is without shadows. Measured (llvmpipe, 2
+    // cores, 160 x 120): without shadows ~20 ms extra; under ViewDependentShadowMap 1,720 ms
+    // extra before the depth passes ran without the BTF program (its 2048 x 2048 map), ~0-10 ms
+    // after. A generous bound (4x + 10 ms) so load on a shared machine does not decide it.
+    osg::ref_ptr<PcaMaterial> material = pcaSample();
+    const CameraSetup camera = shadowSceneCamera(160, 120);
+    sharedRenderer().setCamera(camera);
+    const int frames = 3;
+    const double plain = frameMs(makeShadowScene(nullptr, GetParam()).root.get(), frames);
+    const double btf = frameMs(makeShadowScene(material.get(), GetParam()).root.get(), frames);
+    const double plainNone = frameMs(makeShadowScene(nullptr, "none").root.get(), frames);
+    const double btfNone = frameMs(makeShadowScene(material.get(), "none").root.get(), frames);
+    const double extra = btf - plain, extraNone = btfNone - plainNone;
+    ::testing::Test::RecordProperty("btf_extra_us", int(extra * 1000));
+    ::testing::Test::RecordProperty("btf_extra_without_shadows_us", int(extraNone * 1000));
+    std::printf("%s: BTF ground %.1f ms, plain %.1f ms; without shadows %.1f and %.1f ms\n",
+                GetParam().c_str(), btf, plain, btfNone, plainNone);
+    EXPECT_LT(extra, 4 * std::max(0.0, extraNone) + 10)
+        << "the BTF ground costs " << extra << " ms a frame more than the plain one under "
+        << GetParam() << ", " << extraNone << " ms more without shadows";
+}
+
+INSTANTIATE_TEST_SUITE_P(, ShadowDepthPass,
+                         ::testing::Values("ShadowMap", "SoftShadowMap", "ViewDependentShadowMap"),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                             return info.param;
+                         });
 
 }  // namespace OSGBTF_TEST_FILE
