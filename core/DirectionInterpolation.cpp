@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 
 #include <glm/common.hpp>
 #include <glm/ext/scalar_constants.hpp>
@@ -94,10 +95,12 @@ glm::vec3 barycentric(const glm::vec2& a, const glm::vec2& b, const glm::vec2& c
     return {w0, w1, 1.0f - w0 - w1};
 }
 
-/** Closest point of segment ab to p: its parameter t along ab and the squared distance. */
+/** Closest point of segment ab to p: its parameter t along ab and the squared distance. A
+ *  segment of length 0 (a set of one direction) is its point, t = 0. */
 glm::vec2 projectOnEdge(const glm::vec2& a, const glm::vec2& b, const glm::vec2& p) {
     const glm::vec2 e = b - a;
-    const float t = std::clamp(glm::dot(p - a, e) / glm::dot(e, e), 0.0f, 1.0f);
+    const float length2 = glm::dot(e, e);
+    const float t = length2 > 0.0f ? std::clamp(glm::dot(p - a, e) / length2, 0.0f, 1.0f) : 0.0f;
     const glm::vec2 q = a + t * e - p;
     return {t, glm::dot(q, q)};
 }
@@ -132,7 +135,8 @@ double pointRectDistance(const glm::dvec2& p, const Rect& r) {
 
 double pointSegmentDistance(const glm::dvec2& p, const glm::dvec2& a, const glm::dvec2& b) {
     const glm::dvec2 e = b - a;
-    const double t = std::clamp(glm::dot(p - a, e) / glm::dot(e, e), 0.0, 1.0);
+    const double length2 = glm::dot(e, e);
+    const double t = length2 > 0.0 ? std::clamp(glm::dot(p - a, e) / length2, 0.0, 1.0) : 0.0;
     return glm::length(a + t * e - p);
 }
 
@@ -168,6 +172,38 @@ double segmentRectDistance(const glm::dvec2& a, const glm::dvec2& b, const Rect&
     return d;
 }
 
+/** The segments joining points that all lie on one line (or are one point), in their order
+ *  along it: (0, 0) for a single point. Throws Error for two equal points. */
+std::vector<std::array<int, 2>> chainEdges(const std::vector<glm::dvec2>& points,
+                                           const std::string& name) {
+    const int n = int(points.size());
+    if (n == 1) return {{0, 0}};
+    // The line's direction: the farthest pair (the sets are small).
+    int first = 0, last = 1;
+    double widest = -1;
+    for (int i = 0; i < n; ++i)
+        for (int j = i + 1; j < n; ++j) {
+            const double d = glm::length(points[j] - points[i]);
+            if (d > widest) widest = d, first = i, last = j;
+        }
+    const glm::dvec2 axis = points[last] - points[first];
+    std::vector<int> order(std::size_t(n), 0);
+    for (int i = 0; i < n; ++i) order[std::size_t(i)] = i;
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+        return glm::dot(points[a] - points[first], axis) <
+               glm::dot(points[b] - points[first], axis);
+    });
+    std::vector<std::array<int, 2>> edges;
+    for (std::size_t k = 1; k < order.size(); ++k) {
+        const int a = order[k - 1], b = order[k];
+        if (glm::length(points[b] - points[a]) < 1e-12)
+            throw Error("direction set '" + name + "': duplicate direction at index " +
+                        std::to_string(std::max(a, b)));
+        edges.push_back({a, b});
+    }
+    return edges;
+}
+
 }  // namespace
 
 glm::vec2 directionToDisc(const glm::vec3& direction) {
@@ -185,10 +221,8 @@ glm::vec3 discToDirection(const glm::vec2& p) {
 }
 
 DirectionInterpolator::DirectionInterpolator(const DirectionSet& directions) {
-    if (directions.size() < 3)
-        throw Error("direction set '" + directions.name() +
-                    "': interpolation needs at least 3 directions, got " +
-                    std::to_string(directions.size()));
+    if (directions.size() == 0)
+        throw Error("direction set '" + directions.name() + "': no directions to interpolate");
     for (std::size_t i = 0; i < directions.size(); ++i) {
         const glm::dvec3 d = glm::dvec3(directions.vector(i));
         _points.push_back({d.x / (1.0 + d.z), d.y / (1.0 + d.z)});
@@ -196,9 +230,16 @@ DirectionInterpolator::DirectionInterpolator(const DirectionSet& directions) {
         // vertex bit for bit and gets weight 1 there up to the rounding of 1 / area.
         _discPoints.push_back(directionToDisc(directions.vector(i)));
     }
-    _triangles = delaunay(_points);
-    if (_triangles.empty())
-        throw Error("direction set '" + directions.name() + "' is degenerate (all collinear)");
+    if (_points.size() >= 3) _triangles = delaunay(_points);
+    if (_triangles.empty()) {
+        // One direction, two, or all on one line of the disc map: no triangle, and the chain of
+        // segments joining them takes the hull's place. Every query then gets the closest point
+        // of the chain, as it gets the closest point of the hull outside a triangulation: a
+        // single direction is constant, two blend along the segment between them (in the disc
+        // map, where it is close to their great arc) and beyond its ends take the nearer one.
+        _hullEdges = chainEdges(_points, directions.name());
+        return;
+    }
     for (const auto& t : _triangles) {
         const glm::dvec2 a(_discPoints[t[0]]), b(_discPoints[t[1]]), c(_discPoints[t[2]]);
         _inverseArea.push_back(float(1.0 / cross(a, b, c)));

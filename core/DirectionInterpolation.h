@@ -7,7 +7,10 @@
 // barycentric weights of the triangle that contains it: at most 3 indices, weights >= 0 summing
 // to 1, (index, 1) at a measured direction up to float rounding. Outside the convex hull of the
 // samples (below theta 75 for Bonn data) it takes the closest point of the hull boundary, i.e. it
-// blends the two nearest boundary samples. The weights are continuous in the direction.
+// blends the two nearest boundary samples. The weights are continuous in the direction. A set
+// with no triangle (1 direction, 2, or all on one line of the disc map: a one-view capture, a
+// few views along one azimuth) has a chain of segments in the hull's place and every query takes
+// its closest point: constant for one direction, a blend along the segment for two.
 //
 // The triangulation is built in double; the weights are evaluated in float with the formulas and
 // the operation order of shaders/common/directions.glsl, from the same float vertex data, so the
@@ -61,7 +64,10 @@ struct DirectionTable {
 class DirectionInterpolator {
 public:
     DirectionInterpolator() = default;
-    /** Triangulates the set; throws Error if it has fewer than 3 directions or is degenerate. */
+    /** Triangulates the set. Sets without a triangle (one direction, two, all on one line of
+     *  the disc map) interpolate along the chain of segments joining them instead (hullEdges;
+     *  docs/formats.md, "Interpolating few directions"). Throws Error for an empty set or two
+     *  equal directions. */
     explicit DirectionInterpolator(const DirectionSet& directions);
 
     /** Exact weights of the triangulation (the CPU reference). Every triangle is tested. */

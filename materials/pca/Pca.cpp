@@ -182,8 +182,9 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(FittedMaterial file) {
 osg::ref_ptr<osg::StateSet> PcaMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
-    addTexture(*stateSet, createFloatTexture(eigenTextures).get(), "pcaEigenTextures", 0);
-    addTexture(*stateSet, createFloatTexture(weights).get(), "pcaWeights", 1);
+    // Arrays even with one layer (one measured view): the shader's samplers are sampler2DArray.
+    addTexture(*stateSet, createFloatTextureArray(eigenTextures).get(), "pcaEigenTextures", 0);
+    addTexture(*stateSet, createFloatTextureArray(weights).get(), "pcaWeights", 1);
     _viewLookup.addToStateSet(*stateSet, "pcaViewTable", 2);
     _lightLookup.addToStateSet(*stateSet, "pcaLightTable", 3);
     stateSet->addUniform(new osg::Uniform("pcaComponents", _components));

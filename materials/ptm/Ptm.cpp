@@ -35,9 +35,6 @@ void PtmMaterial::setShape(int width, int height, DirectionSet views, DirectionS
         throw Error("ptm: invalid size " + std::to_string(width) + "x" + std::to_string(height));
     if (lights.size() == 0) throw Error("ptm: needs at least one measured light");
     if (views.size() == 0) throw Error("ptm: needs at least one measured view");
-    if (shape.perView && views.size() < 3)
-        throw Error("ptm: views=all needs at least 3 measured views to interpolate, got " +
-                    std::to_string(views.size()));
     if (frontView >= views.size())
         throw Error("ptm: front view " + std::to_string(frontView) + " is not one of the " +
                     std::to_string(views.size()) + " measured views");

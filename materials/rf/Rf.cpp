@@ -55,7 +55,7 @@ void RfMaterial::setShape(int width, int height, DirectionSet views, DirectionSe
     if (lobeCount < 1 || lobeCount > kMaxLobes)
         throw Error("rf: lobes must be between 1 and " + std::to_string(kMaxLobes) + ", got " +
                     std::to_string(lobeCount));
-    if (views.size() < 3) throw Error("rf: needs at least 3 measured views to interpolate");
+    if (views.size() == 0) throw Error("rf: needs at least one measured view");
     if (lights.size() == 0) throw Error("rf: needs at least one measured light");
     const std::size_t channels = variant.rgb ? 3 : 1;
     const std::size_t layers = views.size() * channels * std::size_t(lobeCount);
@@ -247,7 +247,12 @@ osg::ref_ptr<osg::StateSet> RfMaterial::createStateSet() const {
     for (const StoredArray& a : storedArrays(_views.size(), _lobes, _variant)) {
         const MaterialTexture t =
             (this->*a.member).texture(a.name, _width, _height, a.depth, a.channels);
-        addTexture(*stateSet, createFloatTexture(t).get(), a.sampler, unit++);
+        // rhoD is one 2D texture; the others are arrays even with one layer (one measured
+        // view, one lobe), as the shader samples them.
+        if (a.member == &RfMaterial::rhoD)
+            addTexture(*stateSet, createFloatTexture(t).get(), a.sampler, unit++);
+        else
+            addTexture(*stateSet, createFloatTextureArray(t).get(), a.sampler, unit++);
     }
     _viewLookup.addToStateSet(*stateSet, "rfViewTable", unit);
     stateSet->addUniform(new osg::Uniform("rfLobeCount", _lobes));

@@ -73,7 +73,7 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fromFile(FittedMaterial file) {
     osg::ref_ptr<SlafMaterial> m = new SlafMaterial;
     m->readCommon(file);
     m->readLobeParameters(file);
-    if (m->_views.size() < 3) fail(file.source, "slaf needs at least 3 view directions");
+    if (m->_views.size() == 0) fail(file.source, "slaf needs at least one view direction");
     m->readLobeTextures(file);
     m->scale = m->readTexture(file, "scale", int(m->_views.size()), 3, MaterialTexture::Half);
     m->prepare();
@@ -86,10 +86,12 @@ osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
     addLobeState(*stateSet, kMethod);
-    // T as a 2D array, one layer per measured view (81 or 151 layers, well below GL's 2048).
+    // T as a 2D array, one layer per measured view (81 or 151 layers, well below GL's 2048; an
+    // array with one view too, as the shader samples it).
     addTexture(
         *stateSet,
-        createFloatTexture(scale.texture("scale", _width, _height, int(_views.size()), 3)).get(),
+        createFloatTextureArray(scale.texture("scale", _width, _height, int(_views.size()), 3))
+            .get(),
         "slafScale", 3);
     _viewLookup.addToStateSet(*stateSet, "slafViewTable", 4);
     return stateSet;

@@ -12,7 +12,6 @@ osg::ref_ptr<SlafMaterial> SlafMaterial::fit(const BtfSource& btf, const FitOpti
     const int rounds = o.integer("rounds");
     if (btf.empty() || btf.viewCount() == 0 || btf.lightCount() == 0)
         throw Error("slaf: cannot fit an empty BTF");
-    if (btf.viewCount() < 3) throw Error("slaf: needs at least 3 view directions to interpolate T");
     osg::ref_ptr<SlafMaterial> m =
         create(btf.width(), btf.height(), o.integer("lobes"), btf.views(), btf.lights());
     m->_cosine = o.flag("cosine");

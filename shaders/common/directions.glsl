@@ -59,7 +59,9 @@ void btfLookupDirections(sampler2D table, vec3 d, out ivec3 index, out vec3 weig
         for (int r = int(range.z); r < edgesEnd; r += 2) {
             vec4 ab = btfDirectionTexel(table, r);
             vec2 e = ab.zw - ab.xy;
-            float t = clamp(dot(p - ab.xy, e) / dot(e, e), 0.0, 1.0);
+            // A segment of length 0 (a set of one direction) is its point.
+            float length2 = dot(e, e);
+            float t = length2 > 0.0 ? clamp(dot(p - ab.xy, e) / length2, 0.0, 1.0) : 0.0;
             vec2 q = ab.xy + t * e - p;
             float distance = dot(q, q);
             if (distance < bestDistance) {

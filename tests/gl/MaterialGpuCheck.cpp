@@ -309,6 +309,21 @@ double ptmGpuTolerance(const PtmMaterial& m) {
     return 64 * std::ldexp(1.0, -24) * largest;
 }
 
+double methodGpuBound(const Material& m, const glm::vec3& view, const glm::vec3& light) {
+    if (m.methodName() == "lambert") return 1e-5;
+    if (const auto* ptm = dynamic_cast<const PtmMaterial*>(&m)) return ptmGpuTolerance(*ptm);
+    if (m.methodName() == "fmf") {
+        double largest = 1;
+        for (int y = 0; y < m.height(); ++y)
+            for (int x = 0; x < m.width(); ++x) {
+                const glm::vec3 value = m.evaluate(x, y, view, light);
+                for (int c = 0; c < 3; ++c) largest = std::max(largest, double(std::abs(value[c])));
+            }
+        return 1e-3 * largest;
+    }
+    return 1e-3;
+}
+
 osg::ref_ptr<osg::Image> renderRectifiedPatch(const Material& material,
                                               const RectifiedPatchRender& r) {
     // The material's StateSet above the map's (which replaces its program and adds the map) and

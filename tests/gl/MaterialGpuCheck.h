@@ -110,6 +110,11 @@ GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRend
  *  the largest sum of |terms| (|a_k| times the colour; every monomial is at most 1). */
 double ptmGpuTolerance(const PtmMaterial& material);
 
+/** The GPU-CPU bound of the methods' own tests (bilinear_filter_test.cpp's) for a render from
+ *  `view` lit from `light`: lambert 1e-5, ptm ptmGpuTolerance, fmf 1e-3 of the image's largest
+ *  value (at least 1), the others 1e-3. */
+double methodGpuBound(const Material& material, const glm::vec3& view, const glm::vec3& light);
+
 /** A rectified render of the unit patch (harness/MaterialImage.h: rectifiedPatch under
  *  orthoUnitSquare, the view fixed to `view`, one white light from `light`, both local) at a
  *  texture scale, optionally through a coordinate map: what the mip-map, coordinate-map and

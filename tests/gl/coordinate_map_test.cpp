@@ -105,23 +105,6 @@ TEST_P(CoordinateMapGpu, RenderThroughTheMapEqualsTheMaterialisedMaterial) {
 
 namespace {
 
-/** The GPU-CPU bound of the method's own tests (bilinear_filter_test.cpp's): lambert 1e-5, ptm
- *  its rounding bound, fmf 1e-3 of the image's largest value (at least 1), the others 1e-3. */
-double methodBound(const Material& m, const glm::vec3& view, const glm::vec3& light) {
-    if (m.methodName() == "lambert") return 1e-5;
-    if (const auto* ptm = dynamic_cast<const PtmMaterial*>(&m)) return test::ptmGpuTolerance(*ptm);
-    if (m.methodName() == "fmf") {
-        double largest = 1;
-        for (int y = 0; y < m.height(); ++y)
-            for (int x = 0; x < m.width(); ++x) {
-                const glm::vec3 value = m.evaluate(x, y, view, light);
-                for (int c = 0; c < 3; ++c) largest = std::max(largest, double(std::abs(value[c])));
-            }
-        return 1e-3 * largest;
-    }
-    return 1e-3;
-}
-
 using test::checkThroughMap;
 using test::ThroughMapCheck;
 
@@ -142,7 +125,7 @@ TEST_P(CoordinateMapGpu, MagnifiedAndAcrossTheWrapBlendsTheFourEntries) {
     double worstGpuCpu = 0, worstBound = 0, worstMaterialisedCpu = 0, worstMaterialisedGpu = 0;
     for (const Direction& l : {Direction{52, 200}, Direction{30, 60}}) {
         const glm::vec3 light = l.toVector();
-        const double bound = methodBound(*material, view, light);
+        const double bound = test::methodGpuBound(*material, view, light);
         const ThroughMapCheck r = checkThroughMap(*material, *remapped, map, view, light);
         EXPECT_LE(r.gpuCpu, bound) << GetParam() << " light " << l.theta << "/" << l.phi;
         // The reference blends: a render of the nearest entries would miss it by far more.
@@ -183,7 +166,7 @@ TEST(CoordinateMapGpu, FmfExpDecodingThroughAMapBlendsDecodedValues) {
     osg::ref_ptr<Material> remapped = remapMaterial(*material, map);
     ASSERT_TRUE(remapped->filtersParameters());
     const glm::vec3 view = Direction{31.7f, 77}.toVector(), light = Direction{45, 20}.toVector();
-    const double bound = methodBound(*material, view, light);
+    const double bound = test::methodGpuBound(*material, view, light);
     const ThroughMapCheck r = checkThroughMap(*material, *remapped, map, view, light);
     EXPECT_LE(r.gpuCpu, bound);
     EXPECT_GT(r.fromNearest, 10 * bound);
