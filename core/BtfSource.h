@@ -59,6 +59,9 @@ public:
 
     /** Human-readable origin, e.g. the file it was loaded from. */
     std::string source;
+    /** How a loader turned 8/16-bit image values into radiance ("linear", "sRGB", "gamma 2.2");
+     *  empty for float data and for what was not read from images. */
+    std::string decoding;
 
 protected:
     BtfSource() = default;

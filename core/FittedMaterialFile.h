@@ -36,6 +36,10 @@ constexpr int kFittedMaterialVersion = 1;
  *  data[((z * height + y) * width + x) * channels + c]. */
 struct MaterialTexture {
     enum PixelKind { Half, Float, UNorm8 };
+    /** "half", "float", "unorm8": the name the methods' storage options use. */
+    static const char* kindName(PixelKind kind) {
+        return kind == UNorm8 ? "unorm8" : kind == Half ? "half" : "float";
+    }
 
     std::string name;
     int width = 0;

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "core/Error.h"
+#include "loaders/Rti.h"
 #include "loaders/Ubo2003.h"
 #include "loaders/Ubo2014.h"
 
@@ -40,7 +41,9 @@ MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options)
     const std::string extension = lowerExtension(path);
 
     MeasuredBtf btf;
-    if (status.type() == fs::file_type::directory) {
+    if (isRtiCapture(path)) {
+        btf = loadRti(path, options);
+    } else if (status.type() == fs::file_type::directory) {
         // A folder named like a file is almost certainly a mistake, not a folder of images.
         if (extension == ".btf" || extension == ".zip")
             fail(path, "cannot open: " + std::string(std::strerror(EISDIR)));
@@ -60,8 +63,8 @@ MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options)
             btf = loadUbo2014(path, options);
         else
             fail(path,
-                 "unknown file type (expected a UBO2003 .zip, a UBO2014 .btf or a folder "
-                 "of UBO2003 images)");
+                 "unknown file type (expected a UBO2003 .zip, a UBO2014 .btf, a folder "
+                 "of UBO2003 images or an RTI set: a .lp file, or a folder or zip with one)");
     }
     btf.source = path;
     return btf;

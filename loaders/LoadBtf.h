@@ -10,8 +10,10 @@
 
 namespace osgBTF {
 
-/** Loads a UBO2003/ATRIUM zip (".zip"), a UBO2014 file (".btf") or a folder of UBO2003-named
- *  images; files with another extension are recognised by their first bytes. Sets
+/** Loads a UBO2003/ATRIUM zip (".zip"), a UBO2014 file (".btf"), a folder of UBO2003-named
+ *  images, or an RTI set (a ".lp" light-position file, or a folder or zip holding one and no
+ *  UBO2003-named image: loadRti); files with another extension are recognised by their first
+ *  bytes. Sets
  *  MeasuredBtf::source to path. Throws osgBTF::Error("<path>: <problem>"), e.g. "no such file",
  *  "file is empty", "cannot open: Permission denied". */
 MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options = {});

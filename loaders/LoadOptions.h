@@ -12,11 +12,12 @@ struct LoadOptions {
     Storage storage = Storage::Float;
 
     /** How integer (8/16-bit) image values map to linear radiance; float images are used as is.
-     *  Linear is the default because seed paper 004 says the UBO2003 8-bit data keep the central
-     *  bits of linear 12-bit raw images; Srgb and Gamma22 exist for data sets that were
-     *  display-encoded (btf-rendering assumes gamma 2.2). */
-    enum class DecodeCurve { Linear, Srgb, Gamma22 };
-    DecodeCurve curve = DecodeCurve::Linear;
+     *  Auto, the default, is each format's own convention: Linear for the Bonn formats (seed
+     *  paper 004 says the UBO2003 8-bit data keep the central bits of linear 12-bit raw images),
+     *  Srgb for RTI capture sets (camera photos are sRGB-encoded). Srgb and Gamma22 also serve
+     *  other display-encoded data (btf-rendering assumes gamma 2.2). */
+    enum class DecodeCurve { Auto, Linear, Srgb, Gamma22 };
+    DecodeCurve curve = DecodeCurve::Auto;
 
     /** Label of the progress bar (osgBTF::Progress draws only when enabled globally); empty means
      *  "loading <file name>". */
@@ -27,5 +28,30 @@ struct LoadOptions {
      *  count as columns (S is read). For describing a file (`btf info`) in milliseconds. */
     bool headerOnly = false;
 };
+
+/** "auto", "linear", "srgb", "gamma22" (the tools' --decode values) to the curve; anything else
+ *  is Auto. */
+inline LoadOptions::DecodeCurve decodeCurveFromName(const std::string& name) {
+    using Curve = LoadOptions::DecodeCurve;
+    return name == "linear"    ? Curve::Linear
+           : name == "srgb"    ? Curve::Srgb
+           : name == "gamma22" ? Curve::Gamma22
+                               : Curve::Auto;
+}
+
+/** What `btf info` says a curve is: "linear", "sRGB", "gamma 2.2" ("auto" for Auto). */
+inline const char* decodeCurveLabel(LoadOptions::DecodeCurve curve) {
+    switch (curve) {
+        case LoadOptions::DecodeCurve::Linear:
+            return "linear";
+        case LoadOptions::DecodeCurve::Srgb:
+            return "sRGB";
+        case LoadOptions::DecodeCurve::Gamma22:
+            return "gamma 2.2";
+        case LoadOptions::DecodeCurve::Auto:
+            break;
+    }
+    return "auto";
+}
 
 }  // namespace osgBTF

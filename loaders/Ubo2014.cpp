@@ -20,7 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kRadiansPerHalfTurn = 3.14159265358979323846;
 
 /** Little-endian reader that knows the file size, so every read names the field that ran past the
  *  end and bulk data can be checked against the bytes that remain before allocating for it. */
@@ -160,8 +160,8 @@ Direction toDirection(float thetaRadians, float phiRadians, const std::string& p
         fail(path, field + " is not a finite angle");
     // Rounded to 1e-4 degrees so the float radians of e.g. 60 degrees read back as 60.
     auto clean = [](double degrees) { return float(std::round(degrees * 1e4) / 1e4); };
-    double theta = double(thetaRadians) * 180.0 / kPi;
-    double phi = std::fmod(double(phiRadians) * 180.0 / kPi, 360.0);
+    double theta = double(thetaRadians) * 180.0 / kRadiansPerHalfTurn;
+    double phi = std::fmod(double(phiRadians) * 180.0 / kRadiansPerHalfTurn, 360.0);
     if (phi < 0) phi += 360.0;
     Direction d{clean(theta), clean(phi)};
     if (d.phi >= 360.0f) d.phi -= 360.0f;
@@ -417,10 +417,10 @@ void putChars(std::string& out, const std::string& text, std::size_t width) {
     out += field;
 }
 void putAngle(std::string& out, const Direction& d) {
-    put(out, float(d.theta * kPi / 180.0));
+    put(out, float(d.theta * kRadiansPerHalfTurn / 180.0));
     // Azimuths as btflib writes them, atan2-style in (-pi, pi].
     const double phi = d.phi > 180.0f ? d.phi - 360.0 : d.phi;
-    put(out, float(phi * kPi / 180.0));
+    put(out, float(phi * kRadiansPerHalfTurn / 180.0));
 }
 
 }  // namespace

@@ -43,7 +43,7 @@ struct Manifest {
     /** Texels the error is computed on (randomTexels, the same for every method of a material);
      *  the default -1: all for data in memory, 4096 for a UBO2014 file (errorTexelCount). */
     long long errorTexels = -1;
-    std::string storage = "float", decode = "linear";  ///< `btf fit`'s load options
+    std::string storage = "float", decode = "auto";  ///< `btf fit`'s load options
     std::vector<BatchMaterial> materials;
     std::vector<BatchJob> jobs;
 
@@ -60,7 +60,7 @@ struct PlanOptions {
     std::map<std::string, std::map<std::string, std::string>> methodOptions;
     double holdoutFraction = 0.1;
     long long errorTexels = -1;
-    std::string storage = "float", decode = "linear";
+    std::string storage = "float", decode = "auto";
 };
 
 /** Every measured BTF below `folder`: UBO2014 .btf files, UBO2003/ATRIUM zips, and folders that

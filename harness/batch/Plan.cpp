@@ -109,9 +109,7 @@ std::string utcNow() {
 LoadOptions manifestLoadOptions(const std::string& storage, const std::string& decode) {
     LoadOptions load;
     load.storage = storage == "half" ? Storage::Half : Storage::Float;
-    load.curve = decode == "srgb"      ? LoadOptions::DecodeCurve::Srgb
-                 : decode == "gamma22" ? LoadOptions::DecodeCurve::Gamma22
-                                       : LoadOptions::DecodeCurve::Linear;
+    load.curve = decodeCurveFromName(decode);
     return load;
 }
 

@@ -12,24 +12,6 @@
 
 namespace osgBTF {
 
-namespace {
-
-// GL limits every OpenGL 4 implementation offers (and llvmpipe): texture size and array layers.
-
-const char* storageName(MaterialTexture::PixelKind kind) {
-    switch (kind) {
-        case MaterialTexture::UNorm8:
-            return "unorm8";
-        case MaterialTexture::Half:
-            return "half";
-        case MaterialTexture::Float:
-            break;
-    }
-    return "float";
-}
-
-}  // namespace
-
 void PcaMaterial::setShape(int width, int height, const DirectionSet& views,
                            const DirectionSet& lights, int components,
                            MaterialTexture::PixelKind storage) {
@@ -154,8 +136,8 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fromFile(FittedMaterial file) {
             fail(file.source,
                  "texture '" + expected.name + "' must be " + std::to_string(expected.width) + "x" +
                      std::to_string(expected.height) + "x" + std::to_string(expected.depth) +
-                     " RGB " + storageName(expected.kind) + " for " + std::to_string(components) +
-                     " components");
+                     " RGB " + MaterialTexture::kindName(expected.kind) + " for " +
+                     std::to_string(components) + " components");
     };
     check(m->eigenTextures, eigen);
     check(m->weights, w);

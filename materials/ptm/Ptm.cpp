@@ -17,14 +17,6 @@ namespace osgBTF {
 
 // ---- shape and storage -------------------------------------------------------------------------
 
-namespace {
-
-const char* storageName(MaterialTexture::PixelKind kind) {
-    return kind == MaterialTexture::Float ? "float" : "half";
-}
-
-}  // namespace
-
 float PtmMaterial::toStorage(double value, MaterialTexture::PixelKind kind) {
     return kind == MaterialTexture::Float ? float(value) : roundHalf(value);
 }
@@ -212,7 +204,7 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(FittedMaterial file) {
             t.kind != shape.storage)
             fail(file.source, "texture '" + t.name + "' must be " + std::to_string(m->_width) +
                                   "x" + std::to_string(m->_height) + ", " + std::to_string(depth) +
-                                  " layer(s) of RGB " + storageName(shape.storage));
+                                  " layer(s) of RGB " + MaterialTexture::kindName(shape.storage));
         into = StoredValues::take(t, shape.storage);
         if (!into.allFinite())
             fail(file.source, "texture '" + t.name + "' holds non-finite values");

@@ -16,7 +16,7 @@ namespace osgBTF::tool {
 struct CommonOptions {
     std::string memoryLimit;
     std::string storage = "float";
-    std::string decode = "linear";
+    std::string decode = "auto";
     LoadOptions loadOptions() const;
 };
 

@@ -271,7 +271,11 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
     };
     auto options = std::make_shared<Options>();
     std::string& input = options->input;
-    command->add_option("FILE", input, "UBO2003/ATRIUM zip or folder, or UBO2014 .btf")->required();
+    command
+        ->add_option("FILE", input,
+                     "UBO2003/ATRIUM zip or folder, UBO2014 .btf, or an RTI set (.lp file, or a "
+                     "folder or zip with one)")
+        ->required();
     command->add_flag("--json", options->json, "Print JSON instead of text");
     command->add_flag("--stats", options->stats,
                       "UBO2014 files: also the value range and NaN/Inf count of every decoded "
@@ -297,6 +301,7 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
             {"storage", btf.storage() == Storage::Float ? "float" : "half"},
             {"memory_bytes", btf.memoryBytes()},
             {"raw_8bit_bytes", raw8bit},
+            {"decoded", btf.decoding},
         };
         s.toJson(out);
         if (options->json) {
@@ -317,6 +322,9 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
                   << "storage:  " << out["storage"].get<std::string>() << ", "
                   << formatBytes(btf.memoryBytes()) << " in memory (" << formatBytes(raw8bit)
                   << " as 8-bit RGB)\n";
+        if (!btf.decoding.empty())
+            std::cout << "decoded:  " << btf.decoding
+                      << " (8/16-bit image values to radiance; --decode to choose)\n";
         printStats(out);
     };
 }

@@ -20,9 +20,7 @@ namespace osgBTF::tool {
 LoadOptions CommonOptions::loadOptions() const {
     LoadOptions options;
     options.storage = storage == "half" ? Storage::Half : Storage::Float;
-    options.curve = decode == "srgb"      ? LoadOptions::DecodeCurve::Srgb
-                    : decode == "gamma22" ? LoadOptions::DecodeCurve::Gamma22
-                                          : LoadOptions::DecodeCurve::Linear;
+    options.curve = decodeCurveFromName(decode);
     return options;
 }
 
@@ -32,9 +30,10 @@ void addLoadOptions(CLI::App& command, CommonOptions& common) {
         ->capture_default_str();
     command
         .add_option("--decode", common.decode,
-                    "Decode curve for 8/16-bit images: linear (the Bonn data are linear per "
-                    "Sattler 2003), srgb or gamma22")
-        ->check(CLI::IsMember({"linear", "srgb", "gamma22"}))
+                    "Decode curve for 8/16-bit images: auto (the format's own: linear for the "
+                    "Bonn data, linear per Sattler 2003; srgb for RTI photos), linear, srgb or "
+                    "gamma22")
+        ->check(CLI::IsMember({"auto", "linear", "srgb", "gamma22"}))
         ->capture_default_str();
 }
 
