@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iostream>
 #include <map>
@@ -90,8 +91,12 @@ TEST(DirectionSet, FileAndStringRoundTrip) {
     EXPECT_EQ(back.name(), "ubo2014");
 }
 
-TEST(DirectionInterpolation, TooFewDirectionsIsAnError) {
-    EXPECT_THROW(DirectionInterpolator(DirectionSet("two", {{0, 0}, {30, 0}})), Error);
+TEST(DirectionInterpolation, AnEmptySetIsAnErrorAndTwoDirectionsAChainOfOneSegment) {
+    EXPECT_THROW(DirectionInterpolator(DirectionSet("none", {})), Error);
+    const DirectionInterpolator two(DirectionSet("two", {{0, 0}, {30, 0}}));
+    EXPECT_TRUE(two.triangles().empty());
+    ASSERT_EQ(two.hullEdges().size(), 1u);
+    EXPECT_EQ(two.hullEdges()[0], (std::array<int, 2>{0, 1}));
 }
 
 TEST(DirectionInterpolation, TriangulationHasEulerTriangleCount) {
