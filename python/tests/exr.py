@@ -55,7 +55,7 @@ def read_exr(path):
         end = chlist.index(b"\0", p)
         name = chlist[p:end].decode()
         p = end + 1
-        pixel_type, _, _, _, xs, ys = struct.unpack_from("<iBBBBii", chlist, p)
+        pixel_type, _, xs, ys = struct.unpack_from("<iB3xii", chlist, p)
         p += 16
         if xs != 1 or ys != 1:
             raise ValueError("subsampled channels are not read here")

@@ -22,7 +22,7 @@ def test_methods_are_the_registry_with_its_option_tables(btf_tool):
     pca = {o["name"]: o for o in methods["pca"]["options"]}
     assert pca["components"]["type"] == "integer"
     assert pca["components"]["min"] == 1 and pca["components"]["max"] is None
-    assert pca["storage"]["choices"] == ["unorm8", "half"]
+    assert pca["storage"]["choices"] == ["unorm8", "half", "float"]
     # The same table `btf fit --help` prints: every method, every option line.
     help_text = run_btf(btf_tool, "fit", "--help")
     for method in methods.values():
