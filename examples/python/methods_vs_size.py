@@ -39,8 +39,12 @@ def main():
               f"error {error['average']:.4f}  GPU-CPU {gpu_cpu:.2g}")
         material.save(os.path.join(args.out, f"sample-{method}.btfmat"))
 
-    figure, (plot, *panels) = plt.subplots(1, 1 + len(renders), figsize=(4 + 2.2 * len(renders), 3.6),
-                                           gridspec_kw={"width_ratios": [2.2] + [1] * len(renders)})
+    measured = btf.image(int(np.argmin(np.linalg.norm(btf.views - direction(*view), axis=1))),
+                         int(np.argmin(np.linalg.norm(btf.lights - direction(*light), axis=1))))
+    renders.insert(0, ("measured", measured))
+    figure, (plot, *panels) = plt.subplots(
+        1, 1 + len(renders), figsize=(4 + 2.2 * len(renders), 3.6),
+        gridspec_kw={"width_ratios": [2.2] + [1] * len(renders)})
     for method, size, error in rows:
         plot.scatter(size, error)
         plot.annotate(method, (size, error), textcoords="offset points", xytext=(5, 5))
@@ -48,14 +52,12 @@ def main():
     plot.set_xlabel("bytes per texel")
     plot.set_ylabel("average per-texel error")
     plot.set_title("error against size")
-    measured = btf.image(int(np.argmin(np.linalg.norm(btf.views - direction(*view), axis=1))),
-                         int(np.argmin(np.linalg.norm(btf.lights - direction(*light), axis=1))))
     for panel, (method, image) in zip(panels, renders):
         panel.imshow(np.clip(image, 0, 1) ** (1 / 2.2), interpolation="nearest")
-        panel.set_title(f"{method} (GPU)")
+        panel.set_title(method if method == "measured" else f"{method} (GPU)")
         panel.axis("off")
-    figure.suptitle(f"the built-in sample, {args.size}x{args.size}; view {view}, light {light}; "
-                    f"measured range {measured.min():.2f}..{measured.max():.2f}", fontsize=9)
+    figure.suptitle(f"the built-in sample, {args.size}x{args.size} texels; view {view}, light "
+                    f"{light} (theta, phi in degrees); images gamma 2.2", fontsize=9)
     figure.tight_layout()
     picture = os.path.join(args.out, "methods-vs-size.png")
     figure.savefig(picture, dpi=100)
