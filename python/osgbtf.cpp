@@ -29,6 +29,7 @@
 #include "core/ErrorMetrics.h"
 #include "core/FloatImage.h"
 #include "core/MeasuredBtf.h"
+#include "core/MipPyramid.h"
 #include "core/Progress.h"
 #include "harness/Compare.h"
 #include "harness/FitRunner.h"
@@ -366,6 +367,14 @@ struct Rows {
     }
 };
 
+/** The texels of the material's images: its size, or its base level's when mip-mapped (its
+ *  texels are then an atlas of every level). */
+std::pair<int, int> baseSize(const Material& material) {
+    if (material.mipLayout().mipMapped())
+        return {material.mipLayout().baseWidth(), material.mipLayout().baseHeight()};
+    return {material.width(), material.height()};
+}
+
 /** Material::evaluate for N queries: texel under uv (nearest, wrapped; v from the bottom as OSG
  *  texture coordinates), or with filter="bilinear" evaluateFiltered at level 0. */
 py::array_t<float> evaluate(const PyMaterial& m, const py::handle& uv, const py::handle& views,
@@ -387,7 +396,7 @@ py::array_t<float> evaluate(const PyMaterial& m, const py::handle& uv, const py:
     py::array_t<float> out({py::ssize_t(n), py::ssize_t(3)});
     float* o = out.mutable_data();
     const bool bilinear = filter == "bilinear";
-    const int w = material.width(), h = material.height();
+    const auto [w, h] = baseSize(material);
     {
         py::gil_scoped_release release;
         for (std::size_t i = 0; i < n; ++i) {
@@ -617,8 +626,11 @@ PYBIND11_MODULE(osgbtf, m) {
     py::class_<PyMaterial>(m, "Material",
                            "A fitted material: any method's, fitted here or opened from a file.")
         .def_property_readonly("method", [](const PyMaterial& p) { return p.get().methodName(); })
-        .def_property_readonly("width", [](const PyMaterial& p) { return p.get().width(); })
-        .def_property_readonly("height", [](const PyMaterial& p) { return p.get().height(); })
+        .def_property_readonly(
+            "width", [](const PyMaterial& p) { return baseSize(p.get()).first; },
+            "Texels across (of the base level for a mip-mapped material)")
+        .def_property_readonly("height",
+                               [](const PyMaterial& p) { return baseSize(p.get()).second; })
         .def_property_readonly(
             "options", &materialOptions,
             "The method's options as the fit used them (every option, defaults included), for "
@@ -691,8 +703,8 @@ PYBIND11_MODULE(osgbtf, m) {
             "Saves the fitted-material file (.btfmat or .exr, multi-part OpenEXR), atomically")
         .def("__repr__", [](const PyMaterial& p) {
             std::ostringstream text;
-            text << "<osgbtf.Material " << p.get().methodName() << ", " << p.get().width() << "x"
-                 << p.get().height() << ", " << p.get().memory().bytesPerTexel
+            text << "<osgbtf.Material " << p.get().methodName() << ", " << baseSize(p.get()).first
+                 << "x" << baseSize(p.get()).second << ", " << p.get().memory().bytesPerTexel
                  << " bytes per texel>";
             return text.str();
         });
@@ -750,8 +762,12 @@ PYBIND11_MODULE(osgbtf, m) {
     m.def(
         "error",
         [](const PyBtf& btf, const PyMaterial& m, long long errorTexels) {
-            const BtfSource& source = *btf.source;
             const Material& material = m.get();
+            // A mip-mapped material is scored against every level's data, as `btf fit` does.
+            std::unique_ptr<MipAtlasSource> atlas;
+            if (material.mipLayout().mipMapped())
+                atlas = std::make_unique<MipAtlasSource>(*btf.source);
+            const BtfSource& source = atlas ? *atlas : *btf.source;
             if (material.width() != source.width() || material.height() != source.height() ||
                 !(material.views() == source.views()) || !(material.lights() == source.lights()))
                 throw py::value_error("the material is not of this BTF's size and directions");

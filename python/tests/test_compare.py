@@ -45,3 +45,16 @@ def test_a_model_written_in_python_is_scored_like_a_method(sample_btf):
     assert osgbtf.error_of(sample_btf, constant)["average"] > theirs["average"]
     with pytest.raises(ValueError, match="must return an"):
         osgbtf.error_of(sample_btf, lambda uv, v, l: np.zeros(3))
+
+
+def test_compare_writes_the_btf_compare_report_when_asked(sample_zip, tmp_path):
+    btf = osgbtf.load(sample_zip)
+    report = tmp_path / "report"
+    rows = osgbtf.compare(btf, methods=["pca"], holdout_fraction=0,
+                          options={"pca": {"components": 2}}, report=str(report))
+    assert [r["method"] for r in rows] == ["lambert", "pca"]
+    assert math.isnan(rows[1]["held_out_average"])
+    text = (report / "report.md").read_text()
+    assert "pca" in text and (report / "results.csv").exists()
+    with pytest.raises(ValueError, match="report needs a BTF loaded from a file"):
+        osgbtf.compare(osgbtf.sample(4), methods=["pca"], report=str(tmp_path / "r2"))

@@ -7,11 +7,6 @@ from conftest import SIZE, run_btf
 from exr import read_rgb
 
 
-def direction(theta, phi):
-    t, p = np.radians(theta), np.radians(phi)
-    return np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], dtype=np.float32)
-
-
 def texel_centres(width, height):
     """uv of every texel centre, in the order of an image with rows top-down."""
     x = (np.arange(width) + 0.5) / width
@@ -99,3 +94,15 @@ def test_render_equals_btf_eval(pca, data_dir, btf_tool):
     assert difference < 2e-3
     cpu = pca.image((30, 0), (45, 90))
     assert np.abs(image - cpu).max() == pytest.approx(difference, abs=1e-7)
+
+
+def test_a_mip_mapped_material_evaluates_its_base_level(sample_btf):
+    m = osgbtf.fit(sample_btf, "pca", components=4, mipmap=True)
+    assert m.mip_levels == 5  # 16, 8, 4, 2, 1
+    assert (m.width, m.height) == (SIZE, SIZE)
+    v, l = sample_btf.views[12], sample_btf.lights[50]
+    image = m.image(v, l)
+    assert image.shape == (SIZE, SIZE, 3)
+    assert np.array_equal(m.evaluate(texel_centres(SIZE, SIZE), v, l).reshape(image.shape), image)
+    # Scored against every level's data, as `btf fit --mipmap` scores it.
+    assert osgbtf.error(sample_btf, m)["texels"] > SIZE * SIZE
