@@ -12,18 +12,18 @@
 
 namespace osgBTF {
 
-/** Thrown by Progress::advance() once a stop was requested (Progress::requestStop, or an observer
- *  that returned false): the long work unwinds with it, like with any other Error. */
-class Cancelled : public Error {
-public:
-    Cancelled() : Error("cancelled") {}
-};
-
 /** Thread-safe: advance() may be called from TBB workers. Draws at most ~10 times a second, only
  *  when enabled (the tools enable it when stderr is a terminal or --progress is given; tests and
  *  libraries leave it off so their output stays clean). */
 class Progress {
 public:
+    /** Thrown by advance() once a stop was requested (requestStop, or an observer that returned
+     *  false): the long work unwinds with it, like with any other Error. */
+    class Cancelled : public Error {
+    public:
+        Cancelled() : Error("cancelled") {}
+    };
+
     Progress(std::string label, std::size_t total);
     ~Progress();
     Progress(const Progress&) = delete;

@@ -171,8 +171,9 @@ struct FitState {
 };
 
 /** For one fit (or comparison): the observer that calls the Python callback (from any worker,
- *  taking the GIL) and a SIGINT handler (main thread only) that asks the work to stop; both
- *  undone by the destructor. Fits run one at a time: the observer and the stop are process-wide. */
+ *  taking the GIL) and a SIGINT handler (main thread only) that asks the work to stop, both
+ *  installed for each run() only. Runs are one at a time: the observer and the stop are
+ *  process-wide. */
 class FitScope {
 public:
     explicit FitScope(py::object callback) : _state(std::make_shared<FitState>()) {
@@ -185,7 +186,7 @@ public:
     auto run(Work&& work) -> decltype(work()) {
         static std::mutex fitMutex;
         std::optional<decltype(work())> result;
-        bool cancelled = false;
+        bool stopped = false;
         {
             py::gil_scoped_release release;
             std::lock_guard<std::mutex> lock(fitMutex);
@@ -215,32 +216,32 @@ public:
                     }
                     return !state->callbackStopped;
                 });
+            std::exception_ptr failure;
             try {
                 result.emplace(work());
-            } catch (const Cancelled&) {
-                cancelled = true;
             } catch (...) {
-                Progress::setObserver(nullptr);
-                if (_mainThread) sigaction(SIGINT, &previous, nullptr);
-                Progress::clearStop();
-                throw;
+                failure = std::current_exception();
             }
+            // Asked to stop: whatever the work threw on its way out (Progress::Cancelled, or an
+            // error a method made of it) is the stop.
+            stopped = Progress::stopRequested();
             Progress::setObserver(nullptr);
             if (_mainThread) sigaction(SIGINT, &previous, nullptr);
             Progress::clearStop();
+            if (failure && !stopped) std::rethrow_exception(failure);
         }
         if (g_interrupted) {
             // Ctrl-C during the work (also when it finished before noticing).
             PyErr_SetNone(PyExc_KeyboardInterrupt);
             throw py::error_already_set();
         }
-        if (cancelled) {
+        if (stopped) {
             if (_state->exception) {
                 PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(_state->exception.ptr())),
                                 _state->exception.ptr());
                 throw py::error_already_set();
             }
-            PyErr_SetString(PyExc_KeyboardInterrupt, "the progress callback stopped the fit");
+            PyErr_SetString(PyExc_KeyboardInterrupt, "the progress callback stopped the work");
             throw py::error_already_set();
         }
         return std::move(*result);
@@ -434,6 +435,47 @@ HeadlessRenderer& renderer() {
     return *g_renderer;
 }
 
+/** The patch drawn into a w x h image (not one pixel per texel): the material's StateSet on
+ *  harness/MaterialImage.h's rectified patch, texture coordinates 0..1 across the image, so the
+ *  texels are filtered (and mip levels picked) by the shader. Rows top-down. */
+FloatImage renderPatch(HeadlessRenderer& renderer, const Material& material, int w, int h,
+                       const glm::vec3& view, const glm::vec3& light) {
+    osg::ref_ptr<osg::StateSet> lighting = new osg::StateSet;
+    addRectifiedLighting(*lighting, view, light);
+    osg::ref_ptr<osg::Geode> patch = rectifiedPatch();
+    patch->setStateSet(lighting.get());
+    osg::ref_ptr<osg::Group> root = new osg::Group;
+    root->setStateSet(material.createStateSet().get());
+    root->addChild(patch.get());
+    const osg::ref_ptr<osg::Image> image = renderer.render(root.get(), orthoUnitSquare(w, h));
+    FloatImage out(w, h, 3);
+    out.channelNames = {"R", "G", "B"};
+    const float* rgba = reinterpret_cast<const float*>(image->data());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                out.at(x, h - 1 - y, c) = rgba[(std::size_t(y) * std::size_t(w) + x) * 4 + c];
+    return out;
+}
+
+/** Its CPU reference: evaluateFiltered at each pixel centre, at the level of detail the pixel's
+ *  footprint gives (log2 of texels per pixel, the larger of the two axes, as GL picks it). */
+FloatImage evaluatePatch(const Material& material, int w, int h, const glm::vec3& view,
+                         const glm::vec3& light) {
+    FloatImage out(w, h, 3);
+    out.channelNames = {"R", "G", "B"};
+    if (light.z <= 0.0f || view.z <= 0.0f) return out;  // as the shader
+    const auto [bw, bh] = baseSize(material);
+    const float lod = std::log2(std::max(float(bw) / float(w), float(bh) / float(h)));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const glm::vec3 value = material.evaluateFiltered(
+                (float(x) + 0.5f) / float(w), (float(y) + 0.5f) / float(h), lod, view, light);
+            for (int c = 0; c < 3; ++c) out.at(x, h - 1 - y, c) = value[c];
+        }
+    return out;
+}
+
 // ---- comparison --------------------------------------------------------------------------------
 
 /** The btf executable for `btf compare`'s child fits: beside the module in the build tree
@@ -468,7 +510,7 @@ PYBIND11_MODULE(osgbtf, m) {
     py::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p) std::rethrow_exception(p);
-        } catch (const Cancelled& e) {
+        } catch (const Progress::Cancelled& e) {
             PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
         } catch (const Error& e) {
             PyErr_SetString(error.ptr(), e.what());
@@ -539,6 +581,12 @@ PYBIND11_MODULE(osgbtf, m) {
         "or text like '512M') sets the process-wide limit every allocation of measured data is "
         "checked against, like `btf --memory-limit`. decode: linear, srgb or gamma22 for 8/16-bit "
         "images; storage: float or half.");
+
+    m.def(
+        "memory_limit", []() { return memoryLimit(); },
+        "The process-wide memory limit in bytes that allocations of measured data are checked "
+        "against (3/4 of physical memory unless OSGBTF_MEMORY_LIMIT or load(memory_limit=) set "
+        "it).");
 
     m.def(
         "sample",
@@ -677,22 +725,45 @@ PYBIND11_MODULE(osgbtf, m) {
             "or (x, y, z) vectors.")
         .def(
             "render",
-            [](const PyMaterial& p, const py::object& view, const py::object& light) {
+            [](const PyMaterial& p, const py::object& view, const py::object& light,
+               const py::object& size) {
                 const glm::vec3 v = directionFrom(view, "view"), l = directionFrom(light, "light");
+                int w = 0, h = 0;
+                if (!size.is_none()) {
+                    if (py::isinstance<py::int_>(size)) {
+                        w = h = size.cast<int>();
+                    } else {
+                        const auto wh = size.cast<std::pair<int, int>>();
+                        w = wh.first;
+                        h = wh.second;
+                    }
+                    if (w < 1 || h < 1 || w > 8192 || h > 8192)
+                        throw py::value_error("size must be in 1..8192, got " + std::to_string(w) +
+                                              "x" + std::to_string(h));
+                }
                 FloatImage gpu, cpu;
                 {
                     py::gil_scoped_release release;
                     std::lock_guard<std::mutex> lock(g_rendererMutex);
-                    gpu = renderMaterialImage(renderer(), p.get(), v, l);
-                    cpu = evaluateMaterialImage(p.get(), v, l);
+                    if (size.is_none()) {
+                        gpu = renderMaterialImage(renderer(), p.get(), v, l);
+                        cpu = evaluateMaterialImage(p.get(), v, l);
+                    } else {
+                        gpu = renderPatch(renderer(), p.get(), w, h, v, l);
+                        cpu = evaluatePatch(p.get(), w, h, v, l);
+                    }
                 }
                 const double difference = maxAbsDifference(gpu, cpu);
                 return py::make_tuple(imageArray(std::move(gpu)), difference);
             },
-            py::arg("view"), py::arg("light"),
+            py::arg("view"), py::arg("light"), py::arg("size") = py::none(),
             "The image of (view, light) through the GPU path (the method's shader, headless "
             "OpenGL: EGL, as `btf eval`): returns (image, difference), the (height, width, 3) "
-            "float32 image, rows top-down, and its largest difference to the CPU image.")
+            "float32 image, rows top-down, and its largest difference to the CPU reference. "
+            "size None: one pixel per texel, `btf eval`'s image; size N or (w, h): the patch "
+            "drawn into that many pixels, the shader filtering the texels (bilinear, mip levels "
+            "of a mip-mapped material), against evaluate(filter='bilinear') at the level the "
+            "footprint gives.")
         .def(
             "save",
             [](const PyMaterial& p, const std::string& path) {

@@ -111,8 +111,11 @@ class Material:
         """(N, 2) uv, (N, 3) view and light unit vectors (or one row each) -> (N, 3)."""
     def image(self, view: Direction, light: Direction) -> FloatArray:
         """CPU image, (height, width, 3), rows top-down: what `btf eval --cpu` writes."""
-    def render(self, view: Direction, light: Direction) -> Tuple[FloatArray, float]:
-        """GPU image through the method's shader (headless EGL) and its largest GPU-CPU difference."""
+    def render(
+        self, view: Direction, light: Direction, size: Union[None, int, Tuple[int, int]] = None
+    ) -> Tuple[FloatArray, float]:
+        """GPU image through the method's shader (headless EGL) and its largest GPU-CPU
+        difference; size None: one pixel per texel (`btf eval`), else that many pixels."""
     def save(self, path: Union[str, PathLike[str]]) -> None: ...
 
 def load(
@@ -121,6 +124,7 @@ def load(
     decode: str = "linear",
     storage: str = "float",
 ) -> Btf: ...
+def memory_limit() -> int: ...
 def sample(
     size: int = 64,
     variation: float = 0.0,

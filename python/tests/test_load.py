@@ -73,6 +73,7 @@ def test_bad_input_raises_with_the_one_line_message(tmp_path):
 
 def test_ubo2014_is_decoded_on_demand_within_a_small_memory_limit(ubo2014_file, sample_btf):
     before = osgbtf.load(ubo2014_file)  # default limit
+    default_limit = osgbtf.memory_limit()
     limit = 2 * 1024 * 1024
     try:
         btf = osgbtf.load(ubo2014_file, memory_limit=limit)
@@ -91,8 +92,10 @@ def test_ubo2014_is_decoded_on_demand_within_a_small_memory_limit(ubo2014_file, 
         # All texels at once would pass the limit: refused before allocating.
         with pytest.raises(osgbtf.Error, match="memory limit"):
             btf.texels(0, 0, SIZE, SIZE)
+        assert osgbtf.memory_limit() == limit
     finally:
-        osgbtf.load(ubo2014_file, memory_limit="48G")
+        osgbtf.load(ubo2014_file, memory_limit=default_limit)
+    assert osgbtf.memory_limit() == default_limit
 
 
 def rss_bytes():

@@ -106,3 +106,19 @@ def test_a_mip_mapped_material_evaluates_its_base_level(sample_btf):
     assert np.array_equal(m.evaluate(texel_centres(SIZE, SIZE), v, l).reshape(image.shape), image)
     # Scored against every level's data, as `btf fit --mipmap` scores it.
     assert osgbtf.error(sample_btf, m)["texels"] > SIZE * SIZE
+
+
+def test_render_at_another_size_filters_like_the_cpu_reference(pca, sample_btf):
+    v, l = sample_btf.view_angles[5], sample_btf.light_angles[30]
+    image, difference = pca.render(v, l)
+    # The patch drawn into as many pixels as texels is btf eval's image.
+    same, _ = pca.render(v, l, size=SIZE)
+    assert np.array_equal(same, image)
+    big, difference = pca.render(v, l, size=(3 * SIZE, 2 * SIZE))
+    assert big.shape == (2 * SIZE, 3 * SIZE, 3)
+    # Magnified: the hardware's bilinear filter against evaluateFiltered (GL's filter weights
+    # have a few bits less than float).
+    assert difference < 0.01
+    assert np.abs(big).max() > 0.05
+    with pytest.raises(ValueError, match="size must be"):
+        pca.render(v, l, size=0)
