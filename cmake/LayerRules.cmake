@@ -2,7 +2,7 @@
 # includes a higher one: the runtime libosgBTF (core, loaders, materials, scene) must build and
 # ship without harness/ (libosgBTFHarness), and the plugins load only the runtime.
 #   core <- loaders, materials, synthesis; materials <- streaming (BSVTF);
-#   all of those <- scene <- harness <- tools, examples; scene <- plugins
+#   all of those <- scene <- harness <- tools, examples, python (the Python module); scene <- plugins
 # tests/, fuzz/ and bench/ may include everything below them (fuzz/ holds the fuzz targets'
 # bodies, which the regression test in tests/ calls, and their seed generator). Used by
 # cmake/CheckLayers.cmake (the layers.include_graph test) and tested on fake trees by
@@ -16,13 +16,14 @@ set(OSGBTF_LAYER_ALLOWED_streaming core materials streaming)
 set(OSGBTF_LAYER_ALLOWED_scene core loaders materials synthesis streaming scene)
 set(OSGBTF_LAYER_ALLOWED_harness core loaders materials synthesis streaming scene harness)
 set(OSGBTF_LAYER_ALLOWED_tools core loaders materials synthesis streaming scene harness tools)
+set(OSGBTF_LAYER_ALLOWED_python core loaders materials synthesis streaming scene harness python)
 set(OSGBTF_LAYER_ALLOWED_examples core loaders materials synthesis streaming scene harness examples)
 set(OSGBTF_LAYER_ALLOWED_plugins core loaders materials synthesis streaming scene plugins)
 set(OSGBTF_LAYER_ALLOWED_fuzz core loaders materials synthesis streaming scene harness plugins fuzz)
 set(OSGBTF_LAYER_ALLOWED_tests core loaders materials synthesis streaming scene harness plugins fuzz tests)
 set(OSGBTF_LAYER_ALLOWED_bench core loaders materials synthesis streaming scene harness bench)
-set(OSGBTF_LAYERS core loaders materials synthesis streaming scene harness tools examples plugins fuzz tests
-                  bench)
+set(OSGBTF_LAYERS core loaders materials synthesis streaming scene harness tools python examples plugins
+                  fuzz tests bench)
 
 # Sets OUT_VAR to one message per include of a layer the including file's layer may not use:
 #   <file>: includes "<path>", but <layer>/ may include only <allowed>/

@@ -3,7 +3,8 @@
 # libosgBTF, libosgBTFFit, libosgBTFStreaming and libosgBTFEnvironment in /usr/lib/<multiarch>,
 # the plugins in /usr/lib/<multiarch>/osgPlugins-<OSG version> (where Debian's OSG looks first,
 # so stock osgviewer needs no OSG_LIBRARY_PATH), the tools in /usr/bin, the SDK (headers, CMake
-# package, pkg-config files). Library dependencies come from dpkg-shlibdeps (package dpkg-dev);
+# package, pkg-config files), and the Python module osgbtf in /usr/lib/python3/dist-packages when
+# it is built. Library dependencies come from dpkg-shlibdeps (package dpkg-dev);
 # the -dev packages the SDK's headers need are recommended.
 # cpack installs from this build: it builds nothing that is not built already.
 set(CPACK_PACKAGE_NAME osgbtf)
@@ -28,6 +29,10 @@ set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${CMAKE_INSTALL_LIBDIR})
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
     "libopenscenegraph-dev, libglm-dev, libimath-dev, libeigen3-dev, openscenegraph")
+if(OSGBTF_PYTHON)
+  # The Python module (python/, in /usr/lib/python3/dist-packages) returns numpy arrays.
+  string(APPEND CPACK_DEBIAN_PACKAGE_RECOMMENDS ", python3, python3-numpy")
+endif()
 set(CPACK_GENERATOR DEB)
 set(CPACK_SOURCE_GENERATOR TGZ)
 # The .deb must follow Debian's layout; a build for another prefix would put the library in

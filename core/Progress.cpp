@@ -1,11 +1,45 @@
 #include "core/Progress.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <memory>
 
 namespace osgBTF {
 
 namespace {
 std::atomic<bool> g_enabled{false};
+std::atomic<bool> g_stop{false};
+// Set rarely (a program installs one observer); read under the mutex as a shared copy, so that
+// an observer replaced while a worker calls it stays alive until that call returns.
+std::mutex g_observerMutex;
+std::shared_ptr<const Progress::Observer> g_observer;
+std::atomic<bool> g_hasObserver{false};
+
+std::shared_ptr<const Progress::Observer> currentObserver() {
+    if (!g_hasObserver.load(std::memory_order_relaxed)) return nullptr;
+    std::lock_guard<std::mutex> lock(g_observerMutex);
+    return g_observer;
+}
+}  // namespace
+
+void Progress::setObserver(Observer observer) {
+    std::lock_guard<std::mutex> lock(g_observerMutex);
+    g_observer = observer ? std::make_shared<const Observer>(std::move(observer)) : nullptr;
+    g_hasObserver = g_observer != nullptr;
+}
+void Progress::requestStop() {
+    g_stop = true;
+}
+bool Progress::stopRequested() {
+    return g_stop;
+}
+void Progress::clearStop() {
+    g_stop = false;
+}
+
+void Progress::notify(std::size_t done) {
+    if (const auto observer = currentObserver())
+        if (!(*observer)(_label, std::min(done, _total), _total)) g_stop = true;
 }
 
 void Progress::setEnabled(bool enabled) {
@@ -27,13 +61,16 @@ double Progress::elapsedSeconds() const {
 }
 
 void Progress::advance(std::size_t n) {
-    _done += n;
-    if (!g_enabled) return;
+    const std::size_t done = _done += n;
+    if (g_stop.load(std::memory_order_relaxed)) throw Cancelled();
+    if (!g_enabled && !g_hasObserver.load(std::memory_order_relaxed)) return;
     const auto now = std::chrono::steady_clock::now();
     std::unique_lock<std::mutex> lock(_drawMutex, std::try_to_lock);
     if (!lock.owns_lock() || now - _lastDraw < std::chrono::milliseconds(100)) return;
     _lastDraw = now;
-    draw(false);
+    if (g_enabled) draw(false);
+    notify(done);
+    if (g_stop.load(std::memory_order_relaxed)) throw Cancelled();
 }
 
 void Progress::finish() {
@@ -41,6 +78,12 @@ void Progress::finish() {
     if (_finished) return;
     _finished = true;
     if (g_enabled) draw(true);
+    // Told the total, never asked to stop: finish() also runs from the destructor.
+    if (g_stop) return;
+    try {
+        if (const auto observer = currentObserver()) (*observer)(_label, _total, _total);
+    } catch (...) {
+    }
 }
 
 void Progress::draw(bool final) {

@@ -16,6 +16,7 @@ PACKAGES=(
   zlib1g-dev libcurl4-openssl-dev nginx-light  # BSVTF: tile codec, HTTP streaming, serve-tiles.sh
   libgtest-dev libgmock-dev libcli11-dev nlohmann-json3-dev
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev  # headless OpenGL (llvmpipe)
+  pybind11-dev python3-dev python3-numpy   # the Python module osgbtf (python/)
 )
 # Only the tests need these (about half of what a fresh machine downloads: clang and Chromium are
 # the big ones); OSGBTF_TEST_PACKAGES=0 leaves them out (tools/run-sample.sh does).
@@ -25,6 +26,7 @@ TEST_PACKAGES=(
   slurm-wlm munge             # a real single-node Slurm for `btf batch run --slurm` (tests/slurm/)
   dpkg-dev file               # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
   clang libclang-rt-14-dev    # CI's sanitizer build and the fuzz targets (libFuzzer, ASan, UBSan)
+  python3-pytest python3-matplotlib  # the osgbtf module's tests (python.pytest), its examples
 )
 if [ "${OSGBTF_TEST_PACKAGES:-1}" != 0 ]; then PACKAGES+=("${TEST_PACKAGES[@]}"); fi
 SUDO=""
