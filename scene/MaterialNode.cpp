@@ -856,13 +856,11 @@ void MaterialNode::traverse(osg::NodeVisitor& nv) {
         if (material) {
             if (auto* compile = dynamic_cast<osgUtil::GLObjectsVisitor*>(&nv)) {
                 compile->apply(*material);
-                compile->apply(*depthPassStateSet());
                 compile->apply(*_nodeStateSet);
                 if (_terminatorStateSet) compile->apply(*_terminatorStateSet);
                 if (_mapStateSet) compile->apply(*_mapStateSet);
             } else if (auto* collect = dynamic_cast<osgUtil::StateToCompile*>(&nv)) {
                 collect->apply(*material);
-                collect->apply(*depthPassStateSet());
                 collect->apply(*_nodeStateSet);
                 if (_terminatorStateSet) collect->apply(*_terminatorStateSet);
                 if (_mapStateSet) collect->apply(*_mapStateSet);
