@@ -11,6 +11,7 @@
 #include <glm/geometric.hpp>
 #include <osg/Image>
 #include <osgDB/ReadFile>
+#include <osgDB/WriteFile>
 
 #include "core/Error.h"
 #include "loaders/LoadBtf.h"
