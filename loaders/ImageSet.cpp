@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -37,6 +38,11 @@ bool isJunk(const std::string& memberPath) {
 }
 
 }  // namespace
+
+std::string asciiLower(std::string text) {
+    for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return text;
+}
 
 std::string imageSetBasename(const std::string& entryPath) {
     const auto slash = entryPath.find_last_of("/\\");

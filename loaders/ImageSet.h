@@ -50,6 +50,9 @@ private:
     std::unique_ptr<Impl> _impl;
 };
 
+/** `text` with ASCII letters in lower case (file names and extensions). */
+std::string asciiLower(std::string text);
+
 /** The file name of an entry path ('/' or '\\' separated). */
 std::string imageSetBasename(const std::string& entryPath);
 

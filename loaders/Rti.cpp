@@ -21,11 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string asciiLower(std::string text) {
-    for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return text;
-}
-
 bool endsWithLp(const std::string& name) {
     return name.size() > 3 && asciiLower(name.substr(name.size() - 3)) == ".lp";
 }

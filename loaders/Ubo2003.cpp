@@ -34,11 +34,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string lower(std::string text) {
-    for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return text;
-}
-
 /** A name that carries the direction tokens but not in the accepted form, e.g. a ".txt" or a
  *  "_small.jpg" variant: silently skipping it could hide a damaged archive, so it is an error. */
 bool looksLikeBtfName(const std::string& basename) {
@@ -76,7 +71,7 @@ bool parseUbo2003Name(const std::string& memberPath, Ubo2003Name& name) {
     const std::string base = imageSetBasename(memberPath);
     std::smatch m;
     if (!std::regex_match(base, m, pattern)) return false;
-    const std::string ext = lower(m[6].str());
+    const std::string ext = asciiLower(m[6].str());
     if (ext != "jpg" && ext != "jpeg" && ext != "png" && ext != "hdr" && ext != "exr") return false;
     name.index = m[1].matched ? std::stoi(m[1].str()) : -1;
     name.lightTheta = std::stoi(m[2].str());

@@ -315,6 +315,19 @@ void recordOptions(Material& material, const MethodInfo& method, const FitOption
     }
 }
 
+/** An ErrorSummary as error() and error_of() return it. */
+py::dict errorDict(const ErrorSummary& e) {
+    py::dict out;
+    out["average"] = e.average;
+    out["minimum"] = e.minimum;
+    out["maximum"] = e.maximum;
+    out["rmse"] = e.rmse;
+    out["psnr"] = e.psnr;
+    out["texels"] = e.texelsCompared;
+    out["non_finite"] = e.nonFiniteValues;
+    return out;
+}
+
 py::dict materialOptions(const PyMaterial& m) {
     py::dict out;
     for (const auto& [key, value] : m.get().fitInfo)
@@ -853,15 +866,7 @@ PYBIND11_MODULE(osgbtf, m) {
                     [&](std::size_t texel, float* out) { material.evaluateMeasured(texel, out); },
                     subsample.empty() ? nullptr : &subsample);
             }
-            py::dict out;
-            out["average"] = e.average;
-            out["minimum"] = e.minimum;
-            out["maximum"] = e.maximum;
-            out["rmse"] = e.rmse;
-            out["psnr"] = e.psnr;
-            out["texels"] = e.texelsCompared;
-            out["non_finite"] = e.nonFiniteValues;
-            return out;
+            return errorDict(e);
         },
         py::arg("btf"), py::arg("material"), py::arg("error_texels") = -1,
         "Meseth et al. 2003's per-texel error of a material against measured data (what `btf "
@@ -941,15 +946,7 @@ PYBIND11_MODULE(osgbtf, m) {
                     },
                     subsample.empty() ? nullptr : &subsample);
             }
-            py::dict out;
-            out["average"] = e.average;
-            out["minimum"] = e.minimum;
-            out["maximum"] = e.maximum;
-            out["rmse"] = e.rmse;
-            out["psnr"] = e.psnr;
-            out["texels"] = e.texelsCompared;
-            out["non_finite"] = e.nonFiniteValues;
-            return out;
+            return errorDict(e);
         },
         py::arg("btf"), py::arg("model"), py::arg("error_texels") = -1,
         py::arg("batch_texels") = 64,

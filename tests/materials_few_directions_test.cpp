@@ -20,6 +20,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MethodRegistry.h"
+#include "tests/FewDirectionCases.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {
@@ -28,34 +29,7 @@ using namespace osgBTF;
 
 namespace {
 
-struct DirectionCase {
-    std::string name;
-    DirectionSet views, lights;
-};
-
-/** 24 lights from a spiral with uneven steps, none on the Bonn grid (a handheld RTI capture). */
-DirectionSet irregularLights() {
-    std::vector<Direction> lights;
-    for (int i = 0; i < 24; ++i)
-        lights.push_back({5.0f + 70.0f * float(i) / 23.0f,
-                          std::fmod(137.5f * float(i) + 3.0f * float(i * i), 360.0f)});
-    return DirectionSet("spiral24", lights);
-}
-
-std::vector<DirectionCase> directionCases() {
-    return {
-        {"oneView", DirectionSet("front", {{0, 0}}), DirectionSet::bonn81()},
-        {"twoViews", DirectionSet("two", {{0, 0}, {45, 90}}), DirectionSet::bonn81()},
-        {"viewsOnOneAzimuth", DirectionSet("azimuth0", {{0, 0}, {30, 0}, {60, 0}}),
-         DirectionSet::bonn81()},
-        {"irregularViews",
-         DirectionSet("five", {{5, 10}, {25, 80}, {40, 200}, {55, 300}, {70, 140}}),
-         DirectionSet::bonn81()},
-        {"oneViewIrregularLights", DirectionSet("front", {{0, 0}}), irregularLights()},
-    };
-}
-
-MeasuredBtf sampleWith(const DirectionCase& directions) {
+MeasuredBtf sampleWith(const test::DirectionCase& directions) {
     SampleOptions options;
     options.width = options.height = 4;
     options.views = directions.views;
@@ -81,8 +55,6 @@ double constantModelError(const MeasuredBtf& btf) {
                         })
         .average;
 }
-
-using Param = std::tuple<std::string, int>;
 
 }  // namespace
 
@@ -123,11 +95,12 @@ TEST(FewDirections, OneDirectionIsConstantAndTwoBlendAlongTheirSegment) {
               "direction set 'twice': duplicate direction at index 1");
 }
 
-class FewDirections : public ::testing::TestWithParam<Param> {};
+class FewDirections : public ::testing::TestWithParam<test::MethodAndDirections> {};
 
 TEST_P(FewDirections, EveryMethodFitsEvaluatesFiniteAndBeatsTheMeanColour) {
     const std::string method = std::get<0>(GetParam());
-    const DirectionCase directions = directionCases()[std::size_t(std::get<1>(GetParam()))];
+    const test::DirectionCase directions =
+        test::directionCases()[std::size_t(std::get<1>(GetParam()))];
     const MeasuredBtf btf = sampleWith(directions);
     const MethodInfo& info = findMethod(method);
     osg::ref_ptr<Material> material = info.fit(btf, FitOptions::parse(info.quickFitOptions));
@@ -156,7 +129,8 @@ TEST_P(FewDirections, EveryMethodFitsEvaluatesFiniteAndBeatsTheMeanColour) {
 TEST(FewDirections, OneMeasuredViewIsTheValueForEveryViewOfTheInterpolatingMethods) {
     // The methods whose view dependence is the measured views' data blended by
     // DirectionInterpolator: with one view, every view gets that view's data, weight exactly 1.
-    for (const DirectionCase& directions : {directionCases()[0], directionCases()[4]})
+    for (const test::DirectionCase& directions :
+         {test::directionCases()[0], test::directionCases()[4]})
         for (const std::string method : {"pca", "lpca", "fmf", "ptm"}) {
             const MethodInfo& info = findMethod(method);
             const std::string options =
@@ -177,14 +151,8 @@ TEST(FewDirections, OneMeasuredViewIsTheValueForEveryViewOfTheInterpolatingMetho
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, FewDirections,
                          ::testing::Combine(::testing::ValuesIn(methodNames()),
-                                            ::testing::Range(0, 5)),
-                         [](const ::testing::TestParamInfo<Param>& info) {
-                             std::string name =
-                                 std::get<0>(info.param) + "_" +
-                                 directionCases()[std::size_t(std::get<1>(info.param))].name;
-                             for (char& c : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                             return name;
-                         });
+                                            ::testing::Range(0,
+                                                             int(test::directionCases().size()))),
+                         test::methodAndDirectionsName);
 
 }  // namespace OSGBTF_TEST_FILE

@@ -1,8 +1,8 @@
 // Issue 49: GPU == CPU for every method fitted on the direction sets of real captures: one view
-// (an RTI capture), two views, a few irregular views, one view under irregular lights. The shader
-// reads the same interpolation table as the CPU reference (a chain of segments where a set has
-// no triangle), so each render is held to the method's usual GPU-CPU bound, at a measured view
-// and at one between the measured views.
+// (an RTI capture), two views, a few irregular views, one view under irregular lights, three views
+// on one azimuth. The shader reads the same interpolation table as the CPU reference (a chain of
+// segments where a set has no triangle), so each render is held to the method's usual GPU-CPU
+// bound, at a measured view and at one between the measured views.
 #include <cctype>
 #include <string>
 #include <tuple>
@@ -15,6 +15,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MethodRegistry.h"
+#include "tests/FewDirectionCases.h"
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
@@ -22,37 +23,12 @@ namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
-namespace {
-
-struct DirectionCase {
-    std::string name;
-    DirectionSet views, lights;
-};
-
-std::vector<DirectionCase> directionCases() {
-    std::vector<Direction> spiral;
-    for (int i = 0; i < 24; ++i)
-        spiral.push_back({5.0f + 70.0f * float(i) / 23.0f, float((137 * i + 3 * i * i) % 360)});
-    return {
-        {"oneView", DirectionSet("front", {{0, 0}}), DirectionSet::bonn81()},
-        {"twoViews", DirectionSet("two", {{0, 0}, {45, 90}}), DirectionSet::bonn81()},
-        {"irregularViews",
-         DirectionSet("five", {{5, 10}, {25, 80}, {40, 200}, {55, 300}, {70, 140}}),
-         DirectionSet::bonn81()},
-        {"oneViewIrregularLights", DirectionSet("front", {{0, 0}}),
-         DirectionSet("spiral24", spiral)},
-    };
-}
-
-using Param = std::tuple<std::string, int>;
-
-}  // namespace
-
-class FewDirectionsGpu : public ::testing::TestWithParam<Param> {};
+class FewDirectionsGpu : public ::testing::TestWithParam<test::MethodAndDirections> {};
 
 TEST_P(FewDirectionsGpu, GpuEqualsCpuAtAMeasuredViewAndBetweenViews) {
     const std::string method = std::get<0>(GetParam());
-    const DirectionCase directions = directionCases()[std::size_t(std::get<1>(GetParam()))];
+    const test::DirectionCase directions =
+        test::directionCases()[std::size_t(std::get<1>(GetParam()))];
     SampleOptions sample;
     sample.width = sample.height = 4;
     sample.views = directions.views;
@@ -72,14 +48,8 @@ TEST_P(FewDirectionsGpu, GpuEqualsCpuAtAMeasuredViewAndBetweenViews) {
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, FewDirectionsGpu,
                          ::testing::Combine(::testing::ValuesIn(methodNames()),
-                                            ::testing::Range(0, 4)),
-                         [](const ::testing::TestParamInfo<Param>& info) {
-                             std::string name =
-                                 std::get<0>(info.param) + "_" +
-                                 directionCases()[std::size_t(std::get<1>(info.param))].name;
-                             for (char& c : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                             return name;
-                         });
+                                            ::testing::Range(0,
+                                                             int(test::directionCases().size()))),
+                         test::methodAndDirectionsName);
 
 }  // namespace OSGBTF_TEST_FILE
