@@ -81,9 +81,33 @@ bool labelColumns(FloatImage& image, const std::vector<std::string>& labels, int
     return drawn;
 }
 
+/** Runs (or reuses) one `btf fit` child; false when it failed. */
+bool fitOrReuse(const CompareOptions& options, const fs::path& work, FitJob& job,
+                const std::string& file, FitProcessResult& result) {
+    const std::string stem = file.substr(0, file.rfind('.'));
+    job.output = (work / file).string();
+    job.log = (work / (stem + ".log")).string();
+    const fs::path previous = fs::path(options.outputDir) / file;
+    if (options.reuseFits && canReuseFit(job, previous.string(), result)) {
+        fs::copy_file(previous, job.output);
+        // Same fit, same age: a later run still sees it as newer than INPUT.
+        fs::last_write_time(job.output, fs::last_write_time(previous));
+        fs::copy_file(previous.string() + ".json", job.output + ".json");
+        std::error_code ec;  // the log is nice to have
+        fs::copy_file(fs::path(options.outputDir) / (stem + ".log"), job.log, ec);
+    } else {
+        result = runFitProcess(job);
+        if (result.ok) writeFitRecord(job, result, job.output + ".json");
+    }
+    return result.ok;
+}
+
 void fitStage(const CompareOptions& options, const fs::path& work, CompareResult& result) {
     const std::string tool = options.fitTool.empty() ? defaultFitTool() : options.fitTool;
-    Progress progress("fitting (child processes)", result.methods.size());
+    const bool heldOut = result.holdoutFraction > 0;
+    Progress progress(heldOut ? "fitting, and fitting without the held-out pairs (child processes)"
+                              : "fitting (child processes)",
+                      result.methods.size() * (heldOut ? 2 : 1));
     for (MethodResult& m : result.methods) {
         FitJob job;
         job.tool = tool;
@@ -93,23 +117,19 @@ void fitStage(const CompareOptions& options, const fs::path& work, CompareResult
         job.extraArguments = options.fitExtraArguments;
         job.globalArguments = options.fitGlobalArguments;
         m.fittedFile = "fits/" + m.method + ".exr";
-        job.output = (work / m.fittedFile).string();
-        job.log = (work / ("fits/" + m.method + ".log")).string();
-        const fs::path previous = fs::path(options.outputDir) / m.fittedFile;
-        if (options.reuseFits && canReuseFit(job, previous.string(), m.fit)) {
-            fs::copy_file(previous, job.output);
-            // Same fit, same age: a later run still sees it as newer than INPUT.
-            fs::last_write_time(job.output, fs::last_write_time(previous));
-            fs::copy_file(previous.string() + ".json", job.output + ".json");
-            std::error_code ec;  // the log is nice to have
-            fs::copy_file(fs::path(options.outputDir) / ("fits/" + m.method + ".log"), job.log, ec);
-        } else {
-            m.fit = runFitProcess(job);
-            if (m.fit.ok) writeFitRecord(job, m.fit, job.output + ".json");
-        }
-        if (!m.fit.ok) {
+        if (!fitOrReuse(options, work, job, m.fittedFile, m.fit)) {
             m.failed = true;
             m.failure = "failed: " + m.fit.message;
+        }
+        progress.advance();
+        if (!heldOut) continue;
+        if (!m.failed) {
+            job.extraArguments.insert(
+                job.extraArguments.end(),
+                {"--holdout-fraction", formatNumber(result.holdoutFraction, 6)});
+            m.heldOutFile = "fits/" + m.method + "-heldout.exr";
+            if (!fitOrReuse(options, work, job, m.heldOutFile, m.heldOutFit))
+                m.heldOutFailure = "failed: " + m.heldOutFit.message;
         }
         progress.advance();
     }
@@ -121,6 +141,10 @@ void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& resul
     // The same texels for every method, so that their errors compare.
     std::vector<std::size_t> subsample;
     if (result.errorTexels < btf.texelCount()) subsample = randomTexels(btf, result.errorTexels);
+    const batch::HoldoutSplit split =
+        result.holdoutFraction > 0
+            ? batch::holdoutSplit(btf.viewCount(), btf.lightCount(), result.holdoutFraction)
+            : batch::HoldoutSplit();
     materials.assign(result.methods.size(), nullptr);
     for (std::size_t i = 0; i < result.methods.size(); ++i) {
         MethodResult& m = result.methods[i];
@@ -143,6 +167,19 @@ void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& resul
             } catch (const std::exception& e) {
                 m.failed = true;
                 m.failure = std::string("failed: ") + e.what();
+            }
+        }
+        if (!m.failed && m.heldOutScored()) {
+            try {
+                const osg::ref_ptr<Material> without =
+                    loadMaterial((work / m.heldOutFile).string());
+                m.heldOut =
+                    scoreHeldOut(btf, *without, split, subsample.empty() ? nullptr : &subsample);
+                const auto seconds = without->fitInfo.find("seconds");
+                if (seconds != without->fitInfo.end())
+                    m.heldOutFitSeconds = std::stod(seconds->second);
+            } catch (const std::exception& e) {
+                m.heldOutFailure = std::string("failed: ") + e.what();
             }
         }
         progress.advance();
@@ -447,6 +484,23 @@ CompareResult runCompare(const CompareOptions& options) {
     result.maxMsPerPass = options.maxMsPerPass;
     result.spotCheckPairs = spotPairs(btf);
     result.errorTexels = errorTexelCount(btf, options.errorTexels);
+    if (options.holdoutFraction > 0) {
+        try {
+            const batch::HoldoutSplit split =
+                batch::holdoutSplit(btf.viewCount(), btf.lightCount(), options.holdoutFraction);
+            result.holdoutFraction = options.holdoutFraction;
+            result.holdoutNote = std::to_string(split.leftOutPairs.size()) + " of " +
+                                 std::to_string(btf.imageCount()) + " (view, light) pairs: " +
+                                 std::to_string(btf.viewCount() - split.keptViews.size()) + " of " +
+                                 std::to_string(btf.viewCount()) + " views and " +
+                                 std::to_string(btf.lightCount() - split.keptLights.size()) +
+                                 " of " + std::to_string(btf.lightCount()) + " lights left out";
+        } catch (const Error& e) {
+            result.holdoutNote = std::string("no held-out fits: ") + e.what();
+        }
+    } else {
+        result.holdoutNote = "no held-out fits (--holdout-fraction 0)";
+    }
     result.labelsDrawn = true;  // until a label fails to draw
     for (const std::string& name : methods) {
         MethodResult m;

@@ -13,6 +13,7 @@
 
 #include "core/ErrorMetrics.h"
 #include "harness/FitRunner.h"
+#include "harness/HeldOut.h"
 #include "harness/PassCost.h"
 #include "harness/ShaderCost.h"
 #include "loaders/LoadOptions.h"
@@ -49,6 +50,10 @@ struct CompareOptions {
     /** Texels the error tables compare (a random subsample, all pairs each); 0 = all; -1 = all
      *  for data in memory, 4096 for a UBO2014 file (decoded per block, never whole). */
     long long errorTexels = -1;
+    /** Each method is fitted a second time without this fraction of the (view, light) pairs
+     *  (whole directions: harness/batch/Holdout.h) and scored on them: error, PSNR and SSIM
+     *  (harness/HeldOut.h), the RTI field's figures. 0: no held-out fits. */
+    double holdoutFraction = 0.1;
 };
 
 struct MethodResult {
@@ -64,6 +69,14 @@ struct MethodResult {
     double compressionRatio = 0;  ///< raw bytes per texel / bytes per texel
     ShaderCost cost;
     double gpuCpuMaxDifference = -1;  ///< -1: not checked
+    /** The held-out fit (CompareOptions::holdoutFraction) and its scores; heldOutFile empty: none
+     *  was made; heldOutFailure set: it or its scoring failed (the method's row stands). */
+    std::string heldOutFile;
+    FitProcessResult heldOutFit;
+    double heldOutFitSeconds = -1;
+    std::string heldOutFailure;
+    HeldOutScores heldOut;
+    bool heldOutScored() const { return !heldOutFile.empty() && heldOutFailure.empty(); }
     /** One per pass target (CompareResult::calibrations' order); empty: not measured. */
     std::vector<MethodPass> passes;
     /** The pass in the first target (what the time budget reads), null when not measured. */
@@ -85,6 +98,8 @@ struct CompareResult {
     std::uint64_t rawTotalBytes = 0;
     /** Texels the errors are computed on: width x height, or a random subsample's size. */
     std::size_t errorTexels = 0;
+    double holdoutFraction = 0;
+    std::string holdoutNote;            ///< the split (or why there is none)
     std::vector<MethodResult> methods;  ///< the baseline first
     // GPU part
     bool gpuRan = false;

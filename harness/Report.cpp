@@ -107,6 +107,27 @@ std::string reportMarkdown(const CompareResult& r) {
            << (m.gpuCpuMaxDifference >= 0 ? general(m.gpuCpuMaxDifference, 3) : "n/a") << " |\n";
     }
 
+    md << "\n### Held-out directions\n\n"
+       << "Each method fitted again without some of the measured directions (" << r.holdoutNote
+       << "; whole directions, the split of `btf batch`) and scored on the pairs left out: the "
+          "per-texel error, RMSE and PSNR as above, and the SSIM (Wang et al. 2004: 11 x 11 "
+          "Gaussian window, sigma 1.5, K1 0.01, K2 0.03, range 1) of up to 8 whole left-out "
+          "images, the figures RTI papers report for relighting.\n\n";
+    if (r.holdoutFraction > 0) {
+        md << "| method | held-out avg | RMSE | PSNR dB | SSIM | images | fit s |\n"
+           << "|---|---|---|---|---|---|---|\n";
+        for (const MethodResult& m : r.methods) {
+            md << "| " << m.method << " | ";
+            if (m.failed || !m.heldOutFailure.empty()) {
+                md << cell(m.failed ? m.failure : m.heldOutFailure) << " | | | | | |\n";
+                continue;
+            }
+            md << fixed(m.heldOut.error.average, 5) << " | " << fixed(m.heldOut.error.rmse, 5)
+               << " | " << fixed(m.heldOut.error.psnr, 2) << " | " << fixed(m.heldOut.ssim, 4)
+               << " | " << m.heldOut.imagesScored << " | "
+               << (m.heldOutFitSeconds >= 0 ? fixed(m.heldOutFitSeconds, 2) : "") << " |\n";
+        }
+    }
     md << "\n## Table 2: memory\n\n"
        << "Storage as Meseth et al. 2003, Table 2, counts it (Material::memory(): per-texel arrays "
           "fully, "
@@ -255,7 +276,9 @@ std::string resultsCsv(const CompareResult& r) {
            "shared_bytes,compression_ratio,alu_fixed,tex_fixed,alu_per_light,tex_per_light,alu_"
            "total,"
            "tex_total,pass_clock,"
-        << passColumns << "fit_seconds,fit_process_seconds,peak_rss_bytes,reused,fitted_file\n";
+        << passColumns
+        << "fit_seconds,fit_process_seconds,peak_rss_bytes,reused,fitted_file,heldout_avg,"
+           "heldout_rmse,heldout_psnr_db,heldout_ssim\n";
     for (const MethodResult& m : r.methods) {
         csv << csvField(m.method) << "," << (m.failed ? "failed" : "ok") << ","
             << csvField(m.failed ? m.failure : "") << "," << csvField(optionText(m)) << ",";
@@ -263,7 +286,7 @@ std::string resultsCsv(const CompareResult& r) {
             // Empty measures (error_avg .. fit_seconds), then what the failed child reported.
             csv << std::string(20 + 5 * r.pass.targets.size(), ',')
                 << (m.fit.ok ? "" : full(m.fit.wallSeconds)) << ","
-                << (m.fit.ok ? "" : std::to_string(m.fit.peakRssBytes)) << ",,\n";
+                << (m.fit.ok ? "" : std::to_string(m.fit.peakRssBytes)) << ",,,,,,\n";
             continue;
         }
         const auto optional = [](double v) { return v >= 0 ? full(v) : std::string(); };
@@ -294,7 +317,12 @@ std::string resultsCsv(const CompareResult& r) {
                 << ",";
         }
         csv << optional(m.fitSeconds) << "," << full(m.fit.wallSeconds) << "," << m.fit.peakRssBytes
-            << "," << (m.fit.reused ? "yes" : "no") << "," << csvField(m.fittedFile) << "\n";
+            << "," << (m.fit.reused ? "yes" : "no") << "," << csvField(m.fittedFile);
+        if (m.heldOutScored())
+            csv << "," << full(m.heldOut.error.average) << "," << full(m.heldOut.error.rmse) << ","
+                << full(m.heldOut.error.psnr) << "," << full(m.heldOut.ssim) << "\n";
+        else
+            csv << ",,,,\n";
     }
     return csv.str();
 }
@@ -309,6 +337,7 @@ std::string resultsJson(const CompareResult& r) {
                   {"error_texels", r.errorTexels},
                   {"raw_bytes_per_texel", r.rawBytesPerTexel},
                   {"raw_total_bytes", r.rawTotalBytes}};
+    j["held_out"] = {{"fraction", r.holdoutFraction}, {"note", r.holdoutNote}};
     j["gpu"] = {{"ran", r.gpuRan},
                 {"note", r.gpuNote},
                 {"renderer", r.glRenderer},
@@ -347,6 +376,17 @@ std::string resultsJson(const CompareResult& r) {
                     {"reused", m.fit.reused}};
         if (!m.failed) {
             e["fitted_file"] = m.fittedFile;
+            if (m.heldOutScored())
+                e["held_out"] = {{"fitted_file", m.heldOutFile},
+                                 {"average", number(m.heldOut.error.average)},
+                                 {"rmse", number(m.heldOut.error.rmse)},
+                                 {"psnr_db", number(m.heldOut.error.psnr)},
+                                 {"ssim", number(m.heldOut.ssim)},
+                                 {"pairs", m.heldOut.pairs},
+                                 {"images_scored", m.heldOut.imagesScored},
+                                 {"fit_seconds", number(m.heldOutFitSeconds)}};
+            else if (!m.heldOutFailure.empty())
+                e["held_out"] = {{"failure", m.heldOutFailure}};
             e["fit"]["seconds"] = number(m.fitSeconds);
             e["error"] = {{"average", number(m.error.average)},
                           {"minimum", number(m.error.minimum)},

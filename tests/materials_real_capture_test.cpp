@@ -2,7 +2,8 @@
 // tests/data/rti-icon-64 (MIT, see its LICENSE; 1 view, 72 irregular lights), a 16 x 16 crop of
 // it. Each method fits it with its quick options and beats the mean colour on it; fitted on 63
 // of the lights, its error on the 9 left out is finite (and printed); ptm reaches the linear
-// least-squares optimum, computed here with a QR decomposition instead of the method's SVD.
+// least-squares optimum, and so does hsh at every order, computed here with a QR decomposition
+// instead of the methods' SVD.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,6 +21,7 @@
 #include "loaders/LoadBtf.h"
 #include "materials/Material.h"
 #include "materials/MethodRegistry.h"
+#include "tests/HshReference.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {
@@ -115,44 +117,78 @@ INSTANTIATE_TEST_SUITE_P(EveryMethod, RealCapture, ::testing::ValuesIn(methodNam
                              return name;
                          });
 
-TEST(RealCapture, PtmReachesTheLinearLeastSquaresOptimum) {
-    // Per texel and channel, the six polynomial coefficients that minimise the squared error over
-    // the 72 lights (Malzbender et al. 2001), by QR here. ptm (rgb, float storage) may only do as
-    // well or better (its clamp at 0 can only lower an error).
+namespace {
+
+/** A linear method (float storage) fitted to the whole crop reaches the least-squares optimum of
+ *  its basis, computed here by QR on the design `basis` builds per light; it may only do as well
+ *  or better (its clamp at 0 can only lower an error). Returns (fitted, optimum) squared errors. */
+std::pair<double, double> expectLeastSquaresOptimum(
+    const std::string& method, const std::string& options, int terms,
+    const std::function<Eigen::RowVectorXd(const glm::vec3&)>& basis) {
     const MeasuredBtf btf = cropOfCapture([](std::size_t) { return true; });
-    const MethodInfo& info = findMethod("ptm");
-    osg::ref_ptr<Material> ptm = info.fit(btf, FitOptions::parse("colour=rgb storage=float"));
+    osg::ref_ptr<Material> fitted = findMethod(method).fit(btf, FitOptions::parse(options));
     const std::size_t lights = btf.lightCount();
-    Eigen::MatrixXd design(lights, 6);
-    for (std::size_t l = 0; l < lights; ++l) {
-        const glm::vec3 d = btf.lights().vector(l);
-        design.row(Eigen::Index(l)) << d.x * d.x, d.y * d.y, d.x * d.y, d.x, d.y, 1.0;
-    }
+    Eigen::MatrixXd design(lights, terms);
+    for (std::size_t l = 0; l < lights; ++l)
+        design.row(Eigen::Index(l)) = basis(btf.lights().vector(l));
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
     std::vector<float> model(lights * 3);
     double worstExcess = 0, optimumSum = 0, modelSum = 0;
     for (std::size_t t = 0; t < btf.texelCount(); ++t) {
-        ptm->evaluateMeasured(t, model.data());
+        fitted->evaluateMeasured(t, model.data());
         for (int c = 0; c < 3; ++c) {
             Eigen::VectorXd values(lights);
             for (std::size_t l = 0; l < lights; ++l)
                 values[Eigen::Index(l)] = btf.value(0, l, t, c);
             const double optimum = (design * qr.solve(values) - values).squaredNorm();
-            double fitted = 0;
+            double error = 0;
             for (std::size_t l = 0; l < lights; ++l) {
                 const double d = model[l * 3 + c] - values[Eigen::Index(l)];
-                fitted += d * d;
+                error += d * d;
             }
             optimumSum += optimum;
-            modelSum += fitted;
-            worstExcess = std::max(worstExcess, fitted - optimum);
+            modelSum += error;
+            worstExcess = std::max(worstExcess, error - optimum);
         }
     }
-    std::cout << "ptm on the icon crop: squared error " << modelSum << ", least-squares optimum "
-              << optimumSum << "\n";
+    std::cout << method << " [" << options << "] on the icon crop: squared error " << modelSum
+              << ", least-squares optimum " << optimumSum << "\n";
     // Float rounding of 72-term sums of values up to 1: far below 1e-6 per texel and channel.
-    EXPECT_LE(worstExcess, 1e-6);
-    EXPECT_GT(optimumSum, 0.0);  // the polynomial does not fit the photos exactly
+    EXPECT_LE(worstExcess, 1e-6) << method << " " << options;
+    EXPECT_GT(optimumSum, 0.0) << method;  // the model does not fit the photos exactly
+    return {modelSum, optimumSum};
+}
+
+}  // namespace
+
+TEST(RealCapture, PtmReachesTheLinearLeastSquaresOptimum) {
+    // The six polynomial coefficients of Malzbender et al. 2001 per texel and channel.
+    expectLeastSquaresOptimum("ptm", "colour=rgb storage=float", 6, [](const glm::vec3& d) {
+        Eigen::RowVectorXd row(6);
+        row << d.x * d.x, d.y * d.y, d.x * d.y, d.x, d.y, 1.0;
+        return row;
+    });
+}
+
+TEST(RealCapture, HshReachesTheLinearLeastSquaresOptimumAtEveryOrder) {
+    // The harmonics of the RTI tools (tests/HshReference.h), 4, 9 and 16 per channel: each order
+    // fits at least as well as the one below (nested bases).
+    double previous = 1e300;
+    for (int order = 2; order <= 4; ++order) {
+        const int terms = order * order;
+        const double optimum =
+            expectLeastSquaresOptimum("hsh", "storage=float order=" + std::to_string(order), terms,
+                                      [terms](const glm::vec3& d) {
+                                          const auto h = test::hshTrigonometricForm(d);
+                                          Eigen::RowVectorXd row(terms);
+                                          for (int k = 0; k < terms; ++k)
+                                              row(k) = h[std::size_t(k)];
+                                          return row;
+                                      })
+                .second;
+        EXPECT_LT(optimum, previous) << "order " << order;
+        previous = optimum;
+    }
 }
 
 }  // namespace OSGBTF_TEST_FILE

@@ -97,6 +97,7 @@ struct JobResult {
     double average = 0, rmse = 0, psnr = 0;  ///< on every measured pair of the error texels
     /** On the held-out pairs, by the fit without them; NaN: no held-out fit. */
     double heldOutAverage = 0, heldOutRmse = 0, heldOutPsnr = 0;
+    double heldOutSsim = 0;  ///< mean SSIM of up to 8 whole held-out images (harness/HeldOut.h)
     std::size_t heldOutPairs = 0, errorTexels = 0;
     double bytesPerTexel = 0, compressionRatio = 0;
     double fitSeconds = 0, heldOutFitSeconds = 0, wallSeconds = 0;

@@ -17,6 +17,7 @@
 #include "core/ErrorMetrics.h"
 #include "core/FittedMaterialFile.h"
 #include "core/FloatImage.h"
+#include "harness/HeldOut.h"
 #include "harness/batch/BatchFiles.h"
 #include "harness/batch/Holdout.h"
 #include "loaders/LoadBtf.h"
@@ -76,6 +77,7 @@ nlohmann::json jobResultToJson(const JobResult& r) {
             {"heldout_avg", finiteOrNull(r.heldOutAverage)},
             {"heldout_rmse", finiteOrNull(r.heldOutRmse)},
             {"heldout_psnr", finiteOrNull(r.heldOutPsnr)},
+            {"heldout_ssim", finiteOrNull(r.heldOutSsim)},
             {"heldout_pairs", r.heldOutPairs},
             {"error_texels", r.errorTexels},
             {"bytes_per_texel", finiteOrNull(r.bytesPerTexel)},
@@ -101,6 +103,7 @@ JobResult jobResultFromJson(const nlohmann::json& json) {
     r.heldOutAverage = numberFrom(json, "heldout_avg");
     r.heldOutRmse = numberFrom(json, "heldout_rmse");
     r.heldOutPsnr = numberFrom(json, "heldout_psnr");
+    r.heldOutSsim = numberFrom(json, "heldout_ssim");
     r.heldOutPairs = json.value("heldout_pairs", std::size_t(0));
     r.errorTexels = json.value("error_texels", std::size_t(0));
     r.bytesPerTexel = numberFrom(json, "bytes_per_texel");
@@ -143,7 +146,7 @@ JobResult runJob(const Manifest& manifest, const std::string& resultsDir, const 
     result.id = id;
     result.host = hostName();
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    result.heldOutAverage = result.heldOutRmse = result.heldOutPsnr = nan;
+    result.heldOutAverage = result.heldOutRmse = result.heldOutPsnr = result.heldOutSsim = nan;
     result.heldOutFitSeconds = nan;
     try {
         const LoadOptions load = manifestLoadOptions(manifest.storage, manifest.decode);
@@ -183,26 +186,12 @@ JobResult runJob(const Manifest& manifest, const std::string& resultsDir, const 
             const auto heldOutStart = std::chrono::steady_clock::now();
             const osg::ref_ptr<Material> withoutThem = method.fit(kept, options);
             result.heldOutFitSeconds = secondsSince(heldOutStart);
-            const std::size_t lights = source->lightCount();
-            const ErrorSummary heldOut = computeError(
-                *source,
-                [&](std::size_t t, float* out) {
-                    const int x = int(t % std::size_t(source->width()));
-                    const int y = int(t / std::size_t(source->width()));
-                    for (const std::size_t p : split.leftOutPairs) {
-                        const glm::vec3 value =
-                            withoutThem->evaluate(x, y, source->views().vector(p / lights),
-                                                  source->lights().vector(p % lights));
-                        out[p * 3] = value.r;
-                        out[p * 3 + 1] = value.g;
-                        out[p * 3 + 2] = value.b;
-                    }
-                },
-                texels, &split.leftOutPairs);
-            result.heldOutAverage = heldOut.average;
-            result.heldOutRmse = heldOut.rmse;
-            result.heldOutPsnr = heldOut.psnr;
-            result.heldOutPairs = split.leftOutPairs.size();
+            const HeldOutScores heldOut = scoreHeldOut(*source, *withoutThem, split, texels);
+            result.heldOutAverage = heldOut.error.average;
+            result.heldOutRmse = heldOut.error.rmse;
+            result.heldOutPsnr = heldOut.error.psnr;
+            result.heldOutSsim = heldOut.ssim;
+            result.heldOutPairs = heldOut.pairs;
         }
         result.state = JobState::Done;
     } catch (const std::exception& e) {

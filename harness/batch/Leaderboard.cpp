@@ -165,7 +165,8 @@ std::string writeReport(const Manifest& manifest, const std::string& resultsDir)
         "RMSE over every channel value, PSNR with peak 1. Held-out: the same on the pairs left "
         "out of a second fit (a fraction " +
         cell(manifest.holdoutFraction, 3) +
-        " of them, whole directions), evaluated between the directions that fit kept. Bytes "
+        " of them, whole directions), evaluated between the directions that fit kept, and the "
+        "SSIM (Wang et al. 2004) of up to 8 whole held-out images. Bytes "
         "per texel as stored for rendering; compression against 8-bit RGB per measured pair.";
     data["materials"] = nlohmann::json::array();
     for (const BatchMaterial& m : manifest.materials)
@@ -197,6 +198,7 @@ std::string writeReport(const Manifest& manifest, const std::string& resultsDir)
              {"heldout_avg", measured(r.heldOutAverage)},
              {"heldout_rmse", measured(r.heldOutRmse)},
              {"heldout_psnr", measured(r.heldOutPsnr)},
+             {"heldout_ssim", measured(r.heldOutSsim)},
              {"bytes_per_texel", measured(r.bytesPerTexel)},
              {"compression_ratio", measured(r.compressionRatio)},
              {"fit_seconds", measured(r.fitSeconds)},
@@ -233,24 +235,27 @@ std::string writeReport(const Manifest& manifest, const std::string& resultsDir)
         md << "| " << c.name << " | " << c.materials << " | "
            << (c.recommended.empty() ? "–" : c.recommended) << " | " << c.reason << " |\n";
     md << "\n## Every job\n\n| material | class | method | options | avg error | RMSE | PSNR dB | "
-          "held-out avg | held-out PSNR dB | bytes/texel | ratio | fit s | job s | peak memory | "
+          "held-out avg | held-out PSNR dB | held-out SSIM | bytes/texel | ratio | fit s | job s | "
+          "peak memory | "
           "estimated | Pareto "
-          "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+          "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& row : rows) {
         const JobResult& r = row.result;
         md << "| " << row.material->name << " | " << row.material->materialClass << " | "
            << row.job->method << " | " << optionsText(row.job->options) << " | ";
         if (!row.done()) {
             md << (r.state == JobState::Failed ? "failed: " + r.failure : std::string("pending"))
-               << " | | | | | | | | | | | " << formatBytes(row.job->estimatedPeakBytes) << " | |\n";
+               << " | | | | | | | | | | | | " << formatBytes(row.job->estimatedPeakBytes)
+               << " | |\n";
             continue;
         }
         md << cell(r.average, 5) << " | " << cell(r.rmse, 5) << " | " << cell(r.psnr, 4) << " | "
            << cell(r.heldOutAverage, 5) << " | " << cell(r.heldOutPsnr, 4) << " | "
-           << cell(r.bytesPerTexel, 5) << " | " << cell(r.compressionRatio, 4) << ":1 | "
-           << cell(r.fitSeconds, 3) << " | " << cell(r.wallSeconds, 3) << " | "
-           << formatBytes(r.peakRssBytes) << " | " << formatBytes(row.job->estimatedPeakBytes)
-           << " | " << (row.pareto ? "yes" : "") << " |\n";
+           << cell(r.heldOutSsim, 4) << " | " << cell(r.bytesPerTexel, 5) << " | "
+           << cell(r.compressionRatio, 4) << ":1 | " << cell(r.fitSeconds, 3) << " | "
+           << cell(r.wallSeconds, 3) << " | " << formatBytes(r.peakRssBytes) << " | "
+           << formatBytes(row.job->estimatedPeakBytes) << " | " << (row.pareto ? "yes" : "")
+           << " |\n";
     }
     if (done)
         md << "\nJob time: " << cell(jobSeconds, 4) << " s in all, "
@@ -260,7 +265,7 @@ std::string writeReport(const Manifest& manifest, const std::string& resultsDir)
     // results.csv
     std::ostringstream csv;
     csv << "job,material,class,method,options,status,failure,avg,rmse,psnr,heldout_avg,"
-           "heldout_rmse,heldout_psnr,heldout_pairs,error_texels,bytes_per_texel,"
+           "heldout_rmse,heldout_psnr,heldout_ssim,heldout_pairs,error_texels,bytes_per_texel,"
            "compression_ratio,fit_seconds,heldout_fit_seconds,wall_seconds,peak_rss_bytes,"
            "estimated_peak_bytes,pareto\n";
     for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -275,6 +280,7 @@ std::string writeReport(const Manifest& manifest, const std::string& resultsDir)
             << (d ? csvNumber(r.rmse) : "") << "," << (d ? csvNumber(r.psnr) : "") << ","
             << (d ? csvNumber(r.heldOutAverage) : "") << "," << (d ? csvNumber(r.heldOutRmse) : "")
             << "," << (d ? csvNumber(r.heldOutPsnr) : "") << ","
+            << (d ? csvNumber(r.heldOutSsim) : "") << ","
             << (d ? std::to_string(r.heldOutPairs) : "") << ","
             << (d ? std::to_string(r.errorTexels) : "") << ","
             << (d ? csvNumber(r.bytesPerTexel) : "") << ","

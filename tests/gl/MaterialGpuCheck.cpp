@@ -14,6 +14,7 @@
 #include "harness/PassCost.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/ShaderInterface.h"
+#include "materials/hsh/Hsh.h"
 #include "materials/ptm/Ptm.h"
 
 #include "tests/gl/GlTestEnv.h"
@@ -309,9 +310,23 @@ double ptmGpuTolerance(const PtmMaterial& m) {
     return 64 * std::ldexp(1.0, -24) * largest;
 }
 
+double hshGpuTolerance(const HshMaterial& m) {
+    // Every harmonic is at most ~1.1 in size over the hemisphere (h12 at the normal); 2 covers it.
+    double largest = 0;
+    for (std::size_t t = 0; t < m.texelCount(); ++t)
+        for (int s = 0; s < m.slots(); ++s)
+            for (int c = 0; c < 3; ++c) {
+                double sum = 0;
+                for (int k = 0; k < m.terms(); ++k) sum += std::abs(m.coefficient(t, s, k, c));
+                largest = std::max(largest, 2 * sum);
+            }
+    return 64 * std::ldexp(1.0, -24) * largest;
+}
+
 double methodGpuBound(const Material& m, const glm::vec3& view, const glm::vec3& light) {
     if (m.methodName() == "lambert") return 1e-5;
     if (const auto* ptm = dynamic_cast<const PtmMaterial*>(&m)) return ptmGpuTolerance(*ptm);
+    if (const auto* hsh = dynamic_cast<const HshMaterial*>(&m)) return hshGpuTolerance(*hsh);
     if (m.methodName() == "fmf") {
         double largest = 1;
         for (int y = 0; y < m.height(); ++y)

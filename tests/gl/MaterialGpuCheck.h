@@ -23,7 +23,8 @@
 
 namespace osgBTF {
 class PtmMaterial;
-}
+class HshMaterial;
+}  // namespace osgBTF
 
 namespace osgBTF::test {
 
@@ -109,10 +110,13 @@ GpuCpuComparison compareProbedWithCpu(const Material& material, const ProbedRend
  *  polynomial, 3 blended views, and the view weights equal to rounding, so a few tens of u times
  *  the largest sum of |terms| (|a_k| times the colour; every monomial is at most 1). */
 double ptmGpuTolerance(const PtmMaterial& material);
+/** The same for an HSH material: the basis's ~45 float operations and up to 16 terms, so 64 u
+ *  times the largest sum of |c_k| times the largest harmonic (about 1.1; 2 is used). */
+double hshGpuTolerance(const HshMaterial& material);
 
 /** The GPU-CPU bound of the methods' own tests (bilinear_filter_test.cpp's) for a render from
- *  `view` lit from `light`: lambert 1e-5, ptm ptmGpuTolerance, fmf 1e-3 of the image's largest
- *  value (at least 1), the others 1e-3. */
+ *  `view` lit from `light`: lambert 1e-5, ptm ptmGpuTolerance, hsh hshGpuTolerance, fmf 1e-3 of the
+ * image's largest value (at least 1), the others 1e-3. */
 double methodGpuBound(const Material& material, const glm::vec3& view, const glm::vec3& light);
 
 /** A rectified render of the unit patch (harness/MaterialImage.h: rectifiedPatch under

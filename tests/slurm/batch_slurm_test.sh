@@ -41,9 +41,9 @@ b() { "$btf" --no-progress "$@"; }
 # Results of one run as "job score..." lines: the columns that must not depend on where it ran.
 scores() {
     b batch report "$1" >/dev/null
-    # job, status, avg, rmse, psnr, heldout_avg, heldout_rmse, heldout_psnr, heldout_pairs,
-    # error_texels, bytes_per_texel, compression_ratio
-    cut -d, -f1,6,8-17 "$1/results.csv" | tail -n +2 | sort
+    # job, status, avg, rmse, psnr, heldout_avg, heldout_rmse, heldout_psnr, heldout_ssim,
+    # heldout_pairs, error_texels, bytes_per_texel, compression_ratio
+    cut -d, -f1,6,8-18 "$1/results.csv" | tail -n +2 | sort
 }
 same_scores() {
     paste -d' ' <(scores "$1" | tr ',' ' ') <(scores "$2" | tr ',' ' ') | awk '

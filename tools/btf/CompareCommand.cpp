@@ -155,6 +155,13 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
                      "pair of each, the same texels for every method); 0 = all. Default: all for "
                      "data in memory, 4096 for a UBO2014 file (decoded block by block)")
         ->check(CLI::NonNegativeNumber);
+    command
+        ->add_option("--holdout-fraction", c.holdoutFraction,
+                     "Fit each method a second time without this fraction of the (view, light) "
+                     "pairs (whole directions) and report its error, PSNR and SSIM on them "
+                     "(0: no held-out fits, half the fitting time)")
+        ->check(CLI::Range(0.0, 0.5))
+        ->capture_default_str();
     command->add_flag("--refit", options->noReuse, "Fit every method again, even when DIR has it");
     command->add_flag("--no-gpu", options->noGpu,
                       "Skip the OpenGL part (GPU spot check, pass times, sphere renders)");

@@ -10,6 +10,7 @@
 #include "core/ErrorMetrics.h"
 #include "core/FloatImage.h"
 #include "core/Progress.h"
+#include "harness/HeldOut.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
 #include "materials/Material.h"
@@ -44,6 +45,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         int lobes = 0, components = 0, clusters = 0;
         long long errorTexels = -1;
         bool mipmap = false, noMipmap = false;
+        double holdout = 0;
     };
     auto options = std::make_shared<Options>();
     command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
@@ -78,6 +80,15 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         ->add_flag("--no-mipmap", options->noMipmap,
                    "Fit the base level alone (a plain material: smaller, aliases when minified)")
         ->excludes(mipmapFlag);
+    command
+        ->add_option("--holdout-fraction", options->holdout,
+                     "Leave this fraction of the (view, light) pairs out of the fit (whole "
+                     "directions, the split of `btf batch`) and report the error, PSNR and SSIM "
+                     "on them too: how the method predicts what it was not fitted on. The "
+                     "material written is the one fitted without them (its base level: no "
+                     "mip-maps)")
+        ->check(CLI::Range(0.0, 0.5))
+        ->excludes(mipmapFlag);
     addLoadOptions(*command, common);
     return [&common, options] {
         const MethodInfo& method = findMethod(options->method);
@@ -100,10 +111,13 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         const bool btfOutput = extension == ".btf";
         // Mip-mapped unless asked otherwise (every method's file grows by at most
         // 1.41x on the built-in sample, tools/README.md), or the format cannot hold the levels.
-        const bool mipmap = options->mipmap || (!options->noMipmap && !btfOutput);
+        const bool holdout = options->holdout > 0;
+        const bool mipmap = options->mipmap || (!options->noMipmap && !btfOutput && !holdout);
         if (btfOutput && options->mipmap)
             fail(options->output,
                  "a UBO2014 .btf file has no mip levels; save a --mipmap fit as .btfmat or .exr");
+        if (btfOutput && holdout)
+            fail(options->output, "a --holdout-fraction fit is saved as .btfmat or .exr");
         if (btfOutput && !method.writesUbo2014)
             fail(options->output,
                  "only method fmf writes a UBO2014 .btf file (its factors are "
@@ -122,8 +136,14 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             openBtfSource(options->input, common.loadOptions());
         const std::unique_ptr<BtfSource> atlas =
             mipmap ? std::make_unique<MipAtlasSource>(*input) : nullptr;
-        // A mip-mapped fit's error is measured against every level's data.
-        const BtfSource& btf = atlas ? *atlas : *input;
+        const batch::HoldoutSplit split =
+            holdout ? batch::holdoutSplit(input->viewCount(), input->lightCount(), options->holdout)
+                    : batch::HoldoutSplit();
+        const std::unique_ptr<BtfSource> kept =
+            holdout ? std::make_unique<batch::DirectionSubsetSource>(*input, split) : nullptr;
+        // A mip-mapped fit's error is measured against every level's data, a held-out fit's
+        // against the directions it kept.
+        const BtfSource& btf = atlas ? *atlas : kept ? *kept : *input;
         const auto loaded = std::chrono::steady_clock::now();
         osg::ref_ptr<Material> material =
             mipmap ? fitMipMapped(method, *input, fit) : method.fit(btf, fit);
@@ -164,6 +184,19 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             std::cout << "error over a random subsample of " << subsample.size() << " of "
                       << btf.texelCount() << " texels (all pairs; --error-texels 0 for all):\n";
         printErrorSummary(error);
+        if (holdout) {
+            // The saved file holds the arrays now: the held-out scores use it, loaded back.
+            const osg::ref_ptr<Material> saved = loadMaterial(options->output);
+            const HeldOutScores h =
+                scoreHeldOut(*input, *saved, split, subsample.empty() ? nullptr : &subsample);
+            std::cout << "held out of the fit: " << h.pairs << " of " << input->imageCount()
+                      << " (view, light) pairs (" << split.keptViews.size() << " of "
+                      << input->viewCount() << " views, " << split.keptLights.size() << " of "
+                      << input->lightCount() << " lights kept); on them:\n";
+            printErrorSummary(h.error);
+            std::cout << std::setprecision(4) << "SSIM " << h.ssim << " (mean of " << h.imagesScored
+                      << " whole images)\n";
+        }
         std::cout << "wrote " << options->output << "\n";
     };
 }
