@@ -235,7 +235,7 @@ TEST(PluginNames, BtfZipsAndExrImagesReadByFileName) {
     const osgDB::ReaderWriter::ReadResult result =
         osgDB::Registry::instance()->readNode(other + ".btfzip", options.get());
     EXPECT_EQ(result.status(), osgDB::ReaderWriter::ReadResult::ERROR_IN_READING_FILE);
-    EXPECT_EQ(result.message().rfind(other + ": not a UBO2003/ATRIUM BTF zip", 0), 0u)
+    EXPECT_EQ(result.message().rfind(other + ": not a measured BTF zip", 0), 0u)
         << result.message();
 }
 

@@ -203,6 +203,37 @@ TEST(ScenePlugins, PseudoLoaderPutsTheModelUnderTheMaterial) {
     EXPECT_EQ(node->getChild(0)->getName(), "the model");
 }
 
+// An RTI capture (tests/data/rti-icon-64: photos and dirs.lp) is measured data wherever a measured
+// BTF goes: as a zip read by its name, and as the material of the pseudo-loader, given as its
+// folder or as its .lp file.
+TEST(ScenePlugins, RtiCapturesAreFittedAsTheyCome) {
+    usePluginsFromBuild();
+    TempDir dir;
+    const std::string capture = std::string(test::sourceDir()) + "/tests/data/rti-icon-64";
+    const std::string zip = dir.file("icon.zip");
+    ASSERT_EQ(test::runCommand("cd " + test::shellQuote(capture) + " && zip -q " +
+                               test::shellQuote(zip) + " dirs.lp *.jpg")
+                  .exitCode,
+              0);
+    osg::ref_ptr<osg::Geode> model = new osg::Geode;
+    ASSERT_TRUE(osgDB::writeNodeFile(*model, dir.file("model.osgt")));
+    for (const std::string& name :
+         {zip, zip + ".btfzip",
+          dir.file("model.osgt") + ".(" + capture + "/dirs.lp,method=hsh,cache=off).btfmaterial",
+          dir.file("model.osgt") + ".(" + capture + ",method=hsh,cache=off).btfmaterial"}) {
+        const osg::ref_ptr<osgDB::Options> options =
+            new osgDB::Options("method=hsh cache=off mipmap=off");
+        const ReadResult result = osgDB::Registry::instance()->readNode(name, options.get());
+        MaterialNode* node = asMaterialNode(result);
+        ASSERT_NE(node, nullptr) << name << ": " << result.message();
+        ASSERT_NE(node->getMaterial(), nullptr) << name;
+        EXPECT_EQ(node->getMaterial()->methodName(), "hsh") << name;
+        EXPECT_EQ(node->getMaterial()->width(), 64) << name;
+        EXPECT_EQ(node->getMaterial()->views().size(), 1u) << name;
+        EXPECT_EQ(node->getMaterial()->lights().size(), 72u) << name;
+    }
+}
+
 TEST(ScenePlugins, MeasuredBtfIsFittedOnceThenReadFromTheCache) {
     TempDir dir;
     const std::string zip = writeSampleZip(dir);

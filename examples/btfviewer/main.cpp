@@ -69,9 +69,11 @@ constexpr const char* kKeyHelp =
     "  , / .            --env: turn the environment -/+ 15 degrees about Z (recomputed in the\n"
     "                   background; the HUD shows the progress)\n"
     "  - / + (=)        --env: exposure / or x sqrt(2) (real time)\n"
+    "  v                RTI mode: tilt the view 0 / 20 / 40 / 60 degrees from the captured one\n"
     "  h                OSG's help overlay;  f  full screen / window;  Space  home view\n"
     "  Esc              quit\n"
-    "Mouse (without Shift): the trackball: left rotates, middle pans, right zooms.\n";
+    "Mouse (without Shift): the trackball: left rotates, middle pans, right zooms. RTI mode\n"
+    "(a capture of one view, or --rti): the view is fixed and the light follows the mouse.\n";
 
 /** Every MaterialNode below a node, in traversal order, each once. */
 class MaterialNodeCollector : public osg::NodeVisitor {
@@ -143,6 +145,43 @@ public:
 
     osg::ref_ptr<osgText::Text> hud;
     osg::ref_ptr<btfviewer::EnvironmentControl> environment;  // --env
+
+    // RTI mode: one flat patch seen as it was captured (straight down onto +Z, image up = +Y),
+    // the light following the mouse as in RTIViewer; 'v' tilts the view about X.
+    bool rti = false;
+    double tilt = 0;  // degrees
+    osg::ref_ptr<osg::Camera> camera;
+    double patchHeight = 1;
+
+    /** The light from a direction in world space (x right, y up in the captured image, z toward
+     *  the camera). */
+    void setLightDirection(const osg::Vec3d& d) {
+        azimuth = osg::RadiansToDegrees(std::atan2(d.x(), -d.y()));
+        elevation = osg::RadiansToDegrees(std::asin(std::clamp(d.z(), -1.0, 1.0)));
+        placeOrbitLight();
+    }
+    /** RTIViewer's light control: the window is the hemisphere seen from above, the mouse's
+     *  normalised position (-1..1) its x and y; outside the unit circle, the horizon. */
+    void lightFromMouse(double x, double y) {
+        const double r = std::sqrt(x * x + y * y);
+        if (r > 1) {
+            x /= r;
+            y /= r;
+        }
+        setLightDirection(osg::Vec3d(x, y, std::sqrt(std::max(0.0, 1 - x * x - y * y))));
+    }
+    void placeRtiCamera() {
+        // Far enough for the patch to fill ~90 % of a 30 degree field of view.
+        const double t = osg::DegreesToRadians(tilt);
+        const double distance = 0.55 * patchHeight / std::tan(osg::DegreesToRadians(15.0));
+        camera->setViewMatrixAsLookAt(osg::Vec3d(0, -std::sin(t), std::cos(t)) * distance,
+                                      osg::Vec3d(0, 0, 0), osg::Vec3d(0, std::cos(t), std::sin(t)));
+        updateHud();
+    }
+    void cycleTilt() {
+        tilt = tilt >= 60 ? 0 : tilt + 20;
+        placeRtiCamera();
+    }
 
     void applyTerminator() {
         terminatorAlpha = std::clamp(terminatorAlpha, 0.0, 60.0);
@@ -218,6 +257,9 @@ public:
                                         : "off")
              << "  [x]"
              << "   stats [s]  help [h]";
+        if (rti)
+            text << "\nRTI mode: the light follows the mouse; view tilted " << tilt
+                 << " degrees from the captured one  [v]";
         if (environment) text << "\n" << environment->status();
         if (streaming) text << "\n" << streamingStatus();
         hud->setText(text.str());
@@ -259,7 +301,12 @@ public:
                 return false;
             case GEA::KEYDOWN:
                 return handleKey(ea.getKey());
+            case GEA::MOVE:
+                if (!_state->rti) return false;
+                _state->lightFromMouse(ea.getXnormalized(), ea.getYnormalized());
+                return true;
             case GEA::PUSH:
+                if (_state->rti && !(ea.getModKeyMask() & GEA::MODKEY_SHIFT)) return true;
                 if ((ea.getModKeyMask() & GEA::MODKEY_SHIFT) &&
                     ea.getButtonMask() == GEA::LEFT_MOUSE_BUTTON) {
                     _dragging = true;
@@ -269,6 +316,10 @@ public:
                 }
                 return false;
             case GEA::DRAG:
+                if (_state->rti && !_dragging) {
+                    _state->lightFromMouse(ea.getXnormalized(), ea.getYnormalized());
+                    return true;
+                }
                 if (!_dragging) return false;
                 // A drag across the whole window turns the light half around.
                 _state->orbit(-90.0 * (ea.getXnormalized() - _lastX),
@@ -297,6 +348,7 @@ public:
         usage.addKeyboardMouseBinding("t", "Smooth shadow terminator on/off");
         usage.addKeyboardMouseBinding("[ / ]", "Terminator alpha -/+ 5 degrees");
         usage.addKeyboardMouseBinding("x", "Cast shadows on/off");
+        usage.addKeyboardMouseBinding("v", "RTI mode: tilt the view");
         usage.addKeyboardMouseBinding(", .", "--env: turn the environment -/+ 15 degrees");
         usage.addKeyboardMouseBinding("- +", "--env: exposure / or x sqrt(2)");
     }
@@ -412,15 +464,16 @@ osg::ref_ptr<osg::Camera> createHud(osgText::Text* text) {
     return camera;
 }
 
-/** A flat square of size x size metres in the XY plane around the origin (Z up, normal +Z),
- *  texture coordinates 0..1 across it: --surface-size's model. */
-osg::ref_ptr<osg::Geode> createSurfaceModel(float size) {
+/** A flat rectangle of width x height metres in the XY plane around the origin (Z up, normal +Z),
+ *  texture coordinates 0..1 across it: --surface-size's model (a square) and RTI mode's patch. */
+osg::ref_ptr<osg::Geode> createSurfaceModel(float width, float height) {
     osg::ref_ptr<osg::Geometry> geometry = new osg::Geometry;
     osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array;
     osg::ref_ptr<osg::Vec2Array> texCoords = new osg::Vec2Array;
     for (const osg::Vec2 corner :
          {osg::Vec2(0, 0), osg::Vec2(1, 0), osg::Vec2(1, 1), osg::Vec2(0, 1)}) {
-        vertices->push_back(osg::Vec3((corner - osg::Vec2(0.5f, 0.5f)) * size, 0));
+        vertices->push_back(
+            osg::Vec3((corner.x() - 0.5f) * width, (corner.y() - 0.5f) * height, 0));
         texCoords->push_back(corner);
     }
     geometry->setVertexArray(vertices.get());
@@ -528,6 +581,12 @@ int run(osg::ArgumentParser& arguments) {
         "Cast shadows: the inputs go into an osgShadow::ShadowedScene with a ShadowMap, the "
         "orbit light last in it (the light it shadows; with the orbit light off, the scene's "
         "last light); a scene with its own ShadowedScene keeps it");
+    usage->addCommandLineOption(
+        "--rti",
+        "RTI mode (the default for one material or capture of a single view, e.g. an RTI "
+        "capture's .lp file): a flat patch of the material's aspect, seen as captured, the light "
+        "following the mouse as in RTIViewer, 'v' tilts the view");
+    usage->addCommandLineOption("--no-rti", "Not RTI mode, even for a capture of one view");
     usage->addCommandLineOption("--no-shadows",
                                 "Start with cast shadows off (as key x): every ShadowedScene "
                                 "without its technique");
@@ -622,6 +681,8 @@ int run(osg::ArgumentParser& arguments) {
     const bool noTerminator = arguments.read("--no-terminator");
     const bool shadows = arguments.read("--shadows");
     const bool noShadows = arguments.read("--no-shadows");
+    const bool rtiForced = arguments.read("--rti"), rtiRefused = arguments.read("--no-rti");
+    if (rtiForced && rtiRefused) throw osgBTF::Error("--rti and --no-rti: give one of them");
     if (shadows && noShadows) throw osgBTF::Error("--shadows and --no-shadows: give one of them");
     if (!captureFile.empty() && frames < 0) frames = 3;
     if (!captureFile.empty() && frames < 1)
@@ -671,11 +732,37 @@ int run(osg::ArgumentParser& arguments) {
         plainFmfBytes += streaming->streamer()->plainFmfGpuBytes(streamed->streamIndex());
         named.emplace_back(location, new MaterialNode(streamed.get()));
     }
+    // RTI mode: one material file (or capture) and nothing that places it elsewhere; by default
+    // when its material has a single measured view.
+    const auto* single = named.size() == 1 && streams.empty()
+                             ? dynamic_cast<MaterialNode*>(named.front().second.get())
+                             : nullptr;
+    const bool singleMaterial = single && single->getNumChildren() == 0 && single->getMaterial();
+    const bool placed = !modelFile.empty() || surfaceGiven || !mapFile.empty();
+    if (rtiForced && (!singleMaterial || placed))
+        throw osgBTF::Error(
+            "--rti: needs exactly one material file or capture, without --model, --surface-size "
+            "or --map");
+    const bool rtiMode = rtiForced || (!rtiRefused && singleMaterial && !placed &&
+                                       single->getMaterial()->views().size() == 1);
+    if (rtiMode) {
+        const Material& m = *single->getMaterial();
+        // A mip-mapped material's texels are its atlas; the capture is its base level.
+        const bool mipmapped = m.mipLayout().levelCount() > 0;
+        const int width = mipmapped ? m.mipLayout().baseWidth() : m.width();
+        const int height = mipmapped ? m.mipLayout().baseHeight() : m.height();
+        model = createSurfaceModel(float(width) / float(height), 1.0f);
+        if (!scaleGiven) textureScale = 1;
+        std::cout << "btfviewer: RTI mode (" << width << "x" << height << ", "
+                  << m.views().size() << " view(s), " << m.lights().size()
+                  << " lights): the light follows the mouse, 'v' tilts the view\n";
+    }
     for (const auto& [file, node] : named) {
         auto* material = dynamic_cast<MaterialNode*>(node.get());
         if (material && material->getNumChildren() == 0) {
             if (!model)
-                model = surfaceGiven ? osg::ref_ptr<osg::Node>(createSurfaceModel(surfaceSize))
+                model = surfaceGiven
+                            ? osg::ref_ptr<osg::Node>(createSurfaceModel(surfaceSize, surfaceSize))
                         : modelFile.empty()
                             ? osg::ref_ptr<osg::Node>(osgBTF::examples::createSphereModel())
                             : readInput(modelFile);
@@ -832,7 +919,14 @@ int run(osg::ArgumentParser& arguments) {
         manipulator->setHomePosition(osg::Vec3d(0, -0.85 * surfaceSize, 0.5 * surfaceSize),
                                      osg::Vec3d(0, 0.05 * surfaceSize, 0), osg::Vec3d(0, 0, 1));
     }
-    viewer.setCameraManipulator(manipulator.get());
+    if (rtiMode) {
+        // No manipulator: the view matrix is the captured view's (ViewerState::placeRtiCamera).
+        state->rti = true;
+        state->camera = viewer.getCamera();
+        state->placeRtiCamera();
+    } else {
+        viewer.setCameraManipulator(manipulator.get());
+    }
     viewer.addEventHandler(new ControlHandler(state.get()));
     viewer.addEventHandler(new osgViewer::StatsHandler);
     viewer.addEventHandler(new osgViewer::HelpHandler(usage));

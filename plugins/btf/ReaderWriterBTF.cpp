@@ -21,6 +21,7 @@
 #include "core/FloatImage.h"
 #include "core/Notify.h"
 #include "loaders/LoadBtf.h"
+#include "loaders/Rti.h"
 #include "loaders/Ubo2003.h"
 #include "materials/Material.h"
 #include "scene/MaterialNode.h"
@@ -147,11 +148,18 @@ osg::ref_ptr<Material> openStored(const std::string& path, const Settings& setti
     return loadSharedMaterial(path, storage);
 }
 
-/** Measured BTFs go through the fit; everything else is read as a fitted-material file. */
+/** Measured BTFs (and RTI captures: a .lp light file, or a folder or zip holding one) go through
+ *  the fit; everything else is read as a fitted-material file. */
 bool isMeasured(const std::string& path) {
     const std::string ext = osgDB::getLowerCaseFileExtension(path);
     std::error_code error;
-    return ext == "btf" || ext == "zip" || fs::is_directory(path, error);
+    return ext == "btf" || ext == "zip" || ext == "lp" || fs::is_directory(path, error);
+}
+
+/** Whether a zip holds measured data this plugin reads: UBO2003/ATRIUM images or an RTI capture
+ *  (loaders/Rti.h). Anything else is a model or texture archive, OSG's zip plugin's. */
+bool isMeasuredZip(const std::string& path) {
+    return mayBeUbo2003(path) || isRtiCapture(path);
 }
 
 osg::ref_ptr<Material> readMaterial(const std::string& path, const Settings& settings) {
@@ -214,7 +222,7 @@ osgDB::ReaderWriter* zipForOsg(const osgDB::ReaderWriter& self, const std::strin
     if (osgDB::getLowerCaseFileExtension(file) != "zip" || !self.acceptsExtension("zip"))
         return nullptr;
     const std::string path = osgDB::findDataFile(file, options);
-    if (path.empty() || mayBeUbo2003(path)) return nullptr;
+    if (path.empty() || isMeasuredZip(path)) return nullptr;
     return osgZipReader();
 }
 
@@ -269,13 +277,19 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
                           "on load with method= -> MaterialNode");
     else if (extension == "btfzip") {
         supportsExtension("zip",
-                          "UBO2003/ATRIUM measured BTF zip, fitted on load -> MaterialNode "
-                          "(other zips go to OSG's zip plugin where installed)");
+                          "UBO2003/ATRIUM measured BTF zip or RTI capture zip (photos and a .lp "
+                          "light file), fitted on load -> MaterialNode (other zips go to OSG's "
+                          "zip plugin where installed)");
         supportsExtension("btfzip",
                           "pseudo-loader: NAME.zip.btfzip reads NAME.zip as a UBO2003/ATRIUM "
                           "measured BTF zip (for programs in which \".zip\" reaches OSG's own "
                           "zip plugin)");
-    } else if (extension == "btfmaterial")
+    } else if (extension == "lp")
+        supportsExtension("lp",
+                          "RTI capture: a light-position file (the image count, then \"IMAGE X Y "
+                          "Z\" per photo) and the photos beside it, fitted on load -> "
+                          "MaterialNode");
+    else if (extension == "btfmaterial")
         supportsExtension(
             "btfmaterial",
             std::string("pseudo-loader: a model under an osgBTF material, ") + kPseudoSyntax);
@@ -367,14 +381,14 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
             if (!osgDB::getFileExtension(inner).empty()) path = osgDB::findDataFile(inner, options);
         }
         if (path.empty()) return notFound(name);
-        if (namedBtfZip && !mayBeUbo2003(path))
+        if (namedBtfZip && !isMeasuredZip(path))
             return error(path +
-                         ": not a UBO2003/ATRIUM BTF zip (no member named like \"tl000 pl000 "
-                         "tv000 pv000\"), read as one because of the name " +
+                         ": not a measured BTF zip (no member named like \"tl000 pl000 tv000 "
+                         "pv000\", no RTI light file .lp), read as one because of the name " +
                          file);
         // A zip that is no BTF (a model archive, say) is OSG's zip plugin's where installed;
         // elsewhere FILE_NOT_HANDLED lets osgDB go on to any other reader of ".zip" loaded.
-        if (ext == "zip" && !mayBeUbo2003(path)) {
+        if (ext == "zip" && !isMeasuredZip(path)) {
             if (osgDB::ReaderWriter* zip = zipForOsg(*this, file, options))
                 return zip->readNode(file, options);
             return ReadResult::FILE_NOT_HANDLED;

@@ -946,6 +946,45 @@ TEST(Btfviewer, MaterialFilesGoOnSpheresAndTheMaterialKeysSwitchThem) {
         << "material 1 and 2 look the same";
 }
 
+// An RTI capture by its light file (osgdb_lp): RTI mode by itself (one view), the patch seen as
+// captured; light from the right and from the left give different pictures, a fixed view the same
+// picture twice.
+TEST(Btfviewer, ShowsAnRtiCaptureInRtiMode) {
+    const std::string lp = osgBTF::test::sourceDir() + "/tests/data/rti-icon-64/dirs.lp";
+    CommandResult result = runBtfviewer(
+        ":none", shellQuote(lp) + " -O \"method=lambert cache=off\" --rti --model x.osgt");
+    EXPECT_EQ(result.exitCode, 1);
+    EXPECT_NE(result.output.find("btfviewer: --rti: needs exactly one material file or capture, "
+                                 "without --model, --surface-size or --map"),
+              std::string::npos)
+        << result.output;
+
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    TempDir out;
+    std::vector<RgbImage> images;
+    for (const std::string light : {"90 30", "-90 30", "90 30"}) {
+        const std::string file = out.file("rti" + std::to_string(images.size()) + ".png");
+        result = runBtfviewer(xvfb.display(),
+                              shellQuote(lp) + " -O \"method=hsh cache=off\" --no-hud --light " +
+                                  light + " --window 0 0 320 240 --capture " + shellQuote(file));
+        ASSERT_EQ(result.exitCode, 0) << result.output;
+        EXPECT_NE(result.output.find("btfviewer: RTI mode (64x64, 1 view(s), 72 lights)"),
+                  std::string::npos)
+            << result.output;
+        images.push_back(readCapture(file));
+        const ScreenStats stats = analyse(images.back());
+        EXPECT_TRUE(notBlank(stats)) << describe(stats);
+    }
+    keepScreenshot(images[0], "btfviewer-rti-light-right");
+    keepScreenshot(images[1], "btfviewer-rti-light-left");
+    const std::size_t pixels = images[0].rgb.size() / 3;
+    EXPECT_LE(differingPixels(images[0], images[2]), pixels / 2000) << "runs are not repeatable";
+    EXPECT_GT(differingPixels(images[0], images[1]), pixels / 50)
+        << "the light's side changed nothing";
+}
+
 TEST(Btfviewer, CoversASurfaceThroughACoordinateMap) {
     TempDir out;
     // The fixture's sample is 8x8: a 64x64 block map into it, and one into another size.
