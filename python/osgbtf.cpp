@@ -989,7 +989,7 @@ PYBIND11_MODULE(osgbtf, m) {
                     double fitSeconds = 0, average = 0, rmse = 0, psnr = 0, bytes = 0, values = 0;
                     std::uint64_t total = 0;
                     std::size_t texels = 0, heldOutPairs = 0;
-                    double heldOutAverage = NAN, heldOutRmse = NAN, heldOutPsnr = NAN;
+                    double heldOutAverage = NAN, heldOutRmse = NAN, heldOutPsnr = NAN, heldOutSsim = NAN;
                 };
                 try {
                     const Scores s = scope.run([&] {
@@ -1021,27 +1021,12 @@ PYBIND11_MODULE(osgbtf, m) {
                                 source.viewCount(), source.lightCount(), holdoutFraction);
                             const batch::DirectionSubsetSource kept(source, split);
                             const osg::ref_ptr<Material> without = method.fit(kept, fit);
-                            const std::size_t lights = source.lightCount();
-                            const int width = source.width();
-                            const ErrorSummary h = computeError(
-                                source,
-                                [&](std::size_t t, float* out) {
-                                    const int x = int(t % std::size_t(width));
-                                    const int y = int(t / std::size_t(width));
-                                    for (const std::size_t p : split.leftOutPairs) {
-                                        const glm::vec3 value = without->evaluate(
-                                            x, y, source.views().vector(p / lights),
-                                            source.lights().vector(p % lights));
-                                        out[p * 3] = value.r;
-                                        out[p * 3 + 1] = value.g;
-                                        out[p * 3 + 2] = value.b;
-                                    }
-                                },
-                                texels, &split.leftOutPairs);
-                            s.heldOutAverage = h.average;
-                            s.heldOutRmse = h.rmse;
-                            s.heldOutPsnr = h.psnr;
-                            s.heldOutPairs = split.leftOutPairs.size();
+                            const HeldOutScores h = scoreHeldOut(source, *without, split, texels);
+                            s.heldOutAverage = h.error.average;
+                            s.heldOutRmse = h.error.rmse;
+                            s.heldOutPsnr = h.error.psnr;
+                            s.heldOutSsim = h.ssim;
+                            s.heldOutPairs = h.pairs;
                         }
                         return s;
                     });
@@ -1060,6 +1045,7 @@ PYBIND11_MODULE(osgbtf, m) {
                     row["held_out_average"] = s.heldOutAverage;
                     row["held_out_rmse"] = s.heldOutRmse;
                     row["held_out_psnr"] = numberOrNan(s.heldOutPsnr);
+                    row["held_out_ssim"] = s.heldOutSsim;
                     row["held_out_pairs"] = s.heldOutPairs;
                 } catch (const Error& e) {
                     // A method that fails is a row saying why, as in `btf compare`.
@@ -1068,7 +1054,7 @@ PYBIND11_MODULE(osgbtf, m) {
                     for (const char* key :
                          {"fit_seconds", "average", "rmse", "psnr", "bytes_per_texel",
                           "values_per_texel", "compression_ratio", "held_out_average",
-                          "held_out_rmse", "held_out_psnr"})
+                          "held_out_rmse", "held_out_psnr", "held_out_ssim"})
                         row[key] = std::numeric_limits<double>::quiet_NaN();
                 }
                 rows.append(row);
@@ -1086,6 +1072,7 @@ PYBIND11_MODULE(osgbtf, m) {
                     for (const auto& [k, v] : fit.values()) options.methodOptions[name][k] = v;
                 options.fitTool = findBtfTool();
                 options.errorTexels = errorTexels;
+                options.holdoutFraction = holdoutFraction;
                 scope.run([&] {
                     runCompare(options);
                     return 0;
@@ -1100,8 +1087,8 @@ PYBIND11_MODULE(osgbtf, m) {
         "Fits each method (the baseline added first) and scores it as `btf batch` scores a job: "
         "a list of dicts (method, options, failed, failure, fit_seconds, average, rmse, psnr, "
         "error_texels, bytes_per_texel, values_per_texel, total_bytes, compression_ratio and, "
-        "with holdout_fraction > 0, held_out_average/rmse/psnr/pairs: the error on directions "
-        "left out of a second fit), which pandas.DataFrame takes as it is. options: {method: "
+        "with holdout_fraction > 0, held_out_average/rmse/psnr/ssim/pairs: the error, PSNR and "
+        "SSIM on directions left out of a second fit), which pandas.DataFrame takes as it is. options: {method: "
         "{option: value}}. report=DIR also runs `btf compare` into DIR (report.md, "
         "results.csv/json, pictures; the btf executable fits in child processes).");
 

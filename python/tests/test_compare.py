@@ -22,6 +22,7 @@ def test_compare_gives_one_row_per_method_with_the_baseline_first(sample_btf):
     for r in rows:
         assert r["held_out_pairs"] > 0
         assert math.isfinite(r["held_out_average"])
+        assert 0 < r["held_out_ssim"] <= 1
     assert pca["held_out_average"] > pca["average"]
     with pytest.raises(ValueError, match="pca: option components must be"):
         osgbtf.compare(sample_btf, methods=["pca"], options={"pca": {"components": -1}})
