@@ -8,9 +8,11 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <mutex>
 #include <set>
@@ -443,6 +445,16 @@ void writeFileAtomically(const std::string& path,
         fs::remove(temporaryPath, ignored);
         fail(path, "cannot move the finished temporary file into place: " + ec.message());
     }
+}
+
+std::string readWholeFile(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) fail(path, "is not a regular file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(path, std::string("cannot be read: ") + std::strerror(errno));
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) fail(path, "cannot be read");
+    return bytes;
 }
 
 void writeTextAtomically(const std::string& path, const std::string& text) {

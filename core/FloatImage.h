@@ -88,8 +88,12 @@ void requireFinite(const FloatImage& image, const std::string& path);
 void writeFileAtomically(const std::string& path,
                          const std::function<void(const std::string& temporaryPath)>& write);
 
-/** writeFileAtomically of a text (a report, a record). */
+/** writeFileAtomically of a text (a report, a record) or of any bytes. */
 void writeTextAtomically(const std::string& path, const std::string& text);
+
+/** The whole file as bytes. Throws Error "PATH: cannot be read" (with the reason) when it cannot
+ *  be opened or read, and "PATH: is not a regular file" for a folder. */
+std::string readWholeFile(const std::string& path);
 
 /** Removes what killed writers left in `folder`: entries named "STEM.tmp<pid>" or "STEM.old<pid>"
  *  (the temporary names of writeFileAtomically and of folders published by rename) for which

@@ -1,6 +1,8 @@
 #include "materials/MethodRegistry.h"
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <map>
 
 #include "core/Error.h"
@@ -96,8 +98,28 @@ const MethodInfo& pluginDefaultMethod() {
     return methodWith(&MethodInfo::pluginDefault, "plugins' default");
 }
 
-void saveMaterial(const Material& material, const std::string& path) {
+const ForeignFileFormat* findForeignFile(const std::string& path, std::string* method) {
+    std::string extension = std::filesystem::path(path).extension().string();
+    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    for (const auto& [name, info] : registry())
+        for (const ForeignFileFormat& format : info.foreignFiles)
+            if (format.extension == extension) {
+                if (method) *method = name;
+                return &format;
+            }
+    return nullptr;
+}
+
+std::string saveMaterial(const Material& material, const std::string& path) {
+    std::string owner;
+    if (const ForeignFileFormat* format = findForeignFile(path, &owner)) {
+        if (material.methodName() != owner)
+            fail(path, "a " + format->extension + " file holds a " + owner + " material, not " +
+                           material.methodName());
+        return format->write(material, path);
+    }
     saveFittedMaterial(material.toFittedMaterial(), path);
+    return {};
 }
 
 osg::ref_ptr<Material> materialFromFile(FittedMaterial file) {
@@ -113,6 +135,11 @@ osg::ref_ptr<Material> materialFromFile(FittedMaterial file) {
 }
 
 osg::ref_ptr<Material> loadMaterial(const std::string& path) {
+    if (const ForeignFileFormat* format = findForeignFile(path)) {
+        osg::ref_ptr<Material> material = format->read(path);
+        material->sourceFile = path;
+        return material;
+    }
     osg::ref_ptr<Material> material =
         materialFromFile(loadFittedMaterial(path, [](const std::string& method) {
             const auto it = registry().find(method);

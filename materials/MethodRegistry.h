@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "materials/ForeignFiles.h"
 #include "materials/Material.h"
 
 namespace osgBTF {
@@ -99,6 +100,9 @@ struct MethodInfo {
     double fitWorkingSetFullSizeGiB = 3;
     /** And what a fit holds whatever the input's size (tables per cluster and direction), MiB. */
     double fitTablesMiB = 0;
+    /** Other tools' files this method reads and writes as its materials (materials/
+     *  ForeignFiles.h), found by extension by loadMaterial and saveMaterial. */
+    std::vector<ForeignFileFormat> foreignFiles;
 };
 
 /** Adds a method; each method's .cpp calls it from a static initialiser. Returns true. */
@@ -119,10 +123,17 @@ std::vector<std::string> methodNames();
 /** Registered method names by MethodInfo::order (then name). */
 std::vector<std::string> methodNamesInOrder();
 
-/** Saves through the fitted-material container (atomic). */
-void saveMaterial(const Material& material, const std::string& path);
-/** Loads any registered method's file; throws Error naming the file and the problem. */
+/** Saves through the fitted-material container (atomic), or as another tool's file where a method
+ *  registered the extension (MethodInfo::foreignFiles; the material must be of that method, else
+ *  Error "PATH: a .ptm file holds a ptm material, not hsh"). Returns what the foreign format's
+ *  quantisation lost (one line), empty for the container. */
+std::string saveMaterial(const Material& material, const std::string& path);
+/** Loads any registered method's file, or another tool's file by its registered extension;
+ *  throws Error naming the file and the problem. */
 osg::ref_ptr<Material> loadMaterial(const std::string& path);
+/** The foreign file format registered for `path`'s extension (any case), with the name of the
+ *  method that registered it; null when none. */
+const ForeignFileFormat* findForeignFile(const std::string& path, std::string* method = nullptr);
 /** Any registered method's material from its file, which the method may take apart. */
 osg::ref_ptr<Material> materialFromFile(FittedMaterial file);
 

@@ -12,19 +12,10 @@
 
 #include "core/Error.h"
 #include "core/FittedMaterialFile.h"
+#include "materials/ForeignFiles.h"
 #include "materials/fmf/Fmf.h"
 
 namespace osgBTF {
-
-namespace {
-
-std::string floatText(float v) {
-    std::ostringstream out;
-    out << std::setprecision(9) << v;
-    return out.str();
-}
-
-}  // namespace
 
 std::string TileSetIndex::tilePath(const TileId& t) {
     return "tiles/" + std::to_string(t.group) + "/" + std::to_string(t.level) + "/" +

@@ -28,13 +28,6 @@ int groupsOf(int components) {
     return (components + 3) / 4;
 }
 
-/** Shortest text that reads back as the same float. */
-std::string floatText(float v) {
-    std::ostringstream out;
-    out << std::setprecision(std::numeric_limits<float>::max_digits10) << v;
-    return out.str();
-}
-
 std::string floatList(const float* v, int n) {
     std::string text;
     for (int i = 0; i < n; ++i) text += (i ? "," : "") + floatText(v[i]);

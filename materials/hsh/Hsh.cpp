@@ -9,8 +9,10 @@
 #include <osg/Uniform>
 
 #include "core/Error.h"
+#include "core/FloatImage.h"
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
+#include "materials/hsh/RtiFile.h"
 
 namespace osgBTF {
 
@@ -298,6 +300,29 @@ const bool hshRegistered = registerMethodClass<HshMaterial>([] {
     };
     m.order = 85;
     m.fitWorkingSet = 0.75;  // per-view least squares, as ptm
+    ForeignFileFormat rtiFile;
+    rtiFile.extension = ".rti";
+    rtiFile.description = "RTI file of hemispherical harmonics (type 3): RTIBuilder's, RTIViewer's";
+    rtiFile.read = [](const std::string& path) -> osg::ref_ptr<Material> {
+        return readRtiFile(path);
+    };
+    rtiFile.write = [](const Material& material, const std::string& path) {
+        const auto [error, step] = writeRtiFile(static_cast<const HshMaterial&>(material), path);
+        return "8-bit terms: largest change " + floatText(float(error)) + " (largest step " +
+               floatText(float(step)) + ")";
+    };
+    rtiFile.info = [](const std::string& path) {
+        const RtiFileHeader h = parseRtiHeader(path, readWholeFile(path), false);
+        std::string text = "RTI type 3 (hemispherical harmonics), " + std::to_string(h.width) +
+                           "x" + std::to_string(h.height) + ", " + std::to_string(h.terms) +
+                           " terms per band, basis type " + std::to_string(h.basisType) +
+                           "\nterm ranges:";
+        for (int k = 0; k < h.terms; ++k)
+            text += " [" + floatText(h.minimum[std::size_t(k)]) + ", " +
+                    floatText(h.maximum[std::size_t(k)]) + "]";
+        return text;
+    };
+    m.foreignFiles.push_back(std::move(rtiFile));
     return m;
 }());
 }  // namespace

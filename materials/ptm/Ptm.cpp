@@ -10,8 +10,10 @@
 #include <osg/Uniform>
 
 #include "core/Error.h"
+#include "core/FloatImage.h"
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
+#include "materials/ptm/PtmFile.h"
 
 namespace osgBTF {
 
@@ -292,6 +294,29 @@ const bool ptmRegistered = registerMethodClass<PtmMaterial>([] {
     };
     m.order = 80;
     m.fitWorkingSet = 0.75;  // per-view least squares
+    ForeignFileFormat ptmFile;
+    ptmFile.extension = ".ptm";
+    ptmFile.description =
+        "Polynomial Texture Map file (PTM_1.2; PTM_FORMAT_RGB and PTM_FORMAT_LRGB): RTIBuilder's, "
+        "RTIViewer's";
+    ptmFile.read = [](const std::string& path) -> osg::ref_ptr<Material> {
+        return readPtmFile(path);
+    };
+    ptmFile.write = [](const Material& material, const std::string& path) {
+        const PtmQuantisation q = writePtmFile(static_cast<const PtmMaterial&>(material), path);
+        return "8-bit coefficients: largest change " + floatText(float(q.largestCoefficientError)) +
+               " (largest step " + floatText(float(q.largestStep)) + ")";
+    };
+    ptmFile.info = [](const std::string& path) {
+        const PtmFileHeader h = parsePtmHeader(path, readWholeFile(path), false);
+        std::string text = "PTM_1.2 " + h.format + ", " + std::to_string(h.width) + "x" +
+                           std::to_string(h.height) + "\nscales:";
+        for (const float s : h.scale) text += " " + floatText(s);
+        text += "\nbiases:";
+        for (const int b : h.bias) text += " " + std::to_string(b);
+        return text;
+    };
+    m.foreignFiles.push_back(std::move(ptmFile));
     return m;
 }());
 }  // namespace

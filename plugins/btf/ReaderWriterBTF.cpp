@@ -11,6 +11,8 @@
 #include <sstream>
 #include <system_error>
 
+#include <osg/Geode>
+#include <osg/Geometry>
 #include <osg/Notify>
 #include <osgDB/FileNameUtils>
 #include <osgDB/FileUtils>
@@ -24,6 +26,7 @@
 #include "loaders/Rti.h"
 #include "loaders/Ubo2003.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "scene/MaterialNode.h"
 // The modules that fit on load (all but osgdb_btfmat) link libosgBTFFit for the fit and its
 // cache; osgdb_btfmat renders fitted files only and is built without them (CMakeLists.txt).
@@ -226,6 +229,30 @@ osgDB::ReaderWriter* zipForOsg(const osgDB::ReaderWriter& self, const std::strin
     return osgZipReader();
 }
 
+/** A flat rectangle of the material's aspect (height 1) in the XZ plane around the origin, normal
+ *  -Y, texture coordinates 0..1 across it (s along +X, t along +Z). */
+osg::ref_ptr<osg::Geode> rtiPatch(const Material& material) {
+    const float aspect = float(material.width()) / float(material.height());
+    osg::ref_ptr<osg::Geometry> geometry = new osg::Geometry;
+    osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array;
+    osg::ref_ptr<osg::Vec2Array> texCoords = new osg::Vec2Array;
+    for (const osg::Vec2 corner :
+         {osg::Vec2(0, 0), osg::Vec2(1, 0), osg::Vec2(1, 1), osg::Vec2(0, 1)}) {
+        vertices->push_back(osg::Vec3((corner.x() - 0.5f) * aspect, 0.0f, corner.y() - 0.5f));
+        texCoords->push_back(corner);
+    }
+    geometry->setVertexArray(vertices.get());
+    geometry->setTexCoordArray(0, texCoords.get());
+    osg::ref_ptr<osg::Vec3Array> normals = new osg::Vec3Array(1);
+    (*normals)[0] = osg::Vec3(0, -1, 0);
+    geometry->setNormalArray(normals.get(), osg::Array::BIND_OVERALL);
+    geometry->addPrimitiveSet(new osg::DrawArrays(GL_TRIANGLE_FAN, 0, 4));
+    geometry->setName("osgBTF RTI patch");
+    osg::ref_ptr<osg::Geode> geode = new osg::Geode;
+    geode->addDrawable(geometry.get());
+    return geode;
+}
+
 /** Splits "MODEL.(MATERIAL,k=v,...)" into model, material and the k=v words. */
 bool splitPseudoName(const std::string& inner, std::string& model, std::string& material,
                      std::string& words) {
@@ -284,6 +311,12 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
                           "pseudo-loader: NAME.zip.btfzip reads NAME.zip as a UBO2003/ATRIUM "
                           "measured BTF zip (for programs in which \".zip\" reaches OSG's own "
                           "zip plugin)");
+    } else if (extension == "ptm" || extension == "rti") {
+        std::string method;
+        const ForeignFileFormat* format = findForeignFile("x." + extension, &method);
+        supportsExtension(extension, (format ? format->description : std::string("RTI file")) +
+                                         " -> MaterialNode (a " + method +
+                                         " material) over a flat patch facing -Y");
     } else if (extension == "lp")
         supportsExtension("lp",
                           "RTI capture: a light-position file (the image count, then \"IMAGE X Y "
@@ -402,6 +435,9 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
         if (const std::string problem = applyCoordinateMap(*node, settings, options);
             !problem.empty())
             return error(problem);
+        // An RTI file read by itself is shown as RTI viewers show it: a flat patch of its aspect,
+        // here facing the home view of osgviewer (-Y), lit by its headlight.
+        if (ext == "ptm" || ext == "rti") node->addChild(rtiPatch(*material).get());
         return node.get();
     } catch (const std::exception& e) {
         return error(e.what());

@@ -2,6 +2,7 @@
 #include <cctype>
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "materials/fmf/Fmf.h"
 #include "tools/btf/Commands.h"
@@ -109,14 +111,23 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         std::string extension = std::filesystem::path(options->output).extension().string();
         for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
         const bool btfOutput = extension == ".btf";
+        // Another tool's file (.ptm for ptm, .rti for hsh): the material is written as that.
+        std::string foreignOwner;
+        const ForeignFileFormat* foreign = findForeignFile(options->output, &foreignOwner);
+        if (foreign && foreignOwner != method.name)
+            fail(options->output, "a " + foreign->extension + " file holds a " + foreignOwner +
+                                      " material; fit it with -m " + foreignOwner);
+        if (foreign && options->mipmap)
+            fail(options->output, "a " + foreign->extension + " file has no mip levels");
         // Mip-mapped unless asked otherwise (every method's file grows by at most
         // 1.41x on the built-in sample, tools/README.md), or the format cannot hold the levels.
         const bool holdout = options->holdout > 0;
-        const bool mipmap = options->mipmap || (!options->noMipmap && !btfOutput && !holdout);
+        const bool mipmap =
+            options->mipmap || (!options->noMipmap && !btfOutput && !holdout && !foreign);
         if (btfOutput && options->mipmap)
             fail(options->output,
                  "a UBO2014 .btf file has no mip levels; save a --mipmap fit as .btfmat or .exr");
-        if (btfOutput && holdout)
+        if ((btfOutput || foreign) && holdout)
             fail(options->output, "a --holdout-fraction fit is saved as .btfmat or .exr");
         if (btfOutput && !method.writesUbo2014)
             fail(options->output,
@@ -158,6 +169,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); },
             subsample.empty() ? nullptr : &subsample);
         const MemoryFootprint memory = material->memory();
+        std::function<void()> foreignReport;
         // Saved last, releasing the material's arrays into the file's (no second copy of a PCA
         // of gigabytes).
         if (btfOutput) {
@@ -165,6 +177,30 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             if (!fmf) fail(options->output, "method fmf did not give an FmfMaterial");
             writeFactorsAsUbo2014(fmf->completeFactors(), options->output,
                                   fmf->storage() == MaterialTexture::Float ? 4 : 2, meta.get());
+        } else if (foreign) {
+            const std::string lost = saveMaterial(*material, options->output);
+            // The file as written, read back and evaluated at the data's own directions (a
+            // foreign file records none).
+            const osg::ref_ptr<Material> written = loadMaterial(options->output);
+            const std::size_t lights = btf.lightCount();
+            const ErrorSummary writtenError = computeError(
+                btf,
+                [&](std::size_t t, float* out) {
+                    const int x = int(t % std::size_t(btf.width()));
+                    const int y = int(t / std::size_t(btf.width()));
+                    for (std::size_t p = 0; p < btf.imageCount(); ++p) {
+                        const glm::vec3 v = written->evaluate(x, y, btf.views().vector(p / lights),
+                                                              btf.lights().vector(p % lights));
+                        out[p * 3] = v.r;
+                        out[p * 3 + 1] = v.g;
+                        out[p * 3 + 2] = v.b;
+                    }
+                },
+                subsample.empty() ? nullptr : &subsample);
+            foreignReport = [=] {
+                std::cout << foreign->extension << " file: " << lost << "; its error as written:\n";
+                printErrorSummary(writtenError);
+            };
         } else {
             saveFittedMaterial(material->releaseFittedMaterial(), options->output);
         }
@@ -184,6 +220,7 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             std::cout << "error over a random subsample of " << subsample.size() << " of "
                       << btf.texelCount() << " texels (all pairs; --error-texels 0 for all):\n";
         printErrorSummary(error);
+        if (foreignReport) foreignReport();
         if (holdout) {
             // The saved file holds the arrays now: the held-out scores use it, loaded back.
             const osg::ref_ptr<Material> saved = loadMaterial(options->output);

@@ -20,6 +20,7 @@
 #include "core/Progress.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
+#include "materials/MethodRegistry.h"
 #include "tools/btf/Commands.h"
 
 namespace osgBTF::tool {
@@ -273,8 +274,8 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
     std::string& input = options->input;
     command
         ->add_option("FILE", input,
-                     "UBO2003/ATRIUM zip or folder, UBO2014 .btf, or an RTI set (.lp file, or a "
-                     "folder or zip with one)")
+                     "UBO2003/ATRIUM zip or folder, UBO2014 .btf, an RTI set (.lp file, or a "
+                     "folder or zip with one), or an RTI fitted file (.ptm, .rti)")
         ->required();
     command->add_flag("--json", options->json, "Print JSON instead of text");
     command->add_flag("--stats", options->stats,
@@ -284,6 +285,32 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
     addLoadOptions(*command, common);
     return [&common, options] {
         const std::string& input = options->input;
+        // Another tool's fitted file (.ptm, .rti): its header and what it reads as.
+        std::string method;
+        if (const ForeignFileFormat* format = findForeignFile(input, &method)) {
+            const std::string header = format->info(input);
+            const osg::ref_ptr<Material> material = loadMaterial(input);
+            const MemoryFootprint memory = material->memory();
+            if (options->json) {
+                std::cout << nlohmann::json{{"file", input},
+                                            {"format", format->description},
+                                            {"header", header},
+                                            {"method", method},
+                                            {"width", material->width()},
+                                            {"height", material->height()},
+                                            {"values_per_texel", memory.valuesPerTexel}}
+                                 .dump(2)
+                          << "\n";
+                return;
+            }
+            std::cout << "file:     " << input << "\n"
+                      << "format:   " << format->description << "\n"
+                      << header << "\n"
+                      << "reads as: a " << method << " material, " << material->width() << " x "
+                      << material->height() << " texels, " << memory.valuesPerTexel
+                      << " values per texel\n";
+            return;
+        }
         if (isUbo2014File(input)) {
             infoFactored(input, options->json, options->stats, common.loadOptions());
             return;

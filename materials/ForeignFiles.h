@@ -1,0 +1,37 @@
+// osgBTF: files of other tools that a method reads and writes as its materials (the RTI field's
+// .ptm for `ptm`, .rti for `hsh`), registered with the method (MethodInfo::foreignFiles) so that
+// loadMaterial, saveMaterial, `btf info`, `btf fit -o` and the osgDB plugins find them by
+// extension.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include <osg/ref_ptr>
+
+#include "core/Directions.h"
+
+namespace osgBTF {
+
+class Material;
+
+struct ForeignFileFormat {
+    std::string extension;    ///< lower case, with the dot: ".ptm"
+    std::string description;  ///< one line for help texts
+    /** The file as a material of the method. Throws Error "PATH: problem". */
+    std::function<osg::ref_ptr<Material>(const std::string& path)> read;
+    /** Writes a material of the method; returns one line on what the format's quantisation
+     *  lost. Throws Error "PATH: problem" for a material the format cannot hold. */
+    std::function<std::string(const Material&, const std::string& path)> write;
+    /** The file's header as `btf info` prints it (lines). */
+    std::function<std::string(const std::string& path)> info;
+};
+
+/** The lights a file that records none gets (evaluateMeasured needs a set): the 81 Bonn lights,
+ *  named as nominal. */
+DirectionSet nominalFileLights();
+
+/** A float as text that reads back as the same float. */
+std::string floatText(float value);
+
+}  // namespace osgBTF
