@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -23,6 +24,7 @@
 #include "core/Progress.h"
 #include "loaders/Ubo2003.h"
 #include "loaders/Ubo2014.h"
+#include "materials/MethodRegistry.h"
 #include "plugins/btf/ReaderWriterBTF.h"
 #include "streaming/TileCodec.h"
 #include "streaming/TileSet.h"
@@ -139,10 +141,15 @@ const osgBTF::plugin::ReaderWriterBTF& reader(const std::string& extension) {
 
 const std::vector<Target>& targets() {
     static const std::vector<Target> all = {
-        {"ubo2003_zip", ubo2003Zip},         {"ubo2014", ubo2014},
-        {"fitted_material", fittedMaterial}, {"coordinate_map", coordinateMap},
-        {"btfmat_plugin", btfmatPlugin},     {"plugin_names", pluginNames},
-        {"scene_file", sceneFile},           {"bsvtf_tiles", bsvtfTiles},
+        {"ubo2003_zip", ubo2003Zip},
+        {"ubo2014", ubo2014},
+        {"fitted_material", fittedMaterial},
+        {"coordinate_map", coordinateMap},
+        {"btfmat_plugin", btfmatPlugin},
+        {"plugin_names", pluginNames},
+        {"scene_file", sceneFile},
+        {"bsvtf_tiles", bsvtfTiles},
+        {"rti_files", rtiFiles},
     };
     return all;
 }
@@ -194,6 +201,12 @@ void ubo2014(const std::uint8_t* data, std::size_t size) {
 
 void fittedMaterial(const std::uint8_t* data, std::size_t size) {
     loadFittedMaterial(writeInput(data, size, "input.exr"));
+}
+
+void rtiFiles(const std::uint8_t* data, std::size_t size) {
+    // A PTM file begins with its version; anything else is tried as an .rti (comments first).
+    const bool ptm = size >= 3 && std::memcmp(data, "PTM", 3) == 0;
+    loadMaterial(writeInput(data, size, ptm ? "input.ptm" : "input.rti"));
 }
 
 void coordinateMap(const std::uint8_t* data, std::size_t size) {

@@ -37,6 +37,8 @@ void ubo2003Zip(const std::uint8_t* data, std::size_t size);
 void ubo2014(const std::uint8_t* data, std::size_t size);
 /** The bytes as a fitted-material file (core/FittedMaterialFile, OpenEXR multi-part). */
 void fittedMaterial(const std::uint8_t* data, std::size_t size);
+/** The RTI field's fitted files: .ptm (input starting "PTM") or .rti, read as materials. */
+void rtiFiles(const std::uint8_t* data, std::size_t size);
 /** The bytes as a coordinate map (core/CoordinateMap, OpenEXR). */
 void coordinateMap(const std::uint8_t* data, std::size_t size);
 /** The bytes as "input.btfmat" through the osgdb_btfmat reader (ReaderWriterBTF::readNode): the

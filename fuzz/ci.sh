@@ -14,7 +14,7 @@ fi
 build=$(realpath "$1") seeds=$(realpath "$2") seconds=$3 jobs=${4:-2}
 here=$(cd "$(dirname "$0")" && pwd)
 targets=(ubo2003_zip ubo2014 fitted_material coordinate_map btfmat_plugin plugin_names scene_file
-  bsvtf_tiles)
+  bsvtf_tiles rti_files)
 # The targets write every input to a file under $TMPDIR: memory, not disk, where there is one.
 if [ -d /dev/shm ] && [ -w /dev/shm ]; then export TMPDIR=/dev/shm; fi
 work=$(mktemp -d)

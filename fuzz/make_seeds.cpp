@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
         const fs::path out = fs::absolute(argv[1]);
         for (const char* folder :
              {"ubo2003_zip", "ubo2014", "fitted_material", "coordinate_map", "btfmat_plugin",
-              "plugin_names", "scene_file", "bsvtf_tiles", "fixtures"})
+              "plugin_names", "scene_file", "bsvtf_tiles", "rti_files", "fixtures"})
             fs::create_directories(out / folder);
 
         // UBO2003: 2 views x 2 lights of 2x2 texels in every image format.
@@ -172,6 +172,15 @@ int main(int argc, char** argv) {
             }
         }
         if (!lambert) throw Error("lambert did not fit");
+        // The RTI field's files: PTM RGB and LRGB, HSH of every order, from the sample.
+        for (const char* options : {"colour=rgb", "colour=luminance"})
+            saveMaterial(
+                *findMethod("ptm").fit(sample, FitOptions::parse(options)),
+                (out / "rti_files" / ("seed-" + std::string(options + 7) + ".ptm")).string());
+        for (const char* order : {"2", "3", "4"})
+            saveMaterial(
+                *findMethod("hsh").fit(sample, FitOptions::parse(std::string("order=") + order)),
+                (out / "rti_files" / ("seed-order" + std::string(order) + ".rti")).string());
         saveMaterial(*lambert, (fixtures / "m.btfmat").string());
 
         // Scenes: a MaterialNode naming m.btfmat (resolved in the fixtures folder), and one

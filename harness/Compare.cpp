@@ -128,8 +128,12 @@ void fitStage(const CompareOptions& options, const fs::path& work, CompareResult
                 job.extraArguments.end(),
                 {"--holdout-fraction", formatNumber(result.holdoutFraction, 6)});
             m.heldOutFile = "fits/" + m.method + "-heldout.exr";
-            if (!fitOrReuse(options, work, job, m.heldOutFile, m.heldOutFit))
-                m.heldOutFailure = "failed: " + m.heldOutFit.message;
+            try {
+                if (!fitOrReuse(options, work, job, m.heldOutFile, m.heldOutFit))
+                    m.heldOutFailure = "failed: " + m.heldOutFit.message;
+            } catch (const Error& e) {  // the child could not start: the method's row stands
+                m.heldOutFailure = std::string("failed: ") + e.what();
+            }
         }
         progress.advance();
     }

@@ -126,9 +126,9 @@ TEST(Harness, TinySampleWritesEveryFileAndTablesMatchTheMethodApis) {
     EXPECT_EQ(lpca["status"], "failed");
     EXPECT_EQ(lpca["message"], failure);
     const std::string report = readTextFile((out / "report.md").string());
-    // Error, memory, pass cost and fitting tables each show the failure.
+    // Error, held-out, memory, pass cost and fitting tables each show the failure.
     EXPECT_EQ(count(report, "| lpca | clusters=0 | " + failure + " |"), 1u) << report;
-    EXPECT_EQ(count(report, "| lpca | " + failure + " |"), 3u) << report;
+    EXPECT_EQ(count(report, "| lpca | " + failure + " |"), 4u) << report;
     EXPECT_NE(readTextFile((out / "results.csv").string())
                   .find("lpca,failed,\"" + failure + "\",clusters=0,"),
               std::string::npos);

@@ -2,6 +2,7 @@
 // applications load them: through osgDB and the build's plugin folder. No OpenGL here.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 
@@ -15,10 +16,12 @@
 #include <osgDB/WriteFile>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
 #include "tests/NotifyCapture.h"
 #include "tests/PluginTestUtil.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {
@@ -232,6 +235,41 @@ TEST(ScenePlugins, RtiCapturesAreFittedAsTheyCome) {
         EXPECT_EQ(node->getMaterial()->views().size(), 1u) << name;
         EXPECT_EQ(node->getMaterial()->lights().size(), 72u) << name;
     }
+}
+
+// The RTI field's fitted files through osgDB: osgdb_ptm and osgdb_rti give a MaterialNode over a
+// patch of the file's aspect; the pseudo-loader puts a model under one.
+TEST(ScenePlugins, PtmAndRtiFilesAreMaterialsOverAPatch) {
+    usePluginsFromBuild();
+    TempDir dir;
+    const MeasuredBtf btf = test::sampleBtf(6, 3);
+    saveMaterial(*findMethod("ptm").fit(btf, FitOptions()), dir.file("a.ptm"));
+    saveMaterial(*findMethod("hsh").fit(btf, FitOptions()), dir.file("a.rti"));
+    for (const char* name : {"a.ptm", "a.rti"}) {
+        const ReadResult result = readNode(dir.file(name));
+        MaterialNode* node = asMaterialNode(result);
+        ASSERT_NE(node, nullptr) << name << ": " << result.message();
+        ASSERT_NE(node->getMaterial(), nullptr) << name;
+        EXPECT_EQ(node->getMaterial()->width(), 6) << name;
+        ASSERT_EQ(node->getNumChildren(), 1u) << name;
+        // The patch: 2 x 1 (the file's aspect), in the XZ plane.
+        const osg::BoundingSphere bound = node->getChild(0)->getBound();
+        EXPECT_NEAR(bound.radius(), std::sqrt(1.0 + 0.25), 1e-5) << name;
+    }
+    osg::ref_ptr<osg::Geode> model = new osg::Geode;
+    model->setName("the model");
+    ASSERT_TRUE(osgDB::writeNodeFile(*model, dir.file("model.osgt")));
+    const ReadResult result =
+        readNode(dir.file("model.osgt") + ".(" + dir.file("a.rti") + ").btfmaterial");
+    MaterialNode* node = asMaterialNode(result);
+    ASSERT_NE(node, nullptr) << result.message();
+    EXPECT_EQ(node->getMaterial()->methodName(), "hsh");
+    ASSERT_EQ(node->getNumChildren(), 1u);
+    EXPECT_EQ(node->getChild(0)->getName(), "the model");
+    EXPECT_EQ(readNode(dir.file("none.ptm")).status(), ReadResult::FILE_NOT_FOUND);
+    test::writeTextFile(dir.file("bad.rti"), "#HSH1.2\n2\n1 1 3\n");
+    EXPECT_EQ(readNode(dir.file("bad.rti")).message(),
+              dir.file("bad.rti") + ": RTI type 2 is not read (only 3, hemispherical harmonics)");
 }
 
 TEST(ScenePlugins, MeasuredBtfIsFittedOnceThenReadFromTheCache) {

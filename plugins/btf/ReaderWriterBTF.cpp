@@ -311,11 +311,10 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
                           "pseudo-loader: NAME.zip.btfzip reads NAME.zip as a UBO2003/ATRIUM "
                           "measured BTF zip (for programs in which \".zip\" reaches OSG's own "
                           "zip plugin)");
-    } else if (extension == "ptm" || extension == "rti") {
-        std::string method;
-        const ForeignFileFormat* format = findForeignFile("x." + extension, &method);
-        supportsExtension(extension, (format ? format->description : std::string("RTI file")) +
-                                         " -> MaterialNode (a " + method +
+    } else if (std::string method;
+               const ForeignFileFormat* format = findForeignFile("x." + extension, &method)) {
+        // Another tool's fitted file that a method registered (materials/ForeignFiles.h).
+        supportsExtension(extension, format->description + " -> MaterialNode (a " + method +
                                          " material) over a flat patch facing -Y");
     } else if (extension == "lp")
         supportsExtension("lp",
@@ -437,7 +436,7 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
             return error(problem);
         // An RTI file read by itself is shown as RTI viewers show it: a flat patch of its aspect,
         // here facing the home view of osgviewer (-Y), lit by its headlight.
-        if (ext == "ptm" || ext == "rti") node->addChild(rtiPatch(*material).get());
+        if (findForeignFile(path)) node->addChild(rtiPatch(*material).get());
         return node.get();
     } catch (const std::exception& e) {
         return error(e.what());

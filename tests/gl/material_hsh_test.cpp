@@ -8,6 +8,8 @@
 
 #include "harness/sample/SampleBtf.h"
 #include "materials/hsh/Hsh.h"
+#include "materials/hsh/RtiFile.h"
+#include "tests/TestUtil.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
 namespace OSGBTF_TEST_FILE {
@@ -58,6 +60,27 @@ TEST(HshGpu, PerViewMatchesCpuAtMeasuredAndUnmeasuredDirections) {
     pairs.push_back({{31.7f, 77}, {52, 200}});
     pairs.push_back({{80, 10}, {20, 100}});  // beyond the outermost ring of views
     expectGpuEqualsCpu("views=all order=4", pairs);
+}
+
+// An .rti file renders from its own coefficients (no refit): GPU == CPU for the material read
+// from a written file of every order.
+TEST(HshGpu, MaterialsReadFromRtiFilesMatchCpu) {
+    test::TempDir dir;
+    SampleOptions sample;
+    sample.width = 8;
+    sample.height = 6;
+    for (const char* order : {"order=2", "order=3", "order=4"}) {
+        const osg::ref_ptr<HshMaterial> fitted =
+            HshMaterial::fit(makeSampleBtf(sample), FitOptions::parse(order));
+        writeRtiFile(*fitted, dir.file("m.rti"));
+        const osg::ref_ptr<HshMaterial> m = readRtiFile(dir.file("m.rti"));
+        const double bound = test::hshGpuTolerance(*m);
+        for (const auto& light : {glm::vec3(0, 0, 1), glm::vec3(0.48f, -0.6f, 0.64f)}) {
+            const test::GpuCpuComparison r = test::compareGpuWithCpu(*m, {0, 0, 1}, light);
+            EXPECT_GT(r.pixelsCompared, 40) << order;
+            EXPECT_LE(r.maxAbsDifference, bound) << order << ": " << r.worst;
+        }
+    }
 }
 
 }  // namespace OSGBTF_TEST_FILE

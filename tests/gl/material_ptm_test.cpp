@@ -8,6 +8,8 @@
 
 #include "harness/sample/SampleBtf.h"
 #include "materials/ptm/Ptm.h"
+#include "materials/ptm/PtmFile.h"
+#include "tests/TestUtil.h"
 #include "tests/gl/MaterialGpuCheck.h"
 
 namespace OSGBTF_TEST_FILE {
@@ -59,6 +61,27 @@ TEST(PtmGpu, LuminancePerViewMatchesCpuAtMeasuredAndUnmeasuredDirections) {
     expectGpuEqualsCpu("colour=luminance views=all", pairs);
     // The per-view rgb branch, two pairs.
     expectGpuEqualsCpu("views=all", {{{31.7f, 77}, {52, 200}}, {{15, 60}, {45, 20}}});
+}
+
+// A .ptm file renders from its own coefficients (no refit): GPU == CPU for the material read
+// from a written RGB and LRGB file.
+TEST(PtmGpu, MaterialsReadFromPtmFilesMatchCpu) {
+    test::TempDir dir;
+    SampleOptions sample;
+    sample.width = 8;
+    sample.height = 6;
+    for (const char* colour : {"rgb", "luminance"}) {
+        const osg::ref_ptr<PtmMaterial> fitted = PtmMaterial::fit(
+            makeSampleBtf(sample), FitOptions::parse(std::string("colour=") + colour));
+        writePtmFile(*fitted, dir.file("m.ptm"));
+        const osg::ref_ptr<PtmMaterial> m = readPtmFile(dir.file("m.ptm"));
+        const double bound = test::ptmGpuTolerance(*m);
+        for (const auto& light : {glm::vec3(0, 0, 1), glm::vec3(0.48f, -0.6f, 0.64f)}) {
+            const test::GpuCpuComparison r = test::compareGpuWithCpu(*m, {0, 0, 1}, light);
+            EXPECT_GT(r.pixelsCompared, 40) << colour;
+            EXPECT_LE(r.maxAbsDifference, bound) << colour << ": " << r.worst;
+        }
+    }
 }
 
 }  // namespace OSGBTF_TEST_FILE

@@ -725,6 +725,42 @@ TEST(StockOsgviewer, ShowsAModelThroughThePseudoLoader) {
     EXPECT_TRUE(materialColoured(run.stats)) << describe(run.stats) << "\n" << run.output;
 }
 
+// The RTI field's files as stock osgviewer users open them: `osgviewer icon.ptm` (a lit patch,
+// osgdb_ptm) and an .rti under a model through the pseudo-loader, both written by `btf fit` from
+// the real capture in tests/data/rti-icon-64; and a hand-written 2 x 1 .ptm.
+TEST(StockOsgviewer, ShowsPtmAndRtiFiles) {
+    REQUIRE_XVFB();
+    Xvfb xvfb;
+    ASSERT_TRUE(xvfb.ok()) << "Xvfb did not start: " << xvfb.log();
+    TempDir dir;
+    const std::string capture = osgBTF::test::sourceDir() + "/tests/data/rti-icon-64";
+    for (const std::string& args : {"-m ptm -o " + shellQuote(dir.file("icon.ptm")),
+                                    "-m hsh -o " + shellQuote(dir.file("icon.rti"))}) {
+        const CommandResult fit = runCommand(shellQuote(builtTool("btf")) + " --no-progress fit " +
+                                             shellQuote(capture) + " " + args);
+        ASSERT_EQ(fit.exitCode, 0) << fit.output;
+    }
+    std::string hand = "PTM_1.2\nPTM_FORMAT_RGB\n2 1\n1 1 1 1 1 1\n0 0 0 0 0 0\n";
+    for (const int byte : {0, 0, 0, 0, 0, 250, 0, 0, 0, 0, 0, 90,   // R: a5 per pixel
+                           0, 0, 0, 0, 0, 120, 0, 0, 0, 0, 0, 200,  // G
+                           0, 0, 0, 0, 0, 30,  0, 0, 0, 0, 0, 60})  // B
+        hand += char(byte);
+    osgBTF::test::writeTextFile(dir.file("hand.ptm"), hand);
+    for (const auto& [name, file] : std::vector<std::pair<std::string, std::string>>{
+             {"osgviewer-icon-ptm", "icon.ptm"},
+             {"osgviewer-hand-ptm", "hand.ptm"},
+             {"osgviewer-vase-icon-rti",
+              kExamplesDir + "/vase.osgt.(icon.rti,scale=2).btfmaterial"}}) {
+        const std::vector<std::string> arguments{file};
+        const OsgviewerRun run = runOsgviewer(xvfb, arguments, dir.path().string(),
+                                              [](const ScreenStats& s) { return notBlank(s); });
+        keepScreenshot(run.screen, name);
+        EXPECT_FALSE(run.exitedEarly) << arguments.front() << "\n" << run.output;
+        EXPECT_TRUE(notBlank(run.stats)) << arguments.front() << ": " << describe(run.stats) << "\n"
+                                         << run.output;
+    }
+}
+
 TEST(StockOsgviewer, ShowsAModelUnderAUbo2014FileAsStored) {
     // The line: osgviewer "model.osgt.(carpet.btf,scale=4).btfmaterial", with a
     // hand-written DFMF file (tests/HandWrittenUbo2014.h) opened as an fmf material.
