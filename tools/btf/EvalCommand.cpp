@@ -45,7 +45,8 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
     auto options = std::make_shared<Options>();
     command
         ->add_option("FITTED", options->input,
-                     "Fitted material file from btf fit, or a UBO2014 .btf (its stored factors, "
+                     "Fitted material file from btf fit, an RTI file (.ptm, .rti), or a UBO2014 "
+                     ".btf (its stored factors, "
                      "rendered as an fmf material without decoding)")
         ->required();
     command->add_option("-o,--output", options->output, "Output image (.exr, .png, .hdr, ...)")
