@@ -252,6 +252,13 @@ TEST(ScenePlugins, PtmAndRtiFilesAreMaterialsOverAPatch) {
         ASSERT_NE(node->getMaterial(), nullptr) << name;
         EXPECT_EQ(node->getMaterial()->width(), 6) << name;
         ASSERT_EQ(node->getNumChildren(), 1u) << name;
+        EXPECT_EQ(node->getMaterialFile(), dir.file(name));
+        // A scene keeps the reference: written and read back, the node reads the file again.
+        ASSERT_TRUE(osgDB::writeNodeFile(*node, dir.file(std::string(name) + ".osgt")));
+        MaterialNode* again = asMaterialNode(readNode(dir.file(std::string(name) + ".osgt")));
+        ASSERT_NE(again, nullptr) << name;
+        ASSERT_NE(again->getMaterial(), nullptr) << name;
+        EXPECT_EQ(again->getMaterial()->methodName(), node->getMaterial()->methodName());
         // The patch: 2 x 1 (the file's aspect), in the XZ plane.
         const osg::BoundingSphere bound = node->getChild(0)->getBound();
         EXPECT_NEAR(bound.radius(), std::sqrt(1.0 + 0.25), 1e-5) << name;

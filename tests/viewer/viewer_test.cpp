@@ -727,7 +727,7 @@ TEST(StockOsgviewer, ShowsAModelThroughThePseudoLoader) {
 
 // The RTI field's files as stock osgviewer users open them: `osgviewer icon.ptm` (a lit patch,
 // osgdb_ptm) and an .rti under a model through the pseudo-loader, both written by `btf fit` from
-// the real capture in tests/data/rti-icon-64; and a hand-written 2 x 1 .ptm.
+// the real capture in tests/data/rti-icon-64; and a hand-written 2 x 1 .ptm and 2 x 2 .rti.
 TEST(StockOsgviewer, ShowsPtmAndRtiFiles) {
     REQUIRE_XVFB();
     Xvfb xvfb;
@@ -746,9 +746,22 @@ TEST(StockOsgviewer, ShowsPtmAndRtiFiles) {
                            0, 0, 0, 0, 0, 30,  0, 0, 0, 0, 0, 60})  // B
         hand += char(byte);
     osgBTF::test::writeTextFile(dir.file("hand.ptm"), hand);
+    // And a hand-written 2 x 2 .rti of 4 terms: only c0 (the constant harmonic, 1/sqrt(2 pi))
+    // varies, ranges [0, 2] for c0 and [0, 0] for the others, top row red and green, bottom
+    // row blue and white.
+    std::string rti = "#HSH1.2\n3\n2 2 3\n4 2 1\n";
+    for (const float v : {0.0f, 0.0f, 0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 0.0f}) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &v, 4);
+        for (int i = 0; i < 4; ++i) rti += char((bits >> (8 * i)) & 0xFF);
+    }
+    for (const int c0 : {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255})  // R, G, B per pixel
+        rti += std::string{char(c0), 0, 0, 0};
+    osgBTF::test::writeTextFile(dir.file("hand.rti"), rti);
     for (const auto& [name, file] : std::vector<std::pair<std::string, std::string>>{
              {"osgviewer-icon-ptm", "icon.ptm"},
              {"osgviewer-hand-ptm", "hand.ptm"},
+             {"osgviewer-hand-rti", "hand.rti"},
              {"osgviewer-vase-icon-rti",
               kExamplesDir + "/vase.osgt.(icon.rti,scale=2).btfmaterial"}}) {
         const std::vector<std::string> arguments{file};
