@@ -18,6 +18,7 @@
 #include "harness/Pictures.h"
 #include "harness/Report.h"
 #include "loaders/LoadBtf.h"
+#include "materials/MethodRegistry.h"
 #include "scene/EnvironmentLight.h"
 
 namespace osgBTF {
@@ -229,8 +230,9 @@ void environmentPicture(const CompareOptions& options, HeadlessRenderer& rendere
              fs::path(options.envFile).filename().string() + " (rotation " +
              formatNumber(options.envRotation, 3) + " degrees, exposure " +
              formatNumber(options.envExposure, 3) +
-             "), one column per method, rows: view from above, view 60 degrees from +X. pca, fmf "
-             "and lpca through their folded environment programs (exact); the others as the sum "
+             "), one column per method, rows: view from above, view 60 degrees from +X. " +
+             environmentMethodsText() +
+             " through their folded environment programs (exact); the others as the sum "
              "of their point-light images at the measured light directions weighted by the "
              "projected environment (scene/README.md). sRGB-encoded preview of linear values."});
 }

@@ -15,7 +15,7 @@
 #include "harness/FitRunner.h"
 #include "harness/HeldOut.h"
 #include "harness/PassCost.h"
-#include "harness/ShaderCost.h"
+#include "harness/MaterialShaderCost.h"
 #include "loaders/LoadOptions.h"
 #include "materials/Material.h"
 

@@ -98,6 +98,16 @@ const MethodInfo& pluginDefaultMethod() {
     return methodWith(&MethodInfo::pluginDefault, "plugins' default");
 }
 
+std::string environmentMethodsText() {
+    std::vector<std::string> names;
+    for (const std::string& name : methodNamesInOrder())
+        if (findMethod(name).environment) names.push_back(name);
+    std::string text;
+    for (std::size_t i = 0; i < names.size(); ++i)
+        text += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+    return text;
+}
+
 const ForeignFileFormat* findForeignFile(const std::string& path, std::string* method) {
     std::string extension = std::filesystem::path(path).extension().string();
     for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));

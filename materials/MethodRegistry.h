@@ -122,6 +122,9 @@ const MethodInfo& pluginDefaultMethod();
 std::vector<std::string> methodNames();
 /** Registered method names by MethodInfo::order (then name). */
 std::vector<std::string> methodNamesInOrder();
+/** The methods with folded environment lighting (MethodInfo::environment), in order, as prose:
+ *  "pca, fmf and lpca" (help texts and captions name them from here). */
+std::string environmentMethodsText();
 
 /** Saves through the fitted-material container (atomic), or as another tool's file where a method
  *  registered the extension (MethodInfo::foreignFiles; the material must be of that method, else

@@ -1,7 +1,7 @@
 // osgBTF: what one fragment of a method's shader costs, counted statically from the GLSL.
 //
 // Each method supplies its count through MethodInfo::shaderCost (its shader is in its folder's
-// care); harness/ShaderCost.h applies it to a fitted material for the comparison's Table 3.
+// care); harness/MaterialShaderCost.h applies it to a fitted material for the comparison's Table 3.
 #pragma once
 
 #include <string>

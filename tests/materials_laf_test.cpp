@@ -13,36 +13,13 @@
 #include "materials/laf/Laf.h"
 #include "materials/laf/Lobes.h"
 #include "materials/lambert/Lambert.h"
+#include "tests/ModelData.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
-
-namespace {
-
-/** Data from a model (evaluateMeasured) plus uniform noise of +-amplitude. */
-MeasuredBtf dataFrom(const Material& model, float amplitude, unsigned seed) {
-    MeasuredBtf btf(model.width(), model.height(), model.views(), model.lights());
-    std::mt19937 random(seed);
-    std::uniform_real_distribution<float> noise(-amplitude, amplitude);
-    std::vector<float> abrdf(model.views().size() * model.lights().size() * 3);
-    for (std::size_t t = 0; t < btf.texelCount(); ++t) {
-        model.evaluateMeasured(t, abrdf.data());
-        std::size_t i = 0;
-        for (std::size_t v = 0; v < btf.viewCount(); ++v)
-            for (std::size_t l = 0; l < btf.lightCount(); ++l)
-                for (int c = 0; c < 3; ++c) btf.setValue(v, l, t, c, abrdf[i++] + noise(random));
-    }
-    return btf;
-}
-
-ErrorSummary errorOf(const MeasuredBtf& btf, const Material& m) {
-    return computeError(btf, [&](std::size_t t, float* out) { m.evaluateMeasured(t, out); });
-}
-
-}  // namespace
 
 TEST(Laf, InvalidOptionsAndInputAreRefused) {
     const MeasuredBtf btf = test::sampleBtf(2, 2);
@@ -93,18 +70,18 @@ TEST(Laf, RecoversAKnownModelFromNoisyData) {
         }
     }
     const float noise = 0.01f;
-    const MeasuredBtf data = dataFrom(*truth, noise, 7);
+    const MeasuredBtf data = test::dataFromModel(*truth, noise, 7);
     osg::ref_ptr<LafMaterial> fitted = LafMaterial::fit(data, {});
     ASSERT_EQ(fitted->lobeCount(), 2);
     // Fitted model vs the noise-free truth: close to it, far below the noise amplitude.
-    const MeasuredBtf clean = dataFrom(*truth, 0.0f, 1);
-    const ErrorSummary vsTruth = errorOf(clean, *fitted);
+    const MeasuredBtf clean = test::dataFromModel(*truth, 0.0f, 1);
+    const ErrorSummary vsTruth = test::modelError(clean, *fitted);
     RecordProperty("error_vs_truth_avg", std::to_string(vsTruth.average));
     std::cout << "LAF recovery: error vs truth avg " << vsTruth.average << " max "
               << vsTruth.maximum << "\n";
     EXPECT_LT(vsTruth.maximum, 0.01);
     // And vs the noisy data the error is the noise's own: |uniform RGB noise| ~ 0.0095 for +-0.01.
-    EXPECT_LT(errorOf(data, *fitted).average, 0.0125);
+    EXPECT_LT(test::modelError(data, *fitted).average, 0.0125);
     EXPECT_EQ(fitted->fitInfo.at("fallbacks"), "0");
 }
 
@@ -119,12 +96,12 @@ TEST(Laf, SampleFitIsFiniteBoundedAndBeatsLambert) {
             ASSERT_GE(m->lobes[i], 0.5f);
         }  // n > 0: valid lobes only
     }
-    const ErrorSummary error = errorOf(btf, *m);
+    const ErrorSummary error = test::modelError(btf, *m);
     EXPECT_EQ(error.nonFiniteValues, 0u);
     // No divergent texel: each is within its data's spread around the texel's best lit-texture
     // colour (rho * l_z, the Lambert baseline, what the fitter falls back to), plus the 8-bit
     // versus half rounding of that colour.
-    const ErrorSummary lambert = errorOf(btf, *LambertMaterial::fit(btf, {}));
+    const ErrorSummary lambert = test::modelError(btf, *LambertMaterial::fit(btf, {}));
     for (std::size_t t = 0; t < btf.texelCount(); ++t)
         EXPECT_LE(error.perTexel[t], lambert.perTexel[t] + 0.004) << "texel " << t;
     std::cout << "LAF on the 8x6 sample: error avg " << error.average << " min " << error.minimum
@@ -149,11 +126,11 @@ TEST(Laf, LiteralSeedModelWithoutCosineIsAvailable) {
         const float lobe[4] = {-0.9f, -0.9f, 0.9f, 4.0f + float(t)};
         for (int i = 0; i < 4; ++i) truth->lobes.set(t * 4 + i, roundHalf(lobe[i]));
     }
-    const MeasuredBtf data = dataFrom(*truth, 0.0f, 1);
+    const MeasuredBtf data = test::dataFromModel(*truth, 0.0f, 1);
     osg::ref_ptr<LafMaterial> fitted =
         LafMaterial::fit(data, FitOptions::parse("lobes=1 cosine=0"));
     EXPECT_FALSE(fitted->cosine());
-    EXPECT_LT(errorOf(data, *fitted).maximum, 0.005);
+    EXPECT_LT(test::modelError(data, *fitted).maximum, 0.005);
     EXPECT_FALSE(LafMaterial::fromFile(fitted->toFittedMaterial())->cosine());
 }
 

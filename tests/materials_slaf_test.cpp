@@ -14,35 +14,13 @@
 #include "materials/laf/Laf.h"
 #include "materials/laf/Lobes.h"
 #include "materials/slaf/Slaf.h"
+#include "tests/ModelData.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
-
-namespace {
-
-MeasuredBtf dataFrom(const Material& model, float amplitude, unsigned seed) {
-    MeasuredBtf btf(model.width(), model.height(), model.views(), model.lights());
-    std::mt19937 random(seed);
-    std::uniform_real_distribution<float> noise(-amplitude, amplitude);
-    std::vector<float> abrdf(model.views().size() * model.lights().size() * 3);
-    for (std::size_t t = 0; t < btf.texelCount(); ++t) {
-        model.evaluateMeasured(t, abrdf.data());
-        std::size_t i = 0;
-        for (std::size_t v = 0; v < btf.viewCount(); ++v)
-            for (std::size_t l = 0; l < btf.lightCount(); ++l)
-                for (int c = 0; c < 3; ++c) btf.setValue(v, l, t, c, abrdf[i++] + noise(random));
-    }
-    return btf;
-}
-
-ErrorSummary errorOf(const MeasuredBtf& btf, const Material& m) {
-    return computeError(btf, [&](std::size_t t, float* out) { m.evaluateMeasured(t, out); });
-}
-
-}  // namespace
 
 TEST(Slaf, InvalidOptionsAndInputAreRefused) {
     const MeasuredBtf btf = test::sampleBtf(2, 2);
@@ -81,9 +59,9 @@ TEST(Slaf, RecoversAKnownModelFromNoisyData) {
                                  roundHalf(0.6 + 0.4 * std::pow(z, 1.0 + c + 0.5 * double(t))));
         }
     }
-    const MeasuredBtf data = dataFrom(*truth, 0.01f, 11);
+    const MeasuredBtf data = test::dataFromModel(*truth, 0.01f, 11);
     osg::ref_ptr<SlafMaterial> fitted = SlafMaterial::fit(data, {});
-    const ErrorSummary vsTruth = errorOf(dataFrom(*truth, 0.0f, 1), *fitted);
+    const ErrorSummary vsTruth = test::modelError(test::dataFromModel(*truth, 0.0f, 1), *fitted);
     std::cout << "SLAF recovery: error vs truth avg " << vsTruth.average << " max "
               << vsTruth.maximum << "\n";
     RecordProperty("error_vs_truth_avg", std::to_string(vsTruth.average));
@@ -91,10 +69,10 @@ TEST(Slaf, RecoversAKnownModelFromNoisyData) {
     // 0.01 with the default 2 alternation rounds (the lobes start from a LAF fit biased by the
     // view table and the alternation converges slowly); bounded here so regressions show.
     EXPECT_LT(vsTruth.maximum, 0.015);
-    EXPECT_LT(errorOf(data, *fitted).average, 0.02);
+    EXPECT_LT(test::modelError(data, *fitted).average, 0.02);
     // A LAF fit cannot express T: SLAF must do clearly better on these data.
-    EXPECT_LT(errorOf(data, *fitted).average,
-              0.8 * errorOf(data, *LafMaterial::fit(data, {})).average);
+    EXPECT_LT(test::modelError(data, *fitted).average,
+              0.8 * test::modelError(data, *LafMaterial::fit(data, {})).average);
 }
 
 TEST(Slaf, SampleFitIsFiniteBoundedAndNotWorseThanLaf) {
@@ -107,7 +85,7 @@ TEST(Slaf, SampleFitIsFiniteBoundedAndNotWorseThanLaf) {
             ASSERT_GE(m->lobes[i], 0.5f);
         }
     }
-    const ErrorSummary error = errorOf(btf, *m);
+    const ErrorSummary error = test::modelError(btf, *m);
     EXPECT_EQ(error.nonFiniteValues, 0u);
     // No divergent texel: bounded by the data's spread around each view's best lit-texture colour
     // (T(v) * l_z with rho_d = 1: what the fitter falls back to), plus half-float rounding.
@@ -134,7 +112,7 @@ TEST(Slaf, SampleFitIsFiniteBoundedAndNotWorseThanLaf) {
         }
         EXPECT_LE(error.perTexel[t], spread + 1e-3) << "texel " << t;
     }
-    const ErrorSummary laf = errorOf(btf, *LafMaterial::fit(btf, {}));
+    const ErrorSummary laf = test::modelError(btf, *LafMaterial::fit(btf, {}));
     std::cout << "SLAF on the 6x5 sample: error avg " << error.average << " min " << error.minimum
               << " max " << error.maximum << " (laf avg " << laf.average << ")\n";
     RecordProperty("error_avg", std::to_string(error.average));

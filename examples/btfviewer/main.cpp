@@ -41,6 +41,7 @@
 #include "core/Error.h"
 #include "examples/ExampleScenes.h"
 #include "examples/btfviewer/EnvironmentControl.h"
+#include "materials/MethodRegistry.h"
 #include "scene/MaterialNode.h"
 #include "scene/OwnPlugins.h"
 #include "scene/ShadowTerminator.h"
@@ -600,9 +601,11 @@ int run(osg::ArgumentParser& arguments) {
     usage->addCommandLineOption(
         "--env FILE",
         "Light every BTF material by this HDR lat-long environment (.hdr, .exr; +Z up, top row "
-        "the zenith): pca, fmf and lpca per vertex with the scene's self-shadowing (recomputed "
-        "in the background when the environment turns or the material changes), the other "
-        "methods by 8 median-cut lights; the orbit and scene lights start off");
+        "the zenith): " +
+            osgBTF::environmentMethodsText() +
+            " per vertex with the scene's self-shadowing (recomputed in the background when the "
+            "environment turns or the material changes), the other methods by 8 median-cut "
+            "lights; the orbit and scene lights start off");
     usage->addCommandLineOption("--exposure E", "--env: exposure (default 1)");
     usage->addCommandLineOption("--env-rotation DEG",
                                 "--env: turn the environment about Z (degrees, default 0)");
@@ -753,8 +756,8 @@ int run(osg::ArgumentParser& arguments) {
         const int height = mipmapped ? m.mipLayout().baseHeight() : m.height();
         model = createSurfaceModel(float(width) / float(height), 1.0f);
         if (!scaleGiven) textureScale = 1;
-        std::cout << "btfviewer: RTI mode (" << width << "x" << height << ", "
-                  << m.views().size() << " view(s), " << m.lights().size()
+        std::cout << "btfviewer: RTI mode (" << width << "x" << height << ", " << m.views().size()
+                  << " view(s), " << m.lights().size()
                   << " lights): the light follows the mouse, 'v' tilts the view\n";
     }
     for (const auto& [file, node] : named) {

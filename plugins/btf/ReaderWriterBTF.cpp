@@ -327,8 +327,9 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
             std::string("pseudo-loader: a model under an osgBTF material, ") + kPseudoSyntax);
     if (extension != "btfmat") {
         supportsOption("method=<name>",
-                       "fit method for measured BTFs (default: lpca; a UBO2014 .btf opens as its "
-                       "stored factors, an fmf material, unless method= is given)");
+                       "fit method for measured BTFs (default: " + pluginDefaultMethod().name +
+                           "; a UBO2014 .btf opens as its stored factors unless method= is "
+                           "given)");
         // Each fit option once, with what every method that has it makes of it.
         std::map<std::string, std::string> fitOptions;
         for (const std::string& name : methodNamesInOrder())

@@ -7,6 +7,7 @@
 
 #include "core/Error.h"
 #include "harness/Compare.h"
+#include "materials/MethodRegistry.h"
 #include "scene/EnvironmentLight.h"
 #include "tools/btf/Commands.h"
 
@@ -88,8 +89,8 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
         methodList += (methodList.empty() ? "" : ",") + m;
     command
         ->add_option("--methods", options->methods,
-                     "Comma-separated methods, or 'all' (" + methodList +
-                         "); the plain lit texture baseline 'lambert' is always added")
+                     "Comma-separated methods, or 'all' (" + methodList + "); the baseline '" +
+                         baselineMethod().name + "' is always added")
         ->capture_default_str();
     command->add_option(
         "--lobes", options->lobes,

@@ -1,4 +1,4 @@
-#include "harness/ShaderCost.h"
+#include "harness/MaterialShaderCost.h"
 
 #include <algorithm>
 
