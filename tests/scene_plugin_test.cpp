@@ -255,7 +255,8 @@ TEST(ScenePlugins, PtmAndRtiFilesAreMaterialsOverAPatch) {
         EXPECT_EQ(node->getMaterialFile(), dir.file(name));
         // A scene keeps the reference: written and read back, the node reads the file again.
         ASSERT_TRUE(osgDB::writeNodeFile(*node, dir.file(std::string(name) + ".osgt")));
-        MaterialNode* again = asMaterialNode(readNode(dir.file(std::string(name) + ".osgt")));
+        const ReadResult back = readNode(dir.file(std::string(name) + ".osgt"));
+        MaterialNode* again = asMaterialNode(back);
         ASSERT_NE(again, nullptr) << name;
         ASSERT_NE(again->getMaterial(), nullptr) << name;
         EXPECT_EQ(again->getMaterial()->methodName(), node->getMaterial()->methodName());
