@@ -216,6 +216,12 @@ std::vector<ExrPartSize> exrPartSizes(const std::string& name, exr_context_initi
         check(exr_get_chunk_count(context, part, &count));
         size.chunks = count;
         chunks += std::uint64_t(std::max(count, 0));
+        exr_storage_t storage = EXR_STORAGE_SCANLINE;
+        std::int32_t lines = 0;
+        if (exr_get_storage(context, part, &storage) == EXR_ERR_SUCCESS &&
+            (storage == EXR_STORAGE_SCANLINE) &&
+            exr_get_scanlines_per_chunk(context, part, &lines) == EXR_ERR_SUCCESS)
+            size.linesPerChunk = std::max(lines, 0);
         sizes.push_back(size);
     }
     if (chunks * 8 > fileBytes)
@@ -257,10 +263,16 @@ std::uint64_t exrReadBytes(const ExrPartSize& part, int copies) {
         {std::uint64_t(std::max<std::int64_t>(part.width, 0)),
          std::uint64_t(std::max<std::int64_t>(part.height, 0)),
          std::uint64_t(std::max(part.channels, 0)), 4, std::uint64_t(std::max(copies, 0))});
+    const std::uint64_t lineBuffers =
+        saturatedProduct({std::uint64_t(std::max<std::int64_t>(part.width, 0)),
+                          std::uint64_t(std::max(part.linesPerChunk, 0)),
+                          std::uint64_t(std::max(part.channels, 0)), 4, 2});
     const std::uint64_t bookkeeping =
         saturatedProduct({std::uint64_t(std::max<std::int64_t>(part.height, 0)), 24}) +
         saturatedProduct({std::uint64_t(std::max<std::int64_t>(part.chunks, 0)), 8});
-    return pixels > UINT64_MAX - bookkeeping ? UINT64_MAX : pixels + bookkeeping;
+    const std::uint64_t overhead =
+        lineBuffers > UINT64_MAX - bookkeeping ? UINT64_MAX : lineBuffers + bookkeeping;
+    return pixels > UINT64_MAX - overhead ? UINT64_MAX : pixels + overhead;
 }
 
 }  // namespace osgBTF

@@ -19,6 +19,10 @@ struct ExrPartSize {
     std::int64_t width = 0, height = 0;  ///< of the data window
     int channels = 0;
     std::int64_t chunks = 0;  ///< entries of the part's chunk offset table
+    /** Scanlines per chunk (1 uncompressed, RLE and ZIPS; 16 ZIP and PXR24; 32 PIZ and B44; 256
+     *  DWAB), for tiled parts 0: the C++ reader's line buffers hold this many lines of the data
+     *  window's width, whatever its height. */
+    int linesPerChunk = 0;
 };
 
 /** Reads the headers of an OpenEXR file, and nothing else, through OpenEXR's C library: its C++
@@ -36,7 +40,9 @@ std::vector<ExrPartSize> readExrPartSizes(const std::string& name, const void* b
                                           std::size_t size);
 
 /** Bytes that reading a part into `copies` float buffers needs, with OpenEXR's own bookkeeping
- *  (about 24 bytes per scanline and 8 per chunk); saturates instead of wrapping around. */
+ *  (about 24 bytes per scanline and 8 per chunk) and its line buffers (a compressed and an
+ *  uncompressed one of linesPerChunk lines of the full width: a data window 3 million pixels wide
+ *  and 1 high takes 400 MB in them under ZIP); saturates instead of wrapping around. */
 std::uint64_t exrReadBytes(const ExrPartSize& part, int copies = 1);
 
 }  // namespace osgBTF

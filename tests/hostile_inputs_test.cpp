@@ -552,10 +552,12 @@ TEST(HostileInputs, FittedMaterialWithAbsurdWindowOrDepthIsRefused) {
     patchDataWindow(wide, 999999999, 3);
     MemoryLimit limit(kLimit);
     Refusal r = refusalOf([&] { loadFittedMaterial(wide); });
-    // 1e9 x 4 x 3 values, read through two float buffers: 96e9 bytes = 89.4 GiB.
+    // 1e9 x 4 x 3 values, read through two float buffers: 96e9 bytes; OpenEXR's two line
+    // buffers of 16 lines (ZIP) of the full width: 1e9 x 16 x 3 x 4 x 2 = 384e9 bytes; together
+    // 480e9 bytes = 447.0 GiB.
     EXPECT_EQ(r.message, wide +
                              ": textures of 1 part(s), the largest 1000000000x4 pixels x 3 "
-                             "channels: needs 89.4 GiB, more than the memory limit of 8.0 GiB" +
+                             "channels: needs 447.0 GiB, more than the memory limit of 8.0 GiB" +
                              kRaise);
     expectSmall(r, "fitted material 1e9 texels wide");
 
@@ -568,7 +570,7 @@ TEST(HostileInputs, FittedMaterialWithAbsurdWindowOrDepthIsRefused) {
     });
     EXPECT_EQ(r.message, btfmat +
                              ": textures of 1 part(s), the largest 1000000000x4 pixels x 3 "
-                             "channels: needs 89.4 GiB, more than the memory limit of 8.0 GiB" +
+                             "channels: needs 447.0 GiB, more than the memory limit of 8.0 GiB" +
                              kRaise);
     expectSmall(r, "fitted material 1e9 texels wide through osgdb_btfmat");
 
@@ -595,9 +597,11 @@ TEST(HostileInputs, CoordinateMapWithAbsurdSizeIsRefused) {
     patchDataWindow(path, 999999999, 3);
     MemoryLimit limit(kLimit);
     const Refusal r = refusalOf([&] { readCoordinateMap(path); });
-    // 1e9 x 4 texels x 2 channels x 4 bytes + 4 rows x 24 + 1 chunk x 8 = 29.8 GiB.
+    // 1e9 x 4 texels x 2 channels x 4 bytes (32e9) + OpenEXR's two line buffers of 16 lines
+    // (ZIP) of the full width, 1e9 x 16 x 2 x 4 x 2 (256e9) + 4 rows x 24 + 1 chunk x 8 = 268.2
+    // GiB.
     EXPECT_EQ(r.message, path +
-                             ": 1000000000x4 pixels x 2 channels: needs 29.8 GiB, more than the "
+                             ": 1000000000x4 pixels x 2 channels: needs 268.2 GiB, more than the "
                              "memory limit of 8.0 GiB" +
                              kRaise);
     expectSmall(r, "coordinate map 1e9 texels wide");
