@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <sstream>
 
+#include <gtest/gtest.h>
 #include <glm/geometric.hpp>
 #include <osg/Geode>
 #include <osg/MatrixTransform>
@@ -321,6 +323,22 @@ double hshGpuTolerance(const HshMaterial& m) {
                 largest = std::max(largest, 2 * sum);
             }
     return 64 * std::ldexp(1.0, -24) * largest;
+}
+
+void expectGpuEqualsCpuAtPairs(const Material& material, double bound,
+                               const std::vector<std::pair<Direction, Direction>>& pairs,
+                               const std::string& label) {
+    double worst = 0;
+    for (const auto& [v, l] : pairs) {
+        const GpuCpuComparison r = compareGpuWithCpu(material, v.toVector(), l.toVector());
+        worst = std::max(worst, r.maxAbsDifference);
+        EXPECT_GT(r.pixelsCompared, 48) << label << ": view " << v.theta << "/" << v.phi;
+        EXPECT_LE(r.maxAbsDifference, bound)
+            << label << ": view " << v.theta << "/" << v.phi << " light " << l.theta << "/" << l.phi
+            << ": " << r.worst;
+    }
+    std::cout << label << " GPU vs CPU: largest difference " << worst << " (bound " << bound
+              << ") over " << pairs.size() << " (view, light) pairs\n";
 }
 
 double methodGpuBound(const Material& m, const glm::vec3& view, const glm::vec3& light) {

@@ -7,6 +7,7 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/mat3x3.hpp>
@@ -113,6 +114,12 @@ double ptmGpuTolerance(const PtmMaterial& material);
 /** The same for an HSH material: the basis's ~45 float operations and up to 16 terms, so 64 u
  *  times the largest sum of |c_k| times the largest harmonic (about 1.1; 2 is used). */
 double hshGpuTolerance(const HshMaterial& material);
+
+/** Expects GPU == CPU within `bound` for `material` rendered from each (view, light) pair (and a
+ *  render that covers more than 48 texels); prints the largest difference under `label`. */
+void expectGpuEqualsCpuAtPairs(const Material& material, double bound,
+                               const std::vector<std::pair<Direction, Direction>>& pairs,
+                               const std::string& label);
 
 /** The GPU-CPU bound of the methods' own tests (bilinear_filter_test.cpp's) for a render from
  *  `view` lit from `light`: lambert 1e-5, ptm ptmGpuTolerance, hsh hshGpuTolerance, fmf 1e-3 of the
