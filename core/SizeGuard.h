@@ -30,7 +30,9 @@ struct ExrPartSize {
  *  the data window, as it opens a file, before a caller could look at the data window. Throws
  *  Error "PATH: OpenEXR: ..." for unreadable headers, "PATH: OpenEXR header: attribute 'A' (TYPE)
  *  claims N bytes but M remain in the file ..." for an attribute the C++ reader would allocate
- *  from that claim, and "PATH: the headers announce N chunks,
+ *  from that claim, "PATH: OpenEXR header: attribute 'A' (TYPE) gives its size as N bytes, but a
+ *  value of that type takes M (corrupt file)" for a fixed-size type whose size field disagrees
+ *  (the C and C++ readers then read different headers), and "PATH: the headers announce N chunks,
  *  whose offset table alone takes ..., but the file holds only B bytes ..." when the tables
  *  could not be in the file. Callers then check exrReadBytes with checkMemory before opening the
  *  file with the C++ API. */

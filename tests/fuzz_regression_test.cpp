@@ -169,14 +169,15 @@ TEST_F(FuzzFindings, ExrAttributeClaimingMoreThanTheFileIsRefusedBeforeOpenExrAl
               material +
                   ": OpenEXR header: attribute 'osgBTF.method' (string) claims 1836347395 bytes "
                   "but 1728 remain in the file (truncated or corrupt file)");
-    // A compression attribute whose size field says 905969665: OpenEXR reads its one byte and
-    // takes what follows as the next attribute, an unknown type (allocated from its size).
+    // A compression attribute whose size field says 905969665: OpenEXR's C++ reader reads its
+    // one byte and takes what follows as the next attribute, an unknown type (allocated from its
+    // size). A fixed-size value whose size field disagrees is now refused by itself.
     const std::string plugin =
         input("btfmat_plugin", "hang-attribute-after-compression-claims-1.9GB.btfmat");
     EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::loadFittedMaterial(plugin); }),
               plugin +
-                  ": OpenEXR header: attribute '0,0;30,0;30,120;30,240;60,60' () claims "
-                  "1886220131 bytes but 2367 remain in the file (truncated or corrupt file)");
+                  ": OpenEXR header: attribute 'compression' (compression) gives its size as "
+                  "905969665 bytes, but a value of that type takes 1 (corrupt file)");
     // A channel list whose fields and size field disagree: OpenEXR follows the fields, and the
     // string that it reads next is the one checked.
     const std::string channels =
@@ -191,6 +192,20 @@ TEST_F(FuzzFindings, ExrAttributeClaimingMoreThanTheFileIsRefusedBeforeOpenExrAl
         map +
             ": OpenEXR header: attribute 'lineOrdpression' (\\x01) claims 1677918208 bytes but "
             "319 remain in the file (truncated or corrupt file)");
+}
+
+// CI's fuzz pass (2026-12-06): the same 3,223,415 x 1 ZIP window as slow-zip-window-3223415-wide,
+// behind a compression attribute whose size field says 134217729. OpenEXR's C library, which the
+// size guard reads headers with, calls that attribute invalid and read a window small enough to
+// pass; the C++ reader, which reads the pixels, saw the wide one and filled its line buffers
+// twice (5 s under ASan).
+TEST_F(FuzzFindings, ExrAttributeOfFixedTypeWithAnotherSizeIsRefused) {
+    const std::string map =
+        input("coordinate_map", "slow-zip-window-behind-compression-size-134217729.exr");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::readCoordinateMap(map); }),
+              map +
+                  ": OpenEXR header: attribute 'compression' (compression) gives its size as "
+                  "134217729 bytes, but a value of that type takes 1 (corrupt file)");
 }
 
 TEST_F(FuzzFindings, Ubo2014RowsWithNoColumnToKeepAreSkippedNotWalked) {
