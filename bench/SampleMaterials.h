@@ -10,6 +10,7 @@
 
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 
 namespace osgBTF::bench {

@@ -25,6 +25,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/EnvironmentState.h"
 #include "materials/IlluminationPca.h"
+#include "materials/MethodOptions.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
 #include "scene/VertexEnvironment.h"

@@ -17,6 +17,8 @@
 #include "harness/headless/HeadlessRenderer.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 
 namespace {
 

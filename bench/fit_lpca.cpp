@@ -14,6 +14,7 @@
 #include "core/ErrorMetrics.h"
 #include "core/Progress.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/lpca/Lpca.h"
 
 namespace {

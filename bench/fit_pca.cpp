@@ -14,6 +14,7 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/pca/Pca.h"
 
 using osgBTF::bench::cpuSeconds;

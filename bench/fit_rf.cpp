@@ -18,6 +18,8 @@
 #include "core/Progress.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodOptions.h"
 #include "materials/rf/Rf.h"
 
 int main(int argc, char** argv) {

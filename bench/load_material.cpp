@@ -18,6 +18,7 @@
 
 #include "bench/ProcessUsage.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 
 namespace {

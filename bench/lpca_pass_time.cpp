@@ -14,6 +14,7 @@
 #include "harness/PassCost.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/lpca-revised/LpcaRevised.h"
 #include "materials/lpca/Lpca.h"
 

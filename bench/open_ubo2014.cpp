@@ -23,6 +23,7 @@
 #include "harness/MaterialImage.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "loaders/Ubo2014.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/OpenMaterial.h"

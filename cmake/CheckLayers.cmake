@@ -1,5 +1,6 @@
 # cmake -DROOT=<source tree> -P cmake/CheckLayers.cmake: fails, listing every include of a
-# higher layer by a lower one (cmake/LayerRules.cmake). Run by the test layers.include_graph.
+# higher layer by a lower one and every include cycle among headers (cmake/LayerRules.cmake). Run
+# by the test layers.include_graph.
 cmake_minimum_required(VERSION 3.22)  # policies as in the build (IN_LIST)
 if(NOT ROOT)
   message(FATAL_ERROR "CheckLayers.cmake: pass -DROOT=<source tree>")
@@ -11,4 +12,10 @@ if(violations)
   list(JOIN violations "\n" text)
   message(FATAL_ERROR "${count} include(s) of a higher layer:\n${text}")
 endif()
-message(STATUS "include graph follows the layers")
+osgbtf_include_cycles(${ROOT} cycles)
+if(cycles)
+  list(LENGTH cycles count)
+  list(JOIN cycles "\n" text)
+  message(FATAL_ERROR "${count} include cycle(s) among headers:\n${text}")
+endif()
+message(STATUS "include graph follows the layers and has no cycle")

@@ -34,9 +34,16 @@ endforeach()
 
 foreach(entry IN LISTS UMBRELLAS)
   string(REGEX REPLACE "=.*" "" name "${entry}")
-  string(REGEX REPLACE "^[^=]*=" "" header "${entry}")
-  write_if_changed(${root}/${name}
-    "// -*-c++-*- osgBTF ${VERSION}: <osgBTF/${name}> is ${header}\n#pragma once\n#include <osgBTF/${header}>\n")
+  string(REGEX REPLACE "^[^=]*=" "" headers "${entry}")
+  # NAME=a.h+b.h: an umbrella of several headers (e.g. Material: the interface, the registry and
+  # loading/saving, which are separate headers in the source tree).
+  string(REPLACE "+" ";" headers "${headers}")
+  list(JOIN headers ", " listed)
+  set(text "// -*-c++-*- osgBTF ${VERSION}: <osgBTF/${name}> is ${listed}\n#pragma once\n")
+  foreach(header IN LISTS headers)
+    string(APPEND text "#include <osgBTF/${header}>\n")
+  endforeach()
+  write_if_changed(${root}/${name} "${text}")
   list(APPEND written ${root}/${name})
 endforeach()
 

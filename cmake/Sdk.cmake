@@ -38,7 +38,7 @@ set(OSGBTF_SDK_UMBRELLAS
   MaterialNode=scene/MaterialNode.h
   EnvironmentLight=scene/EnvironmentLight.h
   EnvironmentLitGroup=scene/EnvironmentLitGroup.h
-  Material=materials/Material.h
+  Material=materials/Material.h+materials/MethodRegistry.h+materials/MaterialFiles.h
   MaterialState=materials/MaterialState.h
   LoadBtf=loaders/LoadBtf.h
   LoadOptions=loaders/LoadOptions.h

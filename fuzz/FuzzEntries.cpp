@@ -24,6 +24,7 @@
 #include "core/Progress.h"
 #include "loaders/Ubo2003.h"
 #include "loaders/Ubo2014.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "plugins/btf/ReaderWriterBTF.h"
 #include "streaming/TileCodec.h"

@@ -18,6 +18,7 @@
 #include "harness/Pictures.h"
 #include "harness/Report.h"
 #include "loaders/LoadBtf.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "scene/EnvironmentLight.h"
 

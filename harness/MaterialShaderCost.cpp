@@ -1,4 +1,5 @@
 #include "harness/MaterialShaderCost.h"
+#include "materials/MethodRegistry.h"
 
 #include <algorithm>
 

@@ -8,6 +8,7 @@
 #include <osg/Uniform>
 
 #include "core/Error.h"
+#include "materials/MethodPrograms.h"
 
 namespace osgBTF {
 

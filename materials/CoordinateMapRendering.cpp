@@ -10,7 +10,10 @@
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
 #include "materials/BilinearTaps.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodPrograms.h"
+#include "materials/MethodRegistry.h"
 #include "materials/ShaderInterface.h"
 
 namespace osgBTF {

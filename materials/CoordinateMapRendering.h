@@ -57,20 +57,6 @@ bool declareSharedTextures(const std::string& method, std::vector<std::string> t
 /** What declareSharedTextures declared for METHOD (empty: none). */
 std::vector<std::string> sharedTextures(const std::string& method);
 
-/** methodProgram's variant for rendering through a coordinate map: the same sources, the
- *  fragment shader compiled with `#define OSGBTF_COORDINATE_MAP 1` (shader::kCoordinateMapDefine,
- *  after its #version line). Built once per process and method, like methodProgram. */
-osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method);
-/** methodProgram's variant that samples an osgShadow::ShadowMap for one light (both stages
- *  compiled with shader::kShadowMapDefine; with `coordinateMap` also kCoordinateMapDefine, the
- *  coordinate-map variant's). Built once per process, method and variant; used by MaterialNode
- *  below an osgShadow::ShadowedScene. */
-osg::ref_ptr<osg::Program> shadowMapProgram(const std::string& method, bool coordinateMap);
-/** What MaterialNode draws with in a shadow technique's depth pass, for every method: the
- *  fixed-function position and an empty fragment stage (shaders/common/depth_only.*), so a depth
- *  map costs what it costs for a plain textured node. One per process. */
-osg::ref_ptr<osg::Program> depthOnlyProgram();
-
 /** Throws Error "MAPNAME: made for a WxH sample, but material 'MATERIAL' is wxh"
  *  (MATERIAL: its source file, else its method) when the map does not point into the
  *  material's texels (the base level's, for a mip-mapped material). */

@@ -11,6 +11,7 @@
 #include "materials/BilinearTaps.h"
 #include "materials/Material.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 #include "materials/ShaderInterface.h"
 
 namespace osgBTF {

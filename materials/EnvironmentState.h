@@ -76,7 +76,7 @@ std::size_t foldedStride(const Material& material);
 /** The method's environment program, built once per process and method. Throws Error as
  *  foldEnvironment, or if a shader source is missing. */
 osg::ref_ptr<osg::Program> environmentProgram(const std::string& method);
-/** environmentProgram's part of releaseCachedPrograms (MaterialState.h). */
+/** environmentProgram's part of releaseCachedPrograms (MethodPrograms.h). */
 void releaseCachedEnvironmentPrograms(osg::State* state);
 
 /** Program, per-vertex data texture (folded[v] for vertex index v, each of foldedStride values)

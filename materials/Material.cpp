@@ -6,6 +6,7 @@
 
 #include "core/Error.h"
 #include "materials/BilinearTaps.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 
@@ -13,23 +14,6 @@ namespace {
 // The base size of a mip-mapped material's atlas; the layout follows from it.
 constexpr const char* kMipBaseParameter = "mip.base";
 }  // namespace
-
-// ---- FitOptions ------------------------------------------------------------------------------
-
-FitOptions FitOptions::parse(const std::string& text) {
-    std::string normalised = text;
-    std::replace(normalised.begin(), normalised.end(), ',', ' ');
-    std::istringstream in(normalised);
-    std::string item;
-    FitOptions options;
-    while (in >> item) {
-        const auto eq = item.find('=');
-        if (eq == std::string::npos || eq == 0)
-            throw Error("option '" + item + "': expected KEY=VALUE");
-        options.set(item.substr(0, eq), item.substr(eq + 1));
-    }
-    return options;
-}
 
 // ---- Material --------------------------------------------------------------------------------
 

@@ -1,6 +1,6 @@
 // osgBTF: what every compression method provides (the Material interface). The registry that
-// lists the methods is materials/MethodRegistry.h (included at the end, so that one include
-// brings both); the per-method programs are built in materials/MethodPrograms.cpp.
+// lists the methods is materials/MethodRegistry.h, loading and saving any method's file
+// materials/MaterialFiles.h, the per-method programs materials/MethodPrograms.h.
 //
 // A method (materials/<name>/) fits a Material from measured data (a BtfSource: a MeasuredBtf in
 // memory or a FactoredBtf decoded block by block). The Material evaluates itself on the CPU with
@@ -24,7 +24,6 @@
 #include "core/FittedMaterialFile.h"
 #include "core/MeasuredBtf.h"
 #include "core/MipPyramid.h"
-#include "materials/MethodOptions.h"
 #include "materials/ShaderCost.h"
 
 namespace osgBTF {
@@ -39,24 +38,6 @@ struct MemoryFootprint {
     /** Of totalBytes, the tables shared by all texels (e.g. fmf's U), when a method reports them
      *  (btf compare prints them under Table 2); 0: none or not reported. */
     std::uint64_t sharedBytes = 0;
-};
-
-/** Method settings from the command line or a plugin option string: "lobes=2 clusters=32". */
-class FitOptions {
-public:
-    FitOptions() = default;
-    explicit FitOptions(std::map<std::string, std::string> values) : _values(std::move(values)) {}
-    /** Parses "key=value key=value" (spaces or commas between pairs). Throws Error. */
-    static FitOptions parse(const std::string& text);
-
-    void set(const std::string& key, const std::string& value) { _values[key] = value; }
-    bool has(const std::string& key) const { return _values.count(key) != 0; }
-    /** The pairs as given, values as text: validateOptions (MethodOptions.h) checks them against
-     *  a method's option table and gives typed values. */
-    const std::map<std::string, std::string>& values() const { return _values; }
-
-private:
-    std::map<std::string, std::string> _values;
 };
 
 class Material : public osg::Object {
@@ -195,6 +176,3 @@ private:
 };
 
 }  // namespace osgBTF
-
-// The registry needs the complete Material; every includer of this header gets it too.
-#include "materials/MethodRegistry.h"

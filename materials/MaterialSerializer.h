@@ -12,6 +12,7 @@
 #include <osgDB/OutputStream>
 
 #include "core/FittedMaterialFile.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 

@@ -12,6 +12,7 @@
 #include "core/Error.h"
 #include "materials/LightVisibility.h"
 #include "materials/Material.h"
+#include "materials/MethodPrograms.h"
 #include "materials/ShaderInterface.h"
 
 namespace osgBTF {

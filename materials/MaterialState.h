@@ -54,15 +54,6 @@ osg::ref_ptr<osg::Texture2DArray> createGeneratedTextureArray(const MaterialText
  *  material array texture is made with this. */
 osg::ref_ptr<osg::Texture2DArray> newTexture2DArray();
 
-/** Releases the GL objects that the process-wide programs (methodProgram, its variants,
- *  environmentProgram) hold for the context of `state` (null: every context). OSG releases what a
- *  closing context's scene graph holds, but these programs outlive any scene graph: a context
- *  that is closed after its scene was removed leaves them pointing at its program objects, and a
- *  later context that gets the same context ID would use those dead objects (GL_INVALID_VALUE at
- *  every draw). Call it with the context current before closing such a context;
- *  HeadlessRenderer does. */
-void releaseCachedPrograms(osg::State* state);
-
 /** A sampler uniform + texture on a unit. */
 void addTexture(osg::StateSet& stateSet, osg::Texture* texture, const std::string& sampler,
                 int unit);

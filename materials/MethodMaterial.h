@@ -16,6 +16,7 @@
 #include <osg/Object>
 
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 

@@ -1,13 +1,30 @@
 #include "materials/MethodOptions.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/Error.h"
-#include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
+
+FitOptions FitOptions::parse(const std::string& text) {
+    std::string normalised = text;
+    std::replace(normalised.begin(), normalised.end(), ',', ' ');
+    std::istringstream in(normalised);
+    std::string item;
+    FitOptions options;
+    while (in >> item) {
+        const auto eq = item.find('=');
+        if (eq == std::string::npos || eq == 0)
+            throw Error("option '" + item + "': expected KEY=VALUE");
+        options.set(item.substr(0, eq), item.substr(eq + 1));
+    }
+    return options;
+}
 
 namespace {
 

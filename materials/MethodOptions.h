@@ -12,12 +12,30 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace osgBTF {
 
-class FitOptions;
 struct MethodInfo;
+
+/** Method settings from the command line or a plugin option string: "lobes=2 clusters=32". */
+class FitOptions {
+public:
+    FitOptions() = default;
+    explicit FitOptions(std::map<std::string, std::string> values) : _values(std::move(values)) {}
+    /** Parses "key=value key=value" (spaces or commas between pairs). Throws Error. */
+    static FitOptions parse(const std::string& text);
+
+    void set(const std::string& key, const std::string& value) { _values[key] = value; }
+    bool has(const std::string& key) const { return _values.count(key) != 0; }
+    /** The pairs as given, values as text: validateOptions (below) checks them against
+     *  a method's option table and gives typed values. */
+    const std::map<std::string, std::string>& values() const { return _values; }
+
+private:
+    std::map<std::string, std::string> _values;
+};
 
 /** One fit option of a method. Build with the static helpers: OptionSpec::integer("lobes", 2, 1,
  *  8, "number of lobes"). */

@@ -1,8 +1,5 @@
-// osgBTF: one osg::Program per method and variant (plain, through a coordinate map, under a shadow
-// map) for the whole process: every material of a method shares it, so OSG compiles it once per
-// context. Declared beside their users: methodProgram (MethodRegistry.h), coordinateMapProgram,
-// shadowMapProgram and depthOnlyProgram (CoordinateMapRendering.h), releaseCachedPrograms
-// (MaterialState.h).
+#include "materials/MethodPrograms.h"
+
 #include <map>
 #include <mutex>
 #include <tuple>

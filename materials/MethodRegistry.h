@@ -1,8 +1,8 @@
 // osgBTF: the method registry. Each method (materials/<name>/) registers a MethodInfo from a
 // static initialiser in its own .cpp (registerMethodClass, materials/MethodMaterial.h) and its
 // fitter from its <Name>Fit.cpp in libosgBTFFit (registerFitterClass); the tools, the harness,
-// the plugins and the serializers find methods here by name, and load and save any method's
-// file through it.
+// the plugins and the serializers find methods here by name. Loading and saving any method's
+// file: materials/MaterialFiles.h; its programs: materials/MethodPrograms.h.
 #pragma once
 
 #include <functional>
@@ -10,33 +10,12 @@
 #include <string>
 #include <vector>
 
+#include "materials/EnvironmentHooks.h"
 #include "materials/ForeignFiles.h"
 #include "materials/Material.h"
+#include "materials/MethodOptions.h"
 
 namespace osgBTF {
-
-/** Environment lighting folded per vertex (materials/EnvironmentState.h, Sattler et al. 2003
- * section 5.2), for a method whose point-light rendering is linear in the light interpolation
- * weights: the environment projected onto the measured lights (g) folds into the method's own light
- * basis. Its shader is "environment/<name>.frag" (materials/<name>/<name>_environment.frag). The
- *  functions get materials of the method's own class. */
-struct EnvironmentHooks {
-    /** Whether this material folds (empty: every material of the method does); e.g. fmf only
-     *  without dynamic-range reduction. */
-    std::function<bool(const Material&)> folds;
-    /** One vertex's data from g (one RGB value per measured light); throws Error for g of the
-     *  wrong size or a material that does not fold. */
-    std::function<std::vector<float>(const Material&, const std::vector<glm::vec3>& g)> fold;
-    /** What the environment shader draws from one vertex's data: its CPU reference. */
-    std::function<glm::vec3(const Material&, const std::vector<float>& folded, int x, int y,
-                            const glm::vec3& view)>
-        evaluateFolded;
-    /** RGB values per vertex in fold's result. */
-    std::function<std::size_t(const Material&)> foldedStride;
-    /** Adds the uniforms the environment shader needs beyond the material's StateSet and the
-     *  common ones (e.g. a size its loops run to); empty: none. */
-    std::function<void(const Material&, osg::StateSet&)> addUniforms;
-};
 
 /** A compression method: everything the tools, the harness, the serializers and the tests need
  *  to know about it, so that a new method is one folder that registers one of these. */
@@ -125,24 +104,5 @@ std::vector<std::string> methodNamesInOrder();
 /** The methods with folded environment lighting (MethodInfo::environment), in order, as prose:
  *  "pca, fmf and lpca" (help texts and captions name them from here). */
 std::string environmentMethodsText();
-
-/** Saves through the fitted-material container (atomic), or as another tool's file where a method
- *  registered the extension (MethodInfo::foreignFiles; the material must be of that method, else
- *  Error "PATH: a .ptm file holds a ptm material, not hsh"). Returns what the foreign format's
- *  quantisation lost (one line), empty for the container. */
-std::string saveMaterial(const Material& material, const std::string& path);
-/** Loads any registered method's file, or another tool's file by its registered extension;
- *  throws Error naming the file and the problem. */
-osg::ref_ptr<Material> loadMaterial(const std::string& path);
-/** The foreign file format registered for `path`'s extension (any case), with the name of the
- *  method that registered it; null when none. */
-const ForeignFileFormat* findForeignFile(const std::string& path, std::string* method = nullptr);
-/** Any registered method's material from its file, which the method may take apart. */
-osg::ref_ptr<Material> materialFromFile(FittedMaterial file);
-
-/** The method's shared program: common/btf.vert + <method>.frag (materials/<method>/, or the
- *  method's MethodInfo::fragmentShader), the tangent bound to shader::kTangentAttribute. Compiled
- * by OSG at first use; built once per process and method. Throws Error if a source is missing. */
-osg::ref_ptr<osg::Program> methodProgram(const std::string& method);
 
 }  // namespace osgBTF

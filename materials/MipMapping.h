@@ -3,6 +3,7 @@
 
 #include "core/BtfSource.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 

@@ -1,3 +1,4 @@
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 
 #include "core/MipPyramid.h"

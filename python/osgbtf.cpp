@@ -40,7 +40,9 @@
 #include "harness/sample/Ubo2003Writer.h"
 #include "loaders/LoadBtf.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodOptions.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "scene/OpenMaterial.h"
 
@@ -989,7 +991,8 @@ PYBIND11_MODULE(osgbtf, m) {
                     double fitSeconds = 0, average = 0, rmse = 0, psnr = 0, bytes = 0, values = 0;
                     std::uint64_t total = 0;
                     std::size_t texels = 0, heldOutPairs = 0;
-                    double heldOutAverage = NAN, heldOutRmse = NAN, heldOutPsnr = NAN, heldOutSsim = NAN;
+                    double heldOutAverage = NAN, heldOutRmse = NAN, heldOutPsnr = NAN,
+                           heldOutSsim = NAN;
                 };
                 try {
                     const Scores s = scope.run([&] {
@@ -1088,7 +1091,8 @@ PYBIND11_MODULE(osgbtf, m) {
         "a list of dicts (method, options, failed, failure, fit_seconds, average, rmse, psnr, "
         "error_texels, bytes_per_texel, values_per_texel, total_bytes, compression_ratio and, "
         "with holdout_fraction > 0, held_out_average/rmse/psnr/ssim/pairs: the error, PSNR and "
-        "SSIM on directions left out of a second fit), which pandas.DataFrame takes as it is. options: {method: "
+        "SSIM on directions left out of a second fit), which pandas.DataFrame takes as it is. "
+        "options: {method: "
         "{option: value}}. report=DIR also runs `btf compare` into DIR (report.md, "
         "results.csv/json, pictures; the btf executable fits in child processes).");
 

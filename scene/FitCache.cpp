@@ -11,6 +11,8 @@
 #include "core/FloatImage.h"
 #include "core/Notify.h"
 #include "loaders/LoadBtf.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "scene/MaterialNode.h"
 

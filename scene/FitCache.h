@@ -9,6 +9,7 @@
 #include <osg/ref_ptr>
 
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 

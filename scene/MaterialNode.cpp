@@ -30,6 +30,7 @@
 #include "core/Notify.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/LightVisibility.h"
+#include "materials/MethodPrograms.h"
 #include "scene/OpenMaterial.h"
 #include "scene/ShadowTerminator.h"
 #include "scene/SharedObjects.h"

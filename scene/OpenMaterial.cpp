@@ -2,6 +2,7 @@
 
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
+#include "materials/MaterialFiles.h"
 #include "materials/fmf/Fmf.h"
 
 namespace osgBTF {

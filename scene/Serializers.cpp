@@ -25,6 +25,7 @@
 
 #include "core/Notify.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MaterialSerializer.h"
 #include "scene/MaterialNode.h"
 #include "scene/ShadowTerminator.h"

@@ -15,6 +15,7 @@
 
 #include "core/Error.h"
 #include "materials/Material.h"
+#include "materials/MethodPrograms.h"
 
 namespace osgBTF {
 

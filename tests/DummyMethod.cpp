@@ -3,6 +3,7 @@
 #include "core/ShaderSource.h"
 #include "materials/EnvironmentLighting.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTFTest {
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 
 namespace osgBTFTest {
 

@@ -29,6 +29,8 @@
 #include "harness/sample/Ubo2003Writer.h"
 #include "loaders/Ubo2014.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/MaterialNode.h"
 #include "streaming/TileFetcher.h"

@@ -13,6 +13,7 @@
 #include "core/FactoredBtf.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "materials/fmf/Fmf.h"
 #include "tests/RandomFactors.h"
 #include "tests/TestUtil.h"

@@ -10,6 +10,8 @@
 #include "core/MipPyramid.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"

@@ -14,6 +14,7 @@
 #include "materials/EnvironmentState.h"
 #include "materials/IlluminationPca.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/lpca/Lpca.h"

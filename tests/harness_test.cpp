@@ -15,6 +15,7 @@
 #include "harness/SoakSampling.h"
 #include "loaders/LoadBtf.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {

@@ -27,6 +27,7 @@
 
 #include "core/FloatImage.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "materials/fmf/Fmf.h"
 #include "streaming/TileSet.h"
 #include "tests/PluginTestUtil.h"

@@ -13,6 +13,7 @@
 #include "core/LowRank.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/lpca/Lpca.h"
 

@@ -8,6 +8,7 @@
 
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "materials/lambert/Lambert.h"
 

@@ -6,6 +6,8 @@
 #include "core/ShaderSource.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "tests/TestUtil.h"
 

@@ -13,6 +13,7 @@
 
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "materials/hsh/Hsh.h"
 #include "tests/HshReference.h"

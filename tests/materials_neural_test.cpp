@@ -12,6 +12,7 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/neural/Neural.h"

@@ -11,6 +11,8 @@
 #include "core/ErrorMetrics.h"
 #include "core/LowRank.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodOptions.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/pca/Pca.h"
 #include "tests/ReferenceSvd.h"

@@ -15,6 +15,8 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodOptions.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/ptm/Ptm.h"
 #include "tests/SmallSample.h"

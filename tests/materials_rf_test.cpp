@@ -10,6 +10,8 @@
 #include "core/Error.h"
 #include "core/ErrorMetrics.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/rf/Rf.h"
 #include "tests/SmallSample.h"

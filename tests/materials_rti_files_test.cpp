@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/FloatImage.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "materials/hsh/RtiFile.h"
 #include "materials/ptm/PtmFile.h"

@@ -15,6 +15,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "materials/EnvironmentState.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {

@@ -10,6 +10,7 @@
 #include "core/Error.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {

@@ -12,6 +12,7 @@
 
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
 #include "tests/NotifyCapture.h"

@@ -11,6 +11,8 @@
 
 #include "harness/sample/SampleBtf.h"
 #include "harness/sample/Ubo2003Writer.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "scene/FitCache.h"
 #include "tests/TestUtil.h"
 

@@ -15,6 +15,8 @@
 
 #include "core/Error.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
 #include "scene/ShadowTerminator.h"

@@ -16,6 +16,7 @@
 #include <osgDB/WriteFile>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "materials/MethodPrograms.h"
 #include "materials/ShaderInterface.h"
 #include "scene/MaterialNode.h"
 #include "tests/TestUtil.h"

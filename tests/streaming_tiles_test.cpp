@@ -8,6 +8,8 @@
 #include <iostream>
 
 #include "core/ImageSimilarity.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/fmf/Fmf.h"
 #include "streaming/TileBuilder.h"
 #include "streaming/TileLayout.h"

@@ -19,6 +19,7 @@
 #include "core/FactoredBtf.h"
 #include "harness/sample/SampleBtf.h"
 #include "loaders/Ubo2014.h"
+#include "materials/MethodOptions.h"
 #include "materials/fmf/Fmf.h"
 #include "tests/TestUtil.h"
 

@@ -26,6 +26,7 @@
 #include "harness/sample/SampleBtf.h"
 #include "harness/sample/Ubo2003Writer.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "scene/EnvironmentLight.h"
 #include "scene/MaterialNode.h"
 

@@ -25,6 +25,8 @@
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "materials/pca/Pca.h"
 #include "scene/OwnPlugins.h"

@@ -21,6 +21,8 @@
 #include <osgBTF/MaterialNode>
 #include <osgBTF/Version>
 
+#include "materials/MaterialFiles.h"
+
 namespace {
 
 constexpr int kSize = 256;

@@ -16,6 +16,7 @@
 #include "core/LowRank.h"
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 

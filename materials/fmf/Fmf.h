@@ -27,6 +27,7 @@
 #include "core/FactoredBtf.h"
 #include "materials/DirectionLookup.h"
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 
 namespace osgBTF {
 

@@ -1,5 +1,6 @@
 // FMF's fit (libosgBTFFit): one streamed truncated SVD of the whole BTF as a (3 x images) x
 // texels matrix, read in blocks of images.
+#include "materials/MethodOptions.h"
 #include "materials/fmf/Fmf.h"
 
 #include <algorithm>

@@ -12,6 +12,7 @@
 #include "core/FloatImage.h"
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 #include "materials/hsh/RtiFile.h"
 
 namespace osgBTF {

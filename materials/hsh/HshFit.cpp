@@ -1,5 +1,6 @@
 // HSH's fit (libosgBTFFit): least squares of the harmonics per texel, channel and view slot,
 // through the lights' pseudo-inverse computed once (materials/LightBasisFit.h).
+#include "materials/MethodOptions.h"
 #include "materials/hsh/Hsh.h"
 
 #include <chrono>

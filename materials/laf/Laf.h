@@ -22,6 +22,7 @@
 #pragma once
 
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 #include "materials/laf/LobeMaterial.h"
 
 namespace osgBTF {

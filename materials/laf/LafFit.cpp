@@ -1,4 +1,5 @@
 // LAF's fit (libosgBTFFit): LobeMaterial's fitter with T fixed at 1 (LobeMaterialFit.cpp).
+#include "materials/MethodOptions.h"
 #include "materials/laf/Laf.h"
 
 #include "core/Error.h"

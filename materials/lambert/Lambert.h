@@ -8,6 +8,7 @@
 #pragma once
 
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 #include "materials/StoredValues.h"
 
 namespace osgBTF {

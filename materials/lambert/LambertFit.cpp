@@ -1,4 +1,5 @@
 // The baseline's fit (libosgBTFFit): the least-squares albedo per texel.
+#include "materials/MethodOptions.h"
 #include "materials/lambert/Lambert.h"
 
 #include <tbb/parallel_for.h>

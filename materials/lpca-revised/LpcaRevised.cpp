@@ -10,6 +10,7 @@
 
 #include "core/Error.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 #include "materials/lpca-revised/ConcentricMap.h"
 
 namespace osgBTF {

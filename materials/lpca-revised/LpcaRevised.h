@@ -30,6 +30,7 @@
 #include <glm/vec2.hpp>
 
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 #include "materials/lpca/Lpca.h"
 
 namespace osgBTF {

@@ -1,5 +1,6 @@
 // Revised LPCA's fit (libosgBTFFit): an LPCA fit, its Eigen-BRDFs resampled onto the
 // elevated concentric grid.
+#include "materials/MethodOptions.h"
 #include "materials/lpca-revised/LpcaRevised.h"
 
 #include <algorithm>

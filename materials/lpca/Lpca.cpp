@@ -9,6 +9,7 @@
 
 #include "core/Error.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 

@@ -22,6 +22,7 @@
 
 #include "materials/DirectionLookup.h"
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 #include "materials/StoredValues.h"
 
 namespace osgBTF {

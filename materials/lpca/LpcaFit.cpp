@@ -27,6 +27,7 @@
 
 #include "core/Error.h"
 #include "core/Progress.h"
+#include "materials/MethodOptions.h"
 #include "materials/lpca/Lpca.h"
 
 namespace osgBTF {

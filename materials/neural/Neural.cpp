@@ -8,6 +8,7 @@
 #include "core/Error.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 #include "materials/StoredValues.h"
 
 namespace osgBTF {

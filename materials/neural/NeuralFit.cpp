@@ -1,6 +1,7 @@
 // The neural method's fit (libosgBTFFit): options and shape here; the training itself (libtorch)
 // is NeuralTraining.cpp's, a module loaded on the first neural fit (built when CMake found
 // libtorch; without it the fit says what is missing).
+#include "materials/MethodOptions.h"
 #include "materials/neural/Neural.h"
 
 #include <chrono>

@@ -29,6 +29,7 @@
 
 #include "materials/DirectionLookup.h"
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 
 namespace osgBTF {
 

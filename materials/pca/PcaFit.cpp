@@ -1,5 +1,6 @@
 // PCA's fit (libosgBTFFit): a truncated SVD per view, Eigen-Textures quantised to the storage,
 // weights refitted against the basis as stored.
+#include "materials/MethodOptions.h"
 #include "materials/pca/Pca.h"
 
 #include <algorithm>

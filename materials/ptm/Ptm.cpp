@@ -13,6 +13,7 @@
 #include "core/FloatImage.h"
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 #include "materials/ptm/PtmFile.h"
 
 namespace osgBTF {

@@ -1,5 +1,6 @@
 // PTM's fit (libosgBTFFit): least squares of the biquadratic in (lx, ly) per texel and view slot,
 // through the lights' pseudo-inverse computed once (materials/LightBasisFit.h).
+#include "materials/MethodOptions.h"
 #include "materials/ptm/Ptm.h"
 
 #include <chrono>

@@ -14,6 +14,7 @@
 #include "core/Error.h"
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 #include "materials/rf/RfValues.h"
 
 namespace osgBTF {

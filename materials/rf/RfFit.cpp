@@ -1,5 +1,6 @@
 // RF's fit (libosgBTFFit): per texel and view, Levenberg-Marquardt (Ceres' TinySolver) on the
 // lobes of the luminance or of each colour channel, then the colours in closed form.
+#include "materials/MethodOptions.h"
 #include "materials/rf/Rf.h"
 
 #include <algorithm>

@@ -3,6 +3,7 @@
 #include "core/Error.h"
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodRegistry.h"
 #include "materials/laf/Lobes.h"
 
 namespace osgBTF {

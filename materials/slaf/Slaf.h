@@ -23,6 +23,7 @@
 
 #include "materials/DirectionLookup.h"
 #include "materials/MethodMaterial.h"
+#include "materials/MethodOptions.h"
 #include "materials/laf/LobeMaterial.h"
 
 namespace osgBTF {

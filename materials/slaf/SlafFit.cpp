@@ -1,4 +1,5 @@
 // SLAF's fit (libosgBTFFit): LobeMaterial's fitter with the view table T fitted.
+#include "materials/MethodOptions.h"
 #include "materials/slaf/Slaf.h"
 
 #include "core/Error.h"

@@ -26,6 +26,7 @@
 #include "loaders/Rti.h"
 #include "loaders/Ubo2003.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "scene/MaterialNode.h"
 // The modules that fit on load (all but osgdb_btfmat) link libosgBTFFit for the fit and its

@@ -15,6 +15,7 @@
 #include "harness/MaterialImage.h"
 #include "harness/PassCost.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/MethodPrograms.h"
 #include "materials/ShaderInterface.h"
 #include "materials/hsh/Hsh.h"
 #include "materials/ptm/Ptm.h"

@@ -12,6 +12,7 @@
 #include <iostream>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodRegistry.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/pca/Pca.h"

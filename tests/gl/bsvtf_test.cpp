@@ -20,6 +20,7 @@
 #include "harness/MaterialImage.h"
 #include "harness/headless/HeadlessContext.h"
 #include "materials/MaterialState.h"
+#include "materials/MethodPrograms.h"
 #include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/MaterialNode.h"

@@ -19,6 +19,7 @@
 #include "harness/PassCost.h"
 #include "harness/Pictures.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodRegistry.h"
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

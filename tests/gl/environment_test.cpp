@@ -31,6 +31,7 @@
 #include "materials/BilinearTaps.h"
 #include "materials/EnvironmentLighting.h"
 #include "materials/EnvironmentState.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"

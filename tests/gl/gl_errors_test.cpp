@@ -31,6 +31,7 @@
 
 #include "harness/sample/BlockMap.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/EnvironmentLight.h"

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/fmf/Fmf.h"
 #include "tests/RandomFactors.h"
 #include "tests/gl/MaterialGpuCheck.h"

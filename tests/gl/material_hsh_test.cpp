@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/hsh/Hsh.h"
 #include "materials/hsh/RtiFile.h"
 #include "tests/TestUtil.h"

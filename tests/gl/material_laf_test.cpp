@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/laf/Laf.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

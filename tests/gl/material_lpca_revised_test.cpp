@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/lpca-revised/LpcaRevised.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/neural/Neural.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

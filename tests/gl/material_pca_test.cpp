@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/pca/Pca.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/ptm/Ptm.h"
 #include "materials/ptm/PtmFile.h"
 #include "tests/TestUtil.h"

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/slaf/Slaf.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

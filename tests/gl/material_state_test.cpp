@@ -6,6 +6,7 @@
 
 #include "harness/MaterialImage.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/laf/Laf.h"
 #include "materials/lambert/Lambert.h"
 #include "tests/gl/GlTestEnv.h"

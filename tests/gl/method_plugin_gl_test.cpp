@@ -28,6 +28,7 @@
 #include "materials/CoordinateMapRendering.h"
 #include "materials/EnvironmentLighting.h"
 #include "materials/EnvironmentState.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 #include "scene/EnvironmentLight.h"

@@ -13,6 +13,7 @@
 
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "tests/SmallSample.h"
 #include "tests/gl/GlTestEnv.h"

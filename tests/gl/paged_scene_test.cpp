@@ -23,6 +23,7 @@
 #include "harness/PagedScene.h"
 #include "harness/SoakSampling.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "scene/MaterialNode.h"
 #include "tests/SmallSample.h"

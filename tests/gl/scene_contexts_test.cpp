@@ -22,6 +22,7 @@
 
 #include "core/Directions.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
 #include "tests/gl/GlTestEnv.h"

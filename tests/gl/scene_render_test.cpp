@@ -25,6 +25,8 @@
 
 #include "core/Directions.h"
 #include "harness/sample/SampleBtf.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodOptions.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
 #include "tests/NotifyCapture.h"

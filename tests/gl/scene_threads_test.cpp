@@ -18,6 +18,7 @@
 
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 #include "scene/MaterialNode.h"
 #include "tests/gl/GlTestEnv.h"
 

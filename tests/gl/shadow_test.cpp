@@ -30,6 +30,8 @@
 #include "harness/ShadowScene.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/CoordinateMapRendering.h"
+#include "materials/MethodOptions.h"
+#include "materials/MethodPrograms.h"
 #include "materials/lambert/Lambert.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"

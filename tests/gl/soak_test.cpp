@@ -11,6 +11,8 @@
 
 #include "harness/Soak.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 #include "tests/gl/GlTestEnv.h"

@@ -10,6 +10,7 @@
 #include <glm/geometric.hpp>
 
 #include "harness/sample/SampleBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/laf/Laf.h"
 #include "materials/pca/Pca.h"
 #include "tests/gl/MaterialGpuCheck.h"

@@ -54,4 +54,32 @@ expect(${WORK}/bad
   "scene/S.cpp: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, streaming/, scene/"
   "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, synthesis/, streaming/, scene/, plugins/"
   "fuzz/F.cpp: includes \"tools/btf/Commands.h\", but fuzz/ may include only core/, loaders/, materials/, synthesis/, streaming/, scene/, harness/, plugins/, fuzz/")
+# Include cycles: each reported once, from its alphabetically first header; a same-folder include
+# resolves beside the including file. Acyclic diamonds are fine.
+function(expect_cycles root)
+  osgbtf_include_cycles(${root} got)
+  if(NOT "${got}" STREQUAL "${ARGN}")
+    list(JOIN got "\n  " got_text)
+    list(JOIN ARGN "\n  " want_text)
+    message(FATAL_ERROR "${root}: expected\n  ${want_text}\ngot\n  ${got_text}")
+  endif()
+endfunction()
+write_tree(${WORK}/acyclic
+  core/A.h "#include \"core/B.h\"\n#include \"core/C.h\""
+  core/B.h "#include \"core/D.h\""
+  core/C.h "#include \"D.h\""
+  core/D.h "#pragma once")
+expect_cycles(${WORK}/acyclic)
+write_tree(${WORK}/cycles
+  materials/Material.h "#include \"materials/Options.h\"\n#include \"materials/Registry.h\""
+  materials/Options.h "#pragma once"
+  materials/Registry.h "#include \"Material.h\""
+  core/Self.h "#include \"core/Self.h\""
+  scene/X.h "#include \"scene/Y.h\""
+  scene/Y.h "#include \"scene/Z.h\""
+  scene/Z.h "#include \"scene/X.h\"")
+expect_cycles(${WORK}/cycles
+  "include cycle: core/Self.h -> core/Self.h"
+  "include cycle: materials/Material.h -> materials/Registry.h -> materials/Material.h"
+  "include cycle: scene/X.h -> scene/Y.h -> scene/Z.h -> scene/X.h")
 message(STATUS "layer checker: fake trees give the expected messages")

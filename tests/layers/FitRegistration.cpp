@@ -10,6 +10,7 @@
 
 #include "core/MeasuredBtf.h"
 #include "materials/Material.h"
+#include "materials/MethodRegistry.h"
 
 #ifndef OSGBTF_EXPECT_FITTERS
 #define OSGBTF_EXPECT_FITTERS 0

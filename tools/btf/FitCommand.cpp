@@ -15,6 +15,7 @@
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "materials/MipMapping.h"
 #include "materials/fmf/Fmf.h"

@@ -20,6 +20,7 @@
 #include "core/Progress.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
+#include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "tools/btf/Commands.h"
 

@@ -19,6 +19,7 @@
 #include "core/ErrorMetrics.h"
 #include "core/FactoredBtf.h"
 #include "loaders/LoadBtf.h"
+#include "materials/MethodOptions.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/OpenMaterial.h"
 #include "streaming/TileBuilder.h"

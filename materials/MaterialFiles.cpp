@@ -1,0 +1,62 @@
+#include "materials/MaterialFiles.h"
+
+#include <cctype>
+#include <filesystem>
+
+#include "core/Error.h"
+#include "materials/MethodRegistry.h"
+
+namespace osgBTF {
+
+const ForeignFileFormat* findForeignFile(const std::string& path, std::string* method) {
+    std::string extension = std::filesystem::path(path).extension().string();
+    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    for (const std::string& name : methodNames())
+        for (const ForeignFileFormat& format : findMethod(name).foreignFiles)
+            if (format.extension == extension) {
+                if (method) *method = name;
+                return &format;
+            }
+    return nullptr;
+}
+
+std::string saveMaterial(const Material& material, const std::string& path) {
+    std::string owner;
+    if (const ForeignFileFormat* format = findForeignFile(path, &owner)) {
+        if (material.methodName() != owner)
+            fail(path, "a " + format->extension + " file holds a " + owner + " material, not " +
+                           material.methodName());
+        return format->write(material, path);
+    }
+    saveFittedMaterial(material.toFittedMaterial(), path);
+    return {};
+}
+
+osg::ref_ptr<Material> materialFromFile(FittedMaterial file) {
+    const MethodInfo* info = findMethodIfRegistered(file.method);
+    if (!info)
+        fail(
+            file.source, "unknown method '" + file.method + "' (this osgBTF knows: " + [] {
+                std::string known;
+                for (const auto& n : methodNames()) known += (known.empty() ? "" : ", ") + n;
+                return known;
+            }() + ")");
+    return info->load(std::move(file));
+}
+
+osg::ref_ptr<Material> loadMaterial(const std::string& path) {
+    if (const ForeignFileFormat* format = findForeignFile(path)) {
+        osg::ref_ptr<Material> material = format->read(path);
+        material->sourceFile = path;
+        return material;
+    }
+    osg::ref_ptr<Material> material =
+        materialFromFile(loadFittedMaterial(path, [](const std::string& method) {
+            const MethodInfo* info = findMethodIfRegistered(method);
+            return info ? info->compactTextures : CompactTextures{};
+        }));
+    material->sourceFile = path;
+    return material;
+}
+
+}  // namespace osgBTF
