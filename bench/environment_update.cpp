@@ -21,6 +21,7 @@
 #include <osg/Geometry>
 #include <osg/Group>
 
+#include "environment/VertexEnvironment.h"
 #include "harness/headless/HeadlessRenderer.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/EnvironmentState.h"
@@ -28,7 +29,6 @@
 #include "materials/MethodOptions.h"
 #include "materials/pca/Pca.h"
 #include "scene/MaterialNode.h"
-#include "scene/VertexEnvironment.h"
 
 using namespace osgBTF;
 

@@ -44,7 +44,7 @@ if(OSGBTF_NEURAL_FIT)
   endif()
 endif()
 find_package(TBB CONFIG REQUIRED)
-# Per-vertex environment visibility (scene/VertexEnvironment.h, libosgBTFEnvironment only):
+# Per-vertex environment visibility (environment/VertexEnvironment.h, libosgBTFEnvironment only):
 # Debian's libembree-dev 3.13.
 find_package(embree 3 CONFIG REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)

@@ -1,29 +1,71 @@
-# The layers of the source tree and what each may include (README "Layout"). A lower layer never
-# includes a higher one: the runtime libosgBTF (core, loaders, materials, scene) must build and
-# ship without harness/ (libosgBTFHarness), and the plugins load only the runtime.
-#   core <- loaders, materials, synthesis; materials <- streaming (BSVTF);
-#   all of those <- scene <- harness <- tools, examples, python (the Python module); scene <- plugins
-# tests/, fuzz/ and bench/ may include everything below them (fuzz/ holds the fuzz targets'
-# bodies, which the regression test in tests/ calls, and their seed generator). Used by
-# cmake/CheckLayers.cmake (the layers.include_graph test) and tested on fake trees by
-# tests/layers/CheckLayersTest.cmake.
+# The layers of the source tree and what each may include (README "Layout", docs/architecture.md).
+# Every library is a folder (or a few), and a library includes only its own folders and those of
+# the libraries it links:
+#   libosgBTF          core/ loaders/ materials/ (every method's RENDER sources) synthesis/ scene/
+#   libosgBTFFit       fit/ (and every method's FIT sources, materials/<m>/CMakeLists.txt)
+#   libosgBTFStreaming streaming/        libosgBTFEnvironment environment/
+#   libosgBTFHarness   harness/ (static: the tools, examples, tests and benchmarks)
+# A header belongs to its folder's layer; a library's source to the library that compiles it,
+# checked when CMake configures (osgbtf_library_include_violations, top CMakeLists.txt): a
+# method's *Fit.cpp in materials/<m>/ is libosgBTFFit's and may include fit/, its render sources
+# may not. tests/, fuzz/ and bench/ may include everything below them (fuzz/ holds the fuzz
+# targets' bodies, which the regression test in tests/ calls, and their seed generator). Used by
+# the configure step and cmake/CheckLayers.cmake (the layers.include_graph test), and tested on
+# fake trees by tests/layers/CheckLayersTest.cmake.
 
+set(osgbtf_runtime core loaders materials synthesis scene)
+set(osgbtf_libraries ${osgbtf_runtime} fit streaming environment)
 set(OSGBTF_LAYER_ALLOWED_core core)
 set(OSGBTF_LAYER_ALLOWED_loaders core loaders)
 set(OSGBTF_LAYER_ALLOWED_materials core materials)
 set(OSGBTF_LAYER_ALLOWED_synthesis core synthesis)
+set(OSGBTF_LAYER_ALLOWED_scene core loaders materials synthesis scene)
+set(OSGBTF_LAYER_ALLOWED_fit ${osgbtf_runtime} fit)
 set(OSGBTF_LAYER_ALLOWED_streaming core materials streaming)
-set(OSGBTF_LAYER_ALLOWED_scene core loaders materials synthesis streaming scene)
-set(OSGBTF_LAYER_ALLOWED_harness core loaders materials synthesis streaming scene harness)
-set(OSGBTF_LAYER_ALLOWED_tools core loaders materials synthesis streaming scene harness tools)
-set(OSGBTF_LAYER_ALLOWED_python core loaders materials synthesis streaming scene harness python)
-set(OSGBTF_LAYER_ALLOWED_examples core loaders materials synthesis streaming scene harness examples)
-set(OSGBTF_LAYER_ALLOWED_plugins core loaders materials synthesis streaming scene plugins)
-set(OSGBTF_LAYER_ALLOWED_fuzz core loaders materials synthesis streaming scene harness plugins fuzz)
-set(OSGBTF_LAYER_ALLOWED_tests core loaders materials synthesis streaming scene harness plugins fuzz tests)
-set(OSGBTF_LAYER_ALLOWED_bench core loaders materials synthesis streaming scene harness bench)
-set(OSGBTF_LAYERS core loaders materials synthesis streaming scene harness tools python examples plugins
-                  fuzz tests bench)
+set(OSGBTF_LAYER_ALLOWED_environment ${osgbtf_runtime} environment)
+set(OSGBTF_LAYER_ALLOWED_harness ${osgbtf_libraries} harness)
+set(OSGBTF_LAYER_ALLOWED_tools ${osgbtf_libraries} harness tools)
+set(OSGBTF_LAYER_ALLOWED_python ${osgbtf_libraries} harness python)
+set(OSGBTF_LAYER_ALLOWED_examples ${osgbtf_libraries} harness examples)
+set(OSGBTF_LAYER_ALLOWED_plugins ${osgbtf_libraries} plugins)
+set(OSGBTF_LAYER_ALLOWED_fuzz ${osgbtf_libraries} harness plugins fuzz)
+set(OSGBTF_LAYER_ALLOWED_tests ${osgbtf_libraries} harness plugins fuzz tests)
+set(OSGBTF_LAYER_ALLOWED_bench ${osgbtf_libraries} harness bench)
+set(OSGBTF_LAYERS core loaders materials synthesis scene fit streaming environment harness tools
+                  python examples plugins fuzz tests bench)
+# The layers whose sources a library compiles: their .cpp files are checked per library.
+set(OSGBTF_LIBRARY_LAYERS ${osgbtf_libraries} harness)
+# What each library's sources may include: its own folders and its links'.
+set(OSGBTF_LIBRARY_ALLOWED_osgBTF ${osgbtf_runtime})
+set(OSGBTF_LIBRARY_ALLOWED_osgBTFFit ${osgbtf_runtime} fit)
+set(OSGBTF_LIBRARY_ALLOWED_osgBTFStreaming ${OSGBTF_LAYER_ALLOWED_streaming})
+set(OSGBTF_LIBRARY_ALLOWED_osgBTFEnvironment ${OSGBTF_LAYER_ALLOWED_environment})
+set(OSGBTF_LIBRARY_ALLOWED_osgBTFHarness ${OSGBTF_LAYER_ALLOWED_harness})
+
+# Sets OUT_VAR to one message per include, in FILES (paths relative to ROOT) that LIBRARY
+# compiles, of a layer that library may not use:
+#   <file> (LIBRARY): includes "<path>", but LIBRARY may include only <allowed>/
+function(osgbtf_library_include_violations ROOT LIBRARY FILES OUT_VAR)
+  set(violations)
+  set(allowed ${OSGBTF_LIBRARY_ALLOWED_${LIBRARY}})
+  string(REPLACE ";" "/, " allowed_text "${allowed}")
+  set(files ${FILES})
+  list(SORT files)
+  foreach(file IN LISTS files)
+    file(READ ${ROOT}/${file} text)
+    string(REGEX MATCHALL "#[ \t]*include[ \t]*\"[^\"]+\"" includes "${text}")
+    foreach(include IN LISTS includes)
+      string(REGEX REPLACE ".*\"([^\"]+)\"" "\\1" path "${include}")
+      string(REGEX MATCH "^[^/]+/" first "${path}")
+      string(REPLACE "/" "" first "${first}")
+      if(first AND first IN_LIST OSGBTF_LAYERS AND NOT first IN_LIST allowed)
+        list(APPEND violations
+             "${file} (${LIBRARY}): includes \"${path}\", but ${LIBRARY} may include only ${allowed_text}/")
+      endif()
+    endforeach()
+  endforeach()
+  set(${OUT_VAR} "${violations}" PARENT_SCOPE)
+endfunction()
 
 # Sets OUT_VAR to one message per include of a layer the including file's layer may not use:
 #   <file>: includes "<path>", but <layer>/ may include only <allowed>/
@@ -32,8 +74,14 @@ set(OSGBTF_LAYERS core loaders materials synthesis streaming scene harness tools
 function(osgbtf_layer_violations ROOT OUT_VAR)
   set(violations)
   foreach(layer IN LISTS OSGBTF_LAYERS)
-    file(GLOB_RECURSE files RELATIVE ${ROOT} ${ROOT}/${layer}/*.h ${ROOT}/${layer}/*.hpp
-         ${ROOT}/${layer}/*.cpp ${ROOT}/${layer}/*.inc)
+    # A library's sources are checked with the library they build (above); its headers here.
+    if(layer IN_LIST OSGBTF_LIBRARY_LAYERS)
+      file(GLOB_RECURSE files RELATIVE ${ROOT} ${ROOT}/${layer}/*.h ${ROOT}/${layer}/*.hpp
+           ${ROOT}/${layer}/*.inc)
+    else()
+      file(GLOB_RECURSE files RELATIVE ${ROOT} ${ROOT}/${layer}/*.h ${ROOT}/${layer}/*.hpp
+           ${ROOT}/${layer}/*.cpp ${ROOT}/${layer}/*.inc)
+    endif()
     list(SORT files)
     set(allowed ${OSGBTF_LAYER_ALLOWED_${layer}})
     string(REPLACE ";" "/, " allowed_text "${allowed}")

@@ -16,8 +16,8 @@
 #   <libdir>/pkgconfig/osgBTF.pc, osgBTFFit.pc, osgBTFStreaming.pc, osgBTFEnvironment.pc
 # The headers of all libraries share include/osgBTF: a method's static fit() is declared in its
 # header and defined in libosgBTFFit (materials/<name>/<Name>Fit.cpp), as are fitMipMapped
-# (<osgBTF/materials/MipMapping.h>) and the fit cache (<osgBTF/FitCache>); the functions of
-# <osgBTF/scene/VertexEnvironment.h> and <osgBTF/EnvironmentLitGroup> are libosgBTFEnvironment's.
+# (<osgBTF/fit/MipMapping.h>) and the fit cache (<osgBTF/FitCache>); the functions of
+# <osgBTF/environment/VertexEnvironment.h> and <osgBTF/EnvironmentLitGroup> are libosgBTFEnvironment's.
 # The headers are generated into <build>/sdk/include at build time (target osgbtf_sdk_headers);
 # osgbtf_sdk_check compiles every one of them with nothing but that folder and the public
 # dependencies on the include path, so a header that needs a source-tree path or a private
@@ -25,7 +25,7 @@
 include(CMakePackageConfigHelpers)
 
 set(OSGBTF_SDK_DIR ${CMAKE_BINARY_DIR}/sdk)
-set(OSGBTF_SDK_LAYERS core loaders materials synthesis streaming scene)  # the runtime: every header is public
+set(OSGBTF_SDK_LAYERS core loaders materials synthesis scene fit streaming environment)  # the libraries: every header is public
 set(OSGBTF_SDK_HEADERS)
 foreach(layer IN LISTS OSGBTF_SDK_LAYERS)
   file(GLOB_RECURSE headers RELATIVE ${CMAKE_SOURCE_DIR} CONFIGURE_DEPENDS
@@ -37,7 +37,7 @@ list(SORT OSGBTF_SDK_HEADERS)
 set(OSGBTF_SDK_UMBRELLAS
   MaterialNode=scene/MaterialNode.h
   EnvironmentLight=scene/EnvironmentLight.h
-  EnvironmentLitGroup=scene/EnvironmentLitGroup.h
+  EnvironmentLitGroup=environment/EnvironmentLitGroup.h
   Material=materials/Material.h+materials/MethodRegistry.h+materials/MaterialFiles.h
   MaterialState=materials/MaterialState.h
   LoadBtf=loaders/LoadBtf.h
@@ -49,7 +49,7 @@ set(OSGBTF_SDK_UMBRELLAS
   FittedMaterialFile=core/FittedMaterialFile.h
   FloatImage=core/FloatImage.h
   Error=core/Error.h
-  FitCache=scene/FitCache.h)
+  FitCache=fit/FitCache.h)
 
 set(OSGBTF_SDK_MANIFEST ${OSGBTF_SDK_DIR}/manifest.cmake)
 file(CONFIGURE OUTPUT ${OSGBTF_SDK_MANIFEST} CONTENT [[

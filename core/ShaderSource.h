@@ -5,8 +5,9 @@
 // and rerun without rebuilding (the osgEarth pattern). Lines `#pragma include "common/x.glsl"` are
 // replaced by that file, found the same way, recursively. The built-in names are the paths under
 // shaders/ in the source tree ("common/btf.vert"), and for a method's shaders in its folder
-// materials/<m>/, "<m>.frag" and "environment/<m>.frag" (cmake/EmbedShaders.cmake); an override
-// file is always shaders/NAME.
+// materials/<m>/, "<m>.frag", "environment/<m>.frag" and "<m>/<file>" for any other
+// (cmake/EmbedShaders.cmake); libosgBTFStreaming adds its own (streaming/*.frag) when it is
+// loaded. An override file is always shaders/NAME.
 #pragma once
 
 #include <string>

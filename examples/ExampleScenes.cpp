@@ -19,7 +19,7 @@
 #include <osgUtil/SmoothingVisitor>
 
 #include "core/Error.h"
-#include "scene/EnvironmentLitGroup.h"
+#include "environment/EnvironmentLitGroup.h"
 #include "scene/MaterialNode.h"
 
 namespace osgBTF::examples {

@@ -23,7 +23,6 @@
 #include "materials/Material.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
-#include "materials/fmf/Fmf.h"
 #include "scene/MaterialNode.h"
 #include "streaming/TileBuilder.h"
 
@@ -219,8 +218,8 @@ int main(int argc, char** argv) {
             small.width = 20;
             small.height = 12;
             small.views = small.lights = DirectionSet("d", {{0, 0}, {45, 90}, {30, 200}});
-            const osg::ref_ptr<FmfMaterial> fmf =
-                FmfMaterial::fit(makeSampleBtf(small), FitOptions::parse("components=4"));
+            const osg::ref_ptr<Material> fmf =
+                factorMethod().fit(makeSampleBtf(small), FitOptions::parse("components=4"));
             TileBuildOptions build;
             build.tileSize = 8;
             build.quality = 75;

@@ -14,8 +14,8 @@
 #include "core/ErrorMetrics.h"
 #include "harness/FitRunner.h"
 #include "harness/HeldOut.h"
-#include "harness/PassCost.h"
 #include "harness/MaterialShaderCost.h"
+#include "harness/PassCost.h"
 #include "loaders/LoadOptions.h"
 #include "materials/Material.h"
 

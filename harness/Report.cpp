@@ -157,8 +157,8 @@ std::string reportMarkdown(const CompareResult& r) {
                   "by the texel count.\n";
 
     md << "\n## Table 3: pass cost\n\n"
-       << "ALU / TEX: static count of the fragment shader (harness/MaterialShaderCost.h), fixed + per "
-          "light, and the total at "
+       << "ALU / TEX: static count of the fragment shader (harness/MaterialShaderCost.h), fixed + "
+          "per light, and the total at "
        << r.pass.lights << " light" << (r.pass.lights == 1 ? "" : "s") << ". ";
     if (r.gpuRan && !r.calibrations.empty()) {
         const std::string clock = r.calibrations.front().empty.clock;

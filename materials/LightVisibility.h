@@ -1,5 +1,5 @@
 // osgBTF: per-vertex visibility of single lights, for the representative lights of environment
-// lighting (scene/EnvironmentLitGroup.h): the methods without folded environment lighting are
+// lighting (environment/EnvironmentLitGroup.h): the methods without folded environment lighting are
 // lit by a few median-cut lights, and each vertex sees each of them or not (ray cast against
 // the scene), as the folded methods see the environment itself.
 //

@@ -94,6 +94,12 @@ const MethodInfo& baselineMethod() {
     return methodWith(&MethodInfo::baseline, "baseline");
 }
 
+const MethodInfo& factorMethod() {
+    for (const std::string& name : methodNamesInOrder())
+        if (registry().at(name).factors) return registry().at(name);
+    throw Error("no method is registered with UBO2014 factors (MethodInfo::factors)");
+}
+
 const MethodInfo& pluginDefaultMethod() {
     return methodWith(&MethodInfo::pluginDefault, "plugins' default");
 }

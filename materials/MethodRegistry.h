@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "materials/EnvironmentHooks.h"
+#include "materials/FactorHooks.h"
 #include "materials/ForeignFiles.h"
 #include "materials/Material.h"
 #include "materials/MethodOptions.h"
@@ -58,9 +59,10 @@ struct MethodInfo {
     bool filtersParameters = false;
     /** The baseline every comparison starts with (baselineMethod()); one method sets it. */
     bool baseline = false;
-    /** The method whose fits `btf fit` can save as a UBO2014 .btf file (its factors are the
-     *  format's). */
-    bool writesUbo2014 = false;
+    /** A material that is a factorisation in the UBO2014 files' terms (materials/FactorHooks.h):
+     *  saved as a .btf, opened from one as stored, streamed as BSVTF tiles; factorMethod()
+     *  finds it. One method sets it. */
+    std::optional<FactorHooks> factors;
     /** The method the .btf/.btfmaterial plugins fit when the options name none
      *  (pluginDefaultMethod()); one method sets it. */
     bool pluginDefault = false;
@@ -95,6 +97,8 @@ const MethodInfo& findMethod(const std::string& name);
 const MethodInfo* findMethodIfRegistered(const std::string& name);
 /** The method with MethodInfo::baseline; throws Error when none is registered. */
 const MethodInfo& baselineMethod();
+/** The method with MethodInfo::factors; throws Error when none is registered. */
+const MethodInfo& factorMethod();
 /** The method with MethodInfo::pluginDefault; throws Error when none is registered. */
 const MethodInfo& pluginDefaultMethod();
 /** Registered method names, alphabetically. */

@@ -31,6 +31,7 @@
 #include "core/MeasuredBtf.h"
 #include "core/MipPyramid.h"
 #include "core/Progress.h"
+#include "fit/MipMapping.h"
 #include "harness/Compare.h"
 #include "harness/FitRunner.h"
 #include "harness/MaterialImage.h"
@@ -43,7 +44,6 @@
 #include "materials/MaterialFiles.h"
 #include "materials/MethodOptions.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "scene/OpenMaterial.h"
 
 namespace py = pybind11;

@@ -3,7 +3,7 @@
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
 #include "materials/MaterialFiles.h"
-#include "materials/fmf/Fmf.h"
+#include "materials/MethodRegistry.h"
 
 namespace osgBTF {
 
@@ -12,7 +12,7 @@ osg::ref_ptr<Material> openUbo2014Material(const std::string& path,
     Ubo2014Factors file = readUbo2014(path);
     if (file.scalarSize == 2) storage = MaterialTexture::Half;
     osg::ref_ptr<Material> material =
-        FmfMaterial::fromFactors(std::move(static_cast<FactoredBtf&>(file)), storage);
+        factorMethod().factors->fromFactors(std::move(static_cast<FactoredBtf&>(file)), storage);
     material->sourceFile = path;
     return material;
 }

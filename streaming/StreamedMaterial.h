@@ -56,7 +56,7 @@ public:
      *  padding: per group the GL_LINEAR blend at the fragment's tile's deepest resident level
      *  d, mixed with the one at d's parent level by lod - (L - d) clamped to [0, 1] (0 at level
      *  0): trilinear where d is the finer of the two levels the lod falls between
-     *  (shaders/bsvtf.frag); evaluated as the snapshot's fmf material. Without padding:
+     *  (streaming/bsvtf.frag); evaluated as the snapshot's fmf material. Without padding:
      *  evaluateFiltered, the four texels' values at their deepest levels. Equals
      *  evaluateFiltered where lod <= 0 and every finest tile under the footprint is resident.
      *  Material::evaluateFiltered is not virtual: call this one on the streamed material. */

@@ -1,10 +1,11 @@
 // osgBTF BSVTF in a scene (Schwartz et al. 2013 section 3): a Group above the MaterialNodes of
 // streamed materials. Each frame it renders the feedback pass over its children (a pre-render
 // camera at 1 / feedbackScale of the viewport, sharing the view and projection, every program
-// replaced by shaders/bsvtf_feedback.frag) and reads it back; in the update traversal it counts the
-// feedback's votes and runs its TileStreamer's update with them, so tiles stream in as the camera
-// moves. Materials from streamer()->open(location) go on MaterialNodes below it. The read-back
-// is asynchronous (two pixel-pack buffers): the update uses the feedback of the frame before.
+// replaced by streaming/bsvtf_feedback.frag) and reads it back; in the update traversal it counts
+// the feedback's votes and runs its TileStreamer's update with them, so tiles stream in as the
+// camera moves. Materials from streamer()->open(location) go on MaterialNodes below it. The
+// read-back is asynchronous (two pixel-pack buffers): the update uses the feedback of the frame
+// before.
 #pragma once
 
 #include <mutex>

@@ -66,6 +66,17 @@ void writeBytes(const fs::path& path, const std::vector<std::uint8_t>& data) {
 
 }  // namespace
 
+TileBuildReport buildTileSet(const Material& material, const std::string& folder,
+                             const TileBuildOptions& options) {
+    const auto* fmf = dynamic_cast<const FmfMaterial*>(&material);
+    if (!fmf)
+        fail(
+            material.sourceFile.empty() ? material.methodName() + " material" : material.sourceFile,
+            "is a '" + material.methodName() + "' material; BSVTF tiles an " +
+                std::string(FmfMaterial::kMethod) + " material");
+    return buildTileSet(*fmf, folder, options);
+}
+
 TileBuildReport buildTileSet(const FmfMaterial& material, const std::string& folder,
                              const TileBuildOptions& options) {
     const auto start = std::chrono::steady_clock::now();

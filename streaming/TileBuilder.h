@@ -10,6 +10,7 @@
 namespace osgBTF {
 
 class FmfMaterial;
+class Material;
 
 struct TileBuildOptions {
     int tileSize = TileLayout::kDefaultTileSize;
@@ -41,6 +42,10 @@ struct TileBuildReport {
  *  factorisation with the colour in U's rows), a mip-mapped one (the pyramid is BSVTF's own),
  *  and invalid options; "<folder>: ..." when it cannot write. Progress under "tiles". */
 TileBuildReport buildTileSet(const FmfMaterial& material, const std::string& folder,
+                             const TileBuildOptions& options = {});
+/** The same for a material of any method: throws Error "<material source>: is a 'M' material;
+ *  BSVTF tiles an fmf material" unless it is one. */
+TileBuildReport buildTileSet(const Material& material, const std::string& folder,
                              const TileBuildOptions& options = {});
 
 }  // namespace osgBTF

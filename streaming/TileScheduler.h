@@ -12,7 +12,7 @@
 // resident tiles of a group form a tree under its level-0 tile, and a region shows its deepest
 // resident tile with every coarser one above it still in the cache. The shader needs that: a
 // minified fragment blends its deepest resident level with the next coarser one (trilinear,
-// shaders/bsvtf.frag), and the LUT gives both slots. Schwartz et al. 2013 5.1 instead removes a
+// streaming/bsvtf.frag), and the LUT gives both slots. Schwartz et al. 2013 5.1 instead removes a
 // tile once its children cover it and swaps two leaves for their missing parent; neither exists
 // here (no resident tile is ever covered, no non-resident tile has resident children). The price is
 // the slots of the interior tiles: a third of the finest ones in a large square pyramid, more in

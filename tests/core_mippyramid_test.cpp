@@ -8,11 +8,11 @@
 
 #include "core/Error.h"
 #include "core/MipPyramid.h"
+#include "fit/MipMapping.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/Material.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 

@@ -9,13 +9,13 @@
 #include <glm/geometric.hpp>
 
 #include "core/Error.h"
+#include "fit/MipMapping.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/EnvironmentLighting.h"
 #include "materials/EnvironmentState.h"
 #include "materials/IlluminationPca.h"
 #include "materials/Material.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/lpca/Lpca.h"
 #include "materials/pca/Pca.h"

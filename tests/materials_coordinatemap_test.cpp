@@ -9,12 +9,12 @@
 
 #include "core/Error.h"
 #include "core/ShaderSource.h"
+#include "fit/MipMapping.h"
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/MethodPrograms.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 
 namespace OSGBTF_TEST_FILE {

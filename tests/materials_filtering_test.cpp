@@ -6,10 +6,10 @@
 
 #include <glm/geometric.hpp>
 
+#include "fit/MipMapping.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "materials/lambert/Lambert.h"
 
 namespace OSGBTF_TEST_FILE {

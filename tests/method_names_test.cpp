@@ -6,6 +6,7 @@
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -154,7 +155,7 @@ TEST(MethodNames, ScannerFindsPlantedLiteralsInAFakeTree) {
 
 TEST(MethodNames, NoMethodNameLiteralOutsideItsFolder) {
     // A name needed elsewhere is a constant in the method's header (kFmfMethodName) or a
-    // MethodInfo field (baseline, pluginDefault, writesUbo2014, environment).
+    // MethodInfo field (baseline, pluginDefault, factors, environment).
     const std::vector<std::string> found =
         misplacedMethodNames(fs::path(sourceDir()), kSourceFolders, builtInMethods());
     std::string list;
@@ -162,15 +163,96 @@ TEST(MethodNames, NoMethodNameLiteralOutsideItsFolder) {
     EXPECT_TRUE(found.empty()) << "method names outside their folders:" << list;
 }
 
+namespace {
+
+/** `text` with comments and the contents of string and character literals blanked (lines kept). */
+std::string codeOnly(const std::string& text) {
+    std::string code = text;
+    const std::size_t n = text.size();
+    auto blank = [&](std::size_t from, std::size_t to) {
+        for (std::size_t k = from; k < std::min(to, n); ++k)
+            if (code[k] != '\n') code[k] = ' ';
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+        if (text.compare(i, 2, "//") == 0) {
+            const std::size_t end = text.find('\n', i);
+            blank(i, end == std::string::npos ? n : end);
+            i = end == std::string::npos ? n : end;
+        } else if (text.compare(i, 2, "/*") == 0) {
+            const std::size_t end = text.find("*/", i + 2);
+            const std::size_t stop = end == std::string::npos ? n : end + 2;
+            blank(i, stop);
+            i = stop - 1;
+        } else if (text[i] == '"') {
+            std::size_t j = i + 1;
+            while (j < n && text[j] != '"' && text[j] != '\n') j += text[j] == '\\' ? 2 : 1;
+            blank(i + 1, j);
+            i = std::min(j, n - 1);
+        }
+    }
+    return code;
+}
+
+/** "path:line: Class" for every use of a built-in method's class (its osg::Object className)
+ *  in the .cpp and .h files under `folders`, outside the method folders. */
+std::vector<std::string> misplacedMethodClasses(const fs::path& root,
+                                                const std::vector<std::string>& folders) {
+    std::vector<std::string> classes;
+    for (const std::string& name : builtInMethods()) {
+        osg::ref_ptr<osg::Object> instance = findMethod(name).createInstance();
+        classes.push_back(instance->className());
+    }
+    std::vector<std::string> found;
+    for (const std::string& folder : folders) {
+        for (const auto& entry : fs::recursive_directory_iterator(root / folder)) {
+            const std::string extension = entry.path().extension().string();
+            if (!entry.is_regular_file() || (extension != ".cpp" && extension != ".h")) continue;
+            const std::string relative = entry.path().lexically_relative(root).generic_string();
+            // A method may build on another's (lpca-revised resamples an lpca model).
+            if (relative.rfind("materials/", 0) == 0 &&
+                std::count(relative.begin(), relative.end(), '/') > 1)
+                continue;
+            const std::string code = codeOnly(readTextFile(entry.path().string()));
+            for (const std::string& name : classes) {
+                const std::regex word("\\b" + name + "\\b");
+                for (auto it = std::sregex_iterator(code.begin(), code.end(), word);
+                     it != std::sregex_iterator(); ++it) {
+                    const auto line =
+                        1 + std::count(code.begin(), code.begin() + it->position(), '\n');
+                    found.push_back(relative + ":" + std::to_string(line) + ": " + name);
+                }
+            }
+        }
+    }
+    std::sort(found.begin(), found.end());
+    return found;
+}
+
+}  // namespace
+
+// What the tools, the plugins, the scene graph and the harness need of a method comes from its
+// MethodInfo, not from its class. streaming/ is the one exception, by design: BSVTF (Schwartz et
+// al. 2013) streams the Eigen-Textures of the fmf material and is built on its class.
+TEST(MethodNames, NoMethodClassOutsideItsFolder) {
+    std::vector<std::string> folders;
+    for (const std::string& folder : kSourceFolders)
+        if (folder != "streaming") folders.push_back(folder);
+    const std::vector<std::string> found = misplacedMethodClasses(fs::path(sourceDir()), folders);
+    std::string list;
+    for (const std::string& f : found) list += "\n  " + f;
+    EXPECT_TRUE(found.empty()) << "method classes outside their folders:" << list;
+}
+
 TEST(MethodNames, RolesComeFromTheMethods) {
     EXPECT_EQ(baselineMethod().name, "lambert");
     EXPECT_EQ(pluginDefaultMethod().name, "lpca");
     std::vector<std::string> ubo2014, folding;
     for (const std::string& name : methodNames()) {
-        if (findMethod(name).writesUbo2014) ubo2014.push_back(name);
+        if (findMethod(name).factors) ubo2014.push_back(name);
         if (hasFoldedEnvironment(name)) folding.push_back(name);
     }
     EXPECT_EQ(ubo2014, std::vector<std::string>{"fmf"});
+    EXPECT_EQ(factorMethod().name, "fmf");
     // "dummy": the test-only method of tests/DummyMethod.cpp, registered in this program, folds
     // its environment lighting through its own hooks like the built-in three.
     EXPECT_EQ(folding, (std::vector<std::string>{"dummy", "fmf", "lpca", "pca"}));
@@ -215,6 +297,21 @@ TEST(MethodShaders, EmbeddedFromTheMethodFolders) {
         }
     }
     EXPECT_FALSE(fs::exists(source / "shaders" / "environment"));
+    // Any other shader file of a method folder is embedded as "<m>/<file>" (what its shaders
+    // include, e.g. the evaluation that the streamed materials share).
+    int others = 0;
+    for (const std::string& name : builtInMethods())
+        for (const auto& entry : fs::directory_iterator(source / "materials" / name)) {
+            const std::string file = entry.path().filename().string(),
+                              ext = entry.path().extension();
+            if ((ext != ".glsl" && ext != ".frag" && ext != ".vert") || file == name + ".frag" ||
+                file == name + "_environment.frag")
+                continue;
+            EXPECT_TRUE(has(name + "/" + file)) << name << "/" << file;
+            EXPECT_NO_THROW(shaderSource(name + "/" + file));
+            ++others;
+        }
+    EXPECT_GE(others, 1);
 }
 
 }  // namespace OSGBTF_TEST_FILE

@@ -1,5 +1,5 @@
 // osgBTF::EnvironmentLight (reading maps through osgDB, serialization) and per-vertex
-// environment lighting of a scene with Embree visibility (scene/VertexEnvironment.h).
+// environment lighting of a scene with Embree visibility (environment/VertexEnvironment.h).
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -14,8 +14,8 @@
 #include <osgDB/ReadFile>
 #include <osgDB/WriteFile>
 
+#include "environment/VertexEnvironment.h"
 #include "scene/EnvironmentLight.h"
-#include "scene/VertexEnvironment.h"
 #include "tests/NotifyCapture.h"
 #include "tests/PluginTestUtil.h"
 #include "tests/TestUtil.h"

@@ -1,4 +1,4 @@
-// The fit cache as an application uses it (scene/FitCache.h, libosgBTFFit), without osgDB: the
+// The fit cache as an application uses it (fit/FitCache.h, libosgBTFFit), without osgDB: the
 // plugins' tests (scene_plugin_test.cpp) cover the same cache through the readers.
 #include <chrono>
 #include <cstdlib>
@@ -9,11 +9,11 @@
 
 #include <gtest/gtest.h>
 
+#include "fit/FitCache.h"
 #include "harness/sample/SampleBtf.h"
 #include "harness/sample/Ubo2003Writer.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
-#include "scene/FitCache.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {

@@ -22,12 +22,12 @@
 #include "examples/ExampleScenes.h"
 #include "examples/btf-examples/Gallery.h"
 #include "examples/btf-examples/SceneBench.h"
+#include "fit/MipMapping.h"
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "materials/pca/Pca.h"
 #include "scene/OwnPlugins.h"
 

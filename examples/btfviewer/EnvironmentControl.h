@@ -11,7 +11,7 @@
 
 #include <osg/Group>
 
-#include "scene/EnvironmentLitGroup.h"
+#include "environment/EnvironmentLitGroup.h"
 
 namespace btfviewer {
 

@@ -706,7 +706,21 @@ const bool fmfRegistered = registerMethodClass<FmfMaterial>([] {
             new osg::Uniform("fmfComponents", int(fmf.factors().factors[0].U.cols())));
     };
     m.environment = std::move(environment);
-    m.writesUbo2014 = true;  // FmfMaterial::factors() are what a UBO2014 .btf file stores
+    FactorHooks factors;  // FmfMaterial::factors() are what a UBO2014 .btf file stores
+    factors.description = [](const Material& material) -> const FactoredBtf& {
+        return static_cast<const FmfMaterial&>(material).factors();
+    };
+    factors.complete = [](const Material& material) {
+        return static_cast<const FmfMaterial&>(material).completeFactors();
+    };
+    factors.scalarBytes = [](const Material& material) {
+        return static_cast<const FmfMaterial&>(material).storage() == MaterialTexture::Float ? 4
+                                                                                             : 2;
+    };
+    factors.fromFactors = [](FactoredBtf&& stored, MaterialTexture::PixelKind storage) {
+        return osg::ref_ptr<Material>(FmfMaterial::fromFactors(std::move(stored), storage));
+    };
+    m.factors = std::move(factors);
     m.order = 70;
     m.fitWorkingSet = 0.75;  // per-view blocks and the SVD's sketch (as pca)
     m.quickFitOptions = "components=2";

@@ -1,6 +1,6 @@
 #version 330 compatibility
 // Method "fmf" (materials/fmf/Fmf.h): B = U * SxV^T (Schwartz et al. 2013 section 3), evaluated by
-// common/fmf_eval.glsl with the Eigen-Textures in one texture array.
+// fmf/fmf_eval.glsl (this folder) with the Eigen-Textures in one texture array.
 #pragma include "common/btf_main.glsl"
 #pragma include "common/directions.glsl"
 
@@ -15,4 +15,4 @@ vec4 fmfEigenTexture(ivec2 texel, int layer) {
                        : texelFetch(fmfSxV, ivec3(texel, layer), 0);
 }
 
-#pragma include "common/fmf_eval.glsl"
+#pragma include "fmf/fmf_eval.glsl"

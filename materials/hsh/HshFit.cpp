@@ -1,5 +1,5 @@
 // HSH's fit (libosgBTFFit): least squares of the harmonics per texel, channel and view slot,
-// through the lights' pseudo-inverse computed once (materials/LightBasisFit.h).
+// through the lights' pseudo-inverse computed once (fit/LightBasisFit.h).
 #include "materials/MethodOptions.h"
 #include "materials/hsh/Hsh.h"
 
@@ -9,7 +9,7 @@
 #include <Eigen/Core>
 
 #include "core/Error.h"
-#include "materials/LightBasisFit.h"
+#include "fit/LightBasisFit.h"
 
 namespace osgBTF {
 

@@ -1,5 +1,5 @@
 // PTM's fit (libosgBTFFit): least squares of the biquadratic in (lx, ly) per texel and view slot,
-// through the lights' pseudo-inverse computed once (materials/LightBasisFit.h).
+// through the lights' pseudo-inverse computed once (fit/LightBasisFit.h).
 #include "materials/MethodOptions.h"
 #include "materials/ptm/Ptm.h"
 
@@ -9,7 +9,7 @@
 #include <Eigen/Core>
 
 #include "core/Error.h"
-#include "materials/LightBasisFit.h"
+#include "fit/LightBasisFit.h"
 
 namespace osgBTF {
 

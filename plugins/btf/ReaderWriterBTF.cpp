@@ -32,7 +32,7 @@
 // The modules that fit on load (all but osgdb_btfmat) link libosgBTFFit for the fit and its
 // cache; osgdb_btfmat renders fitted files only and is built without them (CMakeLists.txt).
 #if OSGBTF_READERS_FIT
-#include "scene/FitCache.h"
+#include "fit/FitCache.h"
 #endif
 
 namespace fs = std::filesystem;
@@ -51,7 +51,7 @@ struct Settings {
     float textureScale = 1.0f;
     std::string cacheDir;  // empty: caching off
     std::string mapFile;   // a coordinate map to draw the material through; empty: none
-    // Fit a mip-mapped material (materials/MipMapping.h): unset means yes, as `btf fit` (at most
+    // Fit a mip-mapped material (fit/MipMapping.h): unset means yes, as `btf fit` (at most
     // 1.41x the file; mipmap=off for the base level alone).
     std::optional<bool> mipmap;
 };
@@ -109,7 +109,7 @@ FitOptions fitOptionsFor(const MethodInfo& method, const Settings& settings) {
     return options;
 }
 
-/** A measured BTF fitted with the settings' method, through the fit cache (scene/FitCache.h). */
+/** A measured BTF fitted with the settings' method, through the fit cache (fit/FitCache.h). */
 osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& settings) {
     const MethodInfo& method = findMethod(settings.method);
     const FitOptions fitOptions = fitOptionsFor(method, settings);
@@ -121,8 +121,9 @@ osg::ref_ptr<Material> fitMeasured(const std::string& path, const Settings& sett
 #endif
 }
 
-/** A UBO2014 file without method=: its stored factorisation as an `fmf` material, nothing
- *  decoded or fitted (scene/OpenMaterial.h). Of the fit options only fmf's `storage` applies. */
+/** A UBO2014 file without method=: its stored factorisation as a material of factorMethod()
+ *  (fmf), nothing decoded or fitted (scene/OpenMaterial.h). Of the fit options only its
+ *  `storage` applies. */
 osg::ref_ptr<Material> openStored(const std::string& path, const Settings& settings) {
     MaterialTexture::PixelKind storage = MaterialTexture::Half;
     std::string ignored;
@@ -144,9 +145,8 @@ osg::ref_ptr<Material> openStored(const std::string& path, const Settings& setti
     if (settings.mipmap.value_or(false)) ignored += " mipmap=on";
     OSGBTF_NOTIFY(
         osg::NOTICE,
-        "osgBTF: " << path
-                   << ": opening its stored factorisation as an fmf material (method=NAME fits a "
-                      "method instead)"
+        "osgBTF: " << path << ": opening its stored factorisation as an " << factorMethod().name
+                   << " material (method=NAME fits a method instead)"
                    << (ignored.empty() ? std::string()
                                        : "; fit options without method= ignored:" + ignored));
     return loadSharedMaterial(path, storage);
@@ -181,10 +181,12 @@ osgDB::ReaderWriter::ReadResult error(const std::string& message) {
     return osgDB::ReaderWriter::ReadResult(message);  // ERROR_IN_READING_FILE
 }
 
-/** Puts the settings' coordinate map on the node; the problem (missing or bad file, a map into
- *  another sample size) as the error message, empty when fine. */
-std::string applyCoordinateMap(MaterialNode& node, const Settings& settings,
-                               const osgDB::Options* options) {
+/** The one place where the option words reach a node, for every reader of this module: the
+ *  texture scale and the coordinate map. Returns the problem (a missing or bad map file, a map
+ *  into another sample size) as the error message, empty when fine. */
+std::string applySettings(MaterialNode& node, const Settings& settings,
+                          const osgDB::Options* options) {
+    node.setTextureScale(settings.textureScale);
     if (settings.mapFile.empty()) return {};
     const std::string path = osgDB::findDataFile(settings.mapFile, options);
     if (path.empty()) return settings.mapFile + ": no such file";
@@ -287,8 +289,7 @@ osgDB::ReaderWriter::ReadResult streamedUnder(const std::string& modelName,
     if (!node) return error(indexName + ": did not read as a streamed material");
     osg::ref_ptr<osg::Node> model = osgDB::readRefNodeFile(modelName, options);
     if (!model) return error(modelName + ": cannot read the model");
-    node->setTextureScale(settings.textureScale);
-    if (const std::string problem = applyCoordinateMap(*node, settings, options); !problem.empty())
+    if (const std::string problem = applySettings(*node, settings, options); !problem.empty())
         return error(problem);
     node->addChild(model.get());
     return group.get();
@@ -300,9 +301,9 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
     if (extension == "btfmat")
         supportsExtension("btfmat", "osgBTF fitted material (OpenEXR inside) -> MaterialNode");
     else if (extension == "btf")
-        supportsExtension("btf",
-                          "UBO2014 measured BTF: its stored factors as an fmf material, or fitted "
-                          "on load with method= -> MaterialNode");
+        supportsExtension("btf", "UBO2014 measured BTF: its stored factors as an " +
+                                     factorMethod().name +
+                                     " material, or fitted on load with method= -> MaterialNode");
     else if (extension == "btfzip") {
         supportsExtension("zip",
                           "UBO2003/ATRIUM measured BTF zip or RTI capture zip (photos and a .lp "
@@ -396,8 +397,7 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
             osg::ref_ptr<osg::Node> model = osgDB::readRefNodeFile(modelName, options);
             if (!model) return error(modelName + ": cannot read the model");
             osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
-            node->setTextureScale(settings.textureScale);
-            if (const std::string problem = applyCoordinateMap(*node, settings, options);
+            if (const std::string problem = applySettings(*node, settings, options);
                 !problem.empty())
                 return error(problem);
             node->addChild(model.get());
@@ -432,9 +432,7 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
                                                           : readMaterial(path, settings);
         osg::ref_ptr<MaterialNode> node = new MaterialNode(material.get());
         if (!node->getMaterial()) return error(node->getMaterialError());
-        node->setTextureScale(settings.textureScale);
-        if (const std::string problem = applyCoordinateMap(*node, settings, options);
-            !problem.empty())
+        if (const std::string problem = applySettings(*node, settings, options); !problem.empty())
             return error(problem);
         // An RTI file read by itself is shown as RTI viewers show it: a flat patch of its aspect,
         // here facing the home view of osgviewer (-Y), lit by its headlight.

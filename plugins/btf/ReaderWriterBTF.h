@@ -47,7 +47,7 @@
  *   cache=DIR        folder of fitted measured BTFs (default $OSGBTF_CACHE_DIR, else
  *                    $XDG_CACHE_HOME/osgbtf, else ~/.cache/osgbtf); cache=off fits every time
  *
- * Fit cache (scene/FitCache.h, in libosgBTFFit, which osgdb_btfmat does not load): a measured BTF
+ * Fit cache (fit/FitCache.h, in libosgBTFFit, which osgdb_btfmat does not load): a measured BTF
  * is fitted once; the result is saved (atomically) as
  * DIR/<name>-<method>-<16 hex digits>.btfmat, the digits a hash of the input's absolute path,
  * size, modification time, the method and its options. The next load of the same input with the

@@ -1,7 +1,7 @@
 // osgdb_serializers_osgbtf (CMakeLists.txt says why it exists). Loading it loads libosgBTF and
 // libosgBTFEnvironment, whose static initialisers register the osgBTF:: wrappers; osgDB then
 // finds them.
-#include "scene/EnvironmentLitGroup.h"
+#include "environment/EnvironmentLitGroup.h"
 #include "scene/MaterialNode.h"
 
 // A use of libosgBTF, so that the linker keeps it as a dependency even with --as-needed.

@@ -37,7 +37,7 @@ bool btfBilinear = false;
 vec2 btfBilinearCoordinate = vec2(0.0);
 // The fragment's level of detail in base texels (btfMipLod), set by main() in uniform control
 // flow before any evaluation: for a method that picks levels itself (the BSVTF cache,
-// shaders/bsvtf.frag), whose btfEvaluate runs inside the light loop, where derivatives are
+// streaming/bsvtf.frag), whose btfEvaluate runs inside the light loop, where derivatives are
 // undefined. Not set in the coordinate-map variant.
 float btfFragmentLod = 0.0;
 

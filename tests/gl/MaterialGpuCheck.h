@@ -151,7 +151,7 @@ osg::ref_ptr<osg::Image> renderRectifiedPatch(const Material& material,
 
 /** The unit patch of rectifiedPatch() (normal +Z, tangent attribute +X, texture coordinates =
  *  position) as two indexed triangles (0 1 2, 0 2 3): what environment lighting needs (its
- *  geometry stage takes triangles, scene/VertexEnvironment.h lights only triangles). */
+ *  geometry stage takes triangles, environment/VertexEnvironment.h lights only triangles). */
 osg::ref_ptr<osg::Geometry> trianglePatch();
 
 /** The largest differences of a render through a coordinate map, magnified and across the wrap,

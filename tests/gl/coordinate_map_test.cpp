@@ -13,12 +13,12 @@
 #include <gtest/gtest.h>
 #include <osg/Uniform>
 
+#include "fit/MipMapping.h"
 #include "harness/MaterialImage.h"
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/pca/Pca.h"

@@ -26,21 +26,21 @@
 #include <osgDB/WriteFile>
 #include <osgUtil/UpdateVisitor>
 
+#include "environment/EnvironmentLitGroup.h"
+#include "environment/VertexEnvironment.h"
+#include "fit/MipMapping.h"
 #include "harness/MaterialImage.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/BilinearTaps.h"
 #include "materials/EnvironmentLighting.h"
 #include "materials/EnvironmentState.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 #include "materials/fmf/Fmf.h"
 #include "materials/lpca/Lpca.h"
 #include "materials/pca/Pca.h"
 #include "scene/EnvironmentLight.h"
-#include "scene/EnvironmentLitGroup.h"
 #include "scene/MaterialNode.h"
-#include "scene/VertexEnvironment.h"
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"
 

@@ -29,13 +29,13 @@
 #include <osgText/TextBase>
 #include <osgViewer/Renderer>
 
+#include "environment/EnvironmentLitGroup.h"
+#include "fit/MipMapping.h"
 #include "harness/sample/BlockMap.h"
 #include "materials/Material.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/EnvironmentLight.h"
-#include "scene/EnvironmentLitGroup.h"
 #include "scene/MaterialNode.h"
 #include "streaming/StreamingGroup.h"
 #include "streaming/TileBuilder.h"

@@ -21,6 +21,8 @@
 #include <osg/Uniform>
 #include <osgUtil/UpdateVisitor>
 
+#include "environment/EnvironmentLitGroup.h"
+#include "fit/MipMapping.h"
 #include "harness/MaterialImage.h"
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
@@ -29,10 +31,8 @@
 #include "materials/EnvironmentLighting.h"
 #include "materials/EnvironmentState.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "materials/ShaderInterface.h"
 #include "scene/EnvironmentLight.h"
-#include "scene/EnvironmentLitGroup.h"
 #include "scene/MaterialNode.h"
 #include "tests/DummyMethod.h"
 #include "tests/SmallSample.h"

@@ -11,10 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include "fit/MipMapping.h"
 #include "harness/sample/SampleBtf.h"
 #include "materials/Material.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "tests/SmallSample.h"
 #include "tests/gl/GlTestEnv.h"
 #include "tests/gl/MaterialGpuCheck.h"

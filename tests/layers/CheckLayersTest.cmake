@@ -37,23 +37,51 @@ write_tree(${WORK}/good
   tests/x_test.cpp "#include \"harness/H.h\"\n#include \"plugins/btf/P.h\"\n#include \"fuzz/F.h\"")
 expect(${WORK}/good)
 
-# Upward includes: each one reported once, with the file, the include and the rule.
+# Upward includes: each one reported once, with the file, the include and the rule. In the
+# libraries' folders the headers are checked here (their sources with their library, below).
 write_tree(${WORK}/bad
   core/A.h "#pragma once\n#include \"loaders/L.h\""
+  loaders/L.h "#include \"materials/Material.h\""
   loaders/L.cpp "#include \"materials/Material.h\""
-  materials/M.cpp "  #  include \"harness/headless/HeadlessRenderer.h\""
-  synthesis/K.cpp "#include \"materials/Material.h\""
-  scene/S.cpp "#include \"harness/MaterialImage.h\""
+  materials/M.h "  #  include \"harness/headless/HeadlessRenderer.h\""
+  synthesis/K.h "#include \"materials/Material.h\""
+  scene/S.h "#include \"harness/MaterialImage.h\""
+  scene/F.h "#include \"fit/FitCache.h\""
   plugins/btf/P.cpp "#include \"core/A.h\"\n#include \"harness/Compare.h\""
   fuzz/F.cpp "#include \"tools/btf/Commands.h\"")
 expect(${WORK}/bad
   "core/A.h: includes \"loaders/L.h\", but core/ may include only core/"
-  "loaders/L.cpp: includes \"materials/Material.h\", but loaders/ may include only core/, loaders/"
-  "materials/M.cpp: includes \"harness/headless/HeadlessRenderer.h\", but materials/ may include only core/, materials/"
-  "synthesis/K.cpp: includes \"materials/Material.h\", but synthesis/ may include only core/, synthesis/"
-  "scene/S.cpp: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, streaming/, scene/"
-  "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, synthesis/, streaming/, scene/, plugins/"
-  "fuzz/F.cpp: includes \"tools/btf/Commands.h\", but fuzz/ may include only core/, loaders/, materials/, synthesis/, streaming/, scene/, harness/, plugins/, fuzz/")
+  "loaders/L.h: includes \"materials/Material.h\", but loaders/ may include only core/, loaders/"
+  "materials/M.h: includes \"harness/headless/HeadlessRenderer.h\", but materials/ may include only core/, materials/"
+  "synthesis/K.h: includes \"materials/Material.h\", but synthesis/ may include only core/, synthesis/"
+  "scene/F.h: includes \"fit/FitCache.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, scene/"
+  "scene/S.h: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, scene/"
+  "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, synthesis/, scene/, fit/, streaming/, environment/, plugins/"
+  "fuzz/F.cpp: includes \"tools/btf/Commands.h\", but fuzz/ may include only core/, loaders/, materials/, synthesis/, scene/, fit/, streaming/, environment/, harness/, plugins/, fuzz/")
+
+# Per library: a method's fit source (libosgBTFFit's) may include fit/, its render source
+# (libosgBTF's) may not, nor may the runtime include streaming/ or environment/.
+function(expect_library root library files)
+  osgbtf_library_include_violations(${root} ${library} "${files}" got)
+  if(NOT "${got}" STREQUAL "${ARGN}")
+    list(JOIN got "\n  " got_text)
+    list(JOIN ARGN "\n  " want_text)
+    message(FATAL_ERROR "${root} ${library}: expected\n  ${want_text}\ngot\n  ${got_text}")
+  endif()
+endfunction()
+write_tree(${WORK}/libraries
+  materials/ptm/PtmFit.cpp "#include \"fit/LightBasisFit.h\"\n#include \"materials/ptm/Ptm.h\""
+  materials/ptm/Ptm.cpp "#include \"core/A.h\"\n#include \"fit/LightBasisFit.h\""
+  scene/Node.cpp "#include \"streaming/TileSet.h\"\n#include \"environment/VertexEnvironment.h\""
+  environment/Group.cpp "#include \"scene/MaterialNode.h\"\n#include \"fit/FitCache.h\"")
+expect_library(${WORK}/libraries osgBTFFit "materials/ptm/PtmFit.cpp")
+expect_library(${WORK}/libraries osgBTF "scene/Node.cpp;materials/ptm/Ptm.cpp"
+  "materials/ptm/Ptm.cpp (osgBTF): includes \"fit/LightBasisFit.h\", but osgBTF may include only core/, loaders/, materials/, synthesis/, scene/"
+  "scene/Node.cpp (osgBTF): includes \"streaming/TileSet.h\", but osgBTF may include only core/, loaders/, materials/, synthesis/, scene/"
+  "scene/Node.cpp (osgBTF): includes \"environment/VertexEnvironment.h\", but osgBTF may include only core/, loaders/, materials/, synthesis/, scene/")
+expect_library(${WORK}/libraries osgBTFEnvironment "environment/Group.cpp"
+  "environment/Group.cpp (osgBTFEnvironment): includes \"fit/FitCache.h\", but osgBTFEnvironment may include only core/, loaders/, materials/, synthesis/, scene/, environment/")
+
 # Include cycles: each reported once, from its alphabetically first header; a same-folder include
 # resolves beside the including file. Acyclic diamonds are fine.
 function(expect_cycles root)

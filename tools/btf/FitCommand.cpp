@@ -11,14 +11,13 @@
 #include "core/ErrorMetrics.h"
 #include "core/FloatImage.h"
 #include "core/Progress.h"
+#include "fit/MipMapping.h"
 #include "harness/HeldOut.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
 #include "materials/Material.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
-#include "materials/fmf/Fmf.h"
 #include "tools/btf/Commands.h"
 
 namespace osgBTF::tool {
@@ -54,8 +53,8 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
     command->add_option("INPUT", options->input, "Measured BTF (zip, folder or .btf)")->required();
     command
         ->add_option("-o,--output", options->output,
-                     "Fitted material file (.btfmat or .exr); with -m fmf also a UBO2014 FMF "
-                     "file (.btf) that other readers of the format read")
+                     "Fitted material file (.btfmat or .exr); with -m " + factorMethod().name +
+                         " also a UBO2014 file (.btf) that other readers of the format read")
         ->required();
     command->add_option("-m,--method", options->method, methodsHelp())->required();
     command->add_option("--lobes", options->lobes,
@@ -130,11 +129,11 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
                  "a UBO2014 .btf file has no mip levels; save a --mipmap fit as .btfmat or .exr");
         if ((btfOutput || foreign) && holdout)
             fail(options->output, "a --holdout-fraction fit is saved as .btfmat or .exr");
-        if (btfOutput && !method.writesUbo2014)
-            fail(options->output,
-                 "only method fmf writes a UBO2014 .btf file (its factors are "
-                 "the format's); save " +
-                     method.name + " as .btfmat or .exr");
+        if (btfOutput && !method.factors)
+            fail(options->output, "only method " + factorMethod().name +
+                                      " writes a UBO2014 .btf file (its factors are the "
+                                      "format's); save " +
+                                      method.name + " as .btfmat or .exr");
         // The input's measurement meta data go into a .btf output where the input has them.
         std::unique_ptr<Ubo2014Factors> meta;
         if (btfOutput && isUbo2014File(options->input)) {
@@ -174,10 +173,8 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         // Saved last, releasing the material's arrays into the file's (no second copy of a PCA
         // of gigabytes).
         if (btfOutput) {
-            const auto* fmf = dynamic_cast<const FmfMaterial*>(material.get());
-            if (!fmf) fail(options->output, "method fmf did not give an FmfMaterial");
-            writeFactorsAsUbo2014(fmf->completeFactors(), options->output,
-                                  fmf->storage() == MaterialTexture::Float ? 4 : 2, meta.get());
+            writeFactorsAsUbo2014(method.factors->complete(*material), options->output,
+                                  method.factors->scalarBytes(*material), meta.get());
         } else if (foreign) {
             const std::string lost = saveMaterial(*material, options->output);
             // The file as written, read back and evaluated at the data's own directions (a

@@ -20,7 +20,7 @@
 #include "core/FactoredBtf.h"
 #include "loaders/LoadBtf.h"
 #include "materials/MethodOptions.h"
-#include "materials/fmf/Fmf.h"
+#include "materials/MethodRegistry.h"
 #include "scene/OpenMaterial.h"
 #include "streaming/TileBuilder.h"
 #include "tools/btf/Commands.h"
@@ -29,18 +29,19 @@ namespace osgBTF::tool {
 
 namespace {
 
-/** The fmf fit of a DFMF material's decoded values with `components` (0: its largest rank), and
- *  its error against those values over `errorTexels` texels at every (view, light) pair. */
-osg::ref_ptr<FmfMaterial> convertDfmf(const FmfMaterial& dfmf, int components,
-                                      long long errorTexels) {
-    const FactoredBtf factors = dfmf.completeFactors();
+/** The fit of `method` (factorMethod(): fmf) to a DFMF material's decoded values with
+ *  `components` (0: its largest rank), and its error against those values over `errorTexels`
+ *  texels at every (view, light) pair. */
+osg::ref_ptr<Material> convertDfmf(const MethodInfo& method, const Material& dfmf, int components,
+                                   long long errorTexels) {
+    const FactoredBtf factors = method.factors->complete(dfmf);
     const int ranks[3] = {factors.components(0), factors.components(1), factors.components(2)};
     if (components == 0) components = std::max({ranks[0], ranks[1], ranks[2]});
     const FactoredBtfSource source(factors);
     FitOptions fit;
     fit.set("components", std::to_string(components));
-    fit.set("storage", dfmf.storage() == MaterialTexture::Float ? "float" : "half");
-    osg::ref_ptr<FmfMaterial> fmf = FmfMaterial::fit(source, fit);
+    fit.set("storage", method.factors->scalarBytes(dfmf) == 4 ? "float" : "half");
+    osg::ref_ptr<Material> fmf = method.fit(source, fit);
     fmf->sourceFile = dfmf.sourceFile;
     const std::vector<std::size_t> texels =
         randomTexels(source, errorTexelCount(source, errorTexels));
@@ -112,13 +113,14 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
     return [options] {
         std::string extension = std::filesystem::path(options->input).extension().string();
         for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+        const MethodInfo& tiled = factorMethod();  // BSVTF streams its Eigen-Textures
         if (extension == ".zip" || std::filesystem::is_directory(options->input))
-            fail(options->input, "is a measured BTF; tile an fmf fit of it (`btf fit " +
-                                     options->input +
-                                     " -m fmf -o M.btfmat`, then `btf tiles M.btfmat`)");
+            fail(options->input, "is a measured BTF; tile an " + tiled.name +
+                                     " fit of it (`btf fit " + options->input + " -m " +
+                                     tiled.name + " -o M.btfmat`, then `btf tiles M.btfmat`)");
         osg::ref_ptr<Material> material = openMaterial(options->input);
-        const auto* opened = dynamic_cast<const FmfMaterial*>(material.get());
-        if (opened && opened->factors().model == FactorModel::Dfmf) {
+        const bool factored = material->methodName() == tiled.name;
+        if (factored && tiled.factors->description(*material).model == FactorModel::Dfmf) {
             // Converted from the factors as stored: a file of float scalars opened again as
             // floats (the default rounds them to half, as the GPU would get them).
             osg::ref_ptr<Material> exact = material;
@@ -126,18 +128,16 @@ Runner addTilesCommand(CLI::App& app, CommonOptions&) {
                 material = nullptr;
                 exact = openMaterial(options->input, MaterialTexture::Float);
             }
-            material = convertDfmf(dynamic_cast<const FmfMaterial&>(*exact), options->components,
-                                   options->errorTexels);
+            material = convertDfmf(tiled, *exact, options->components, options->errorTexels);
         } else if (options->components != 0) {
             fail(options->input, "--components converts DFMF input; this material is " +
-                                     std::string(opened ? "FMF already" : "not fmf"));
+                                     (factored ? std::string("FMF already") : "not " + tiled.name));
         }
-        const auto* fmf = dynamic_cast<const FmfMaterial*>(material.get());
-        if (!fmf)
-            fail(options->input, "is a '" + material->methodName() +
-                                     "' material; BSVTF tiles an fmf material (`btf fit IN -m "
-                                     "fmf -o M.btfmat`, or a UBO2014 FMF .btf)");
-        const TileBuildReport r = buildTileSet(*fmf, options->output, options->build);
+        if (material->methodName() != tiled.name)
+            fail(options->input, "is a '" + material->methodName() + "' material; BSVTF tiles an " +
+                                     tiled.name + " material (`btf fit IN -m " + tiled.name +
+                                     " -o M.btfmat`, or a UBO2014 FMF .btf)");
+        const TileBuildReport r = buildTileSet(*material, options->output, options->build);
         const double mib = 1024.0 * 1024.0;
         std::cout << std::fixed << std::setprecision(2) << options->output << ": " << r.groups
                   << " groups x " << r.levels << " levels, " << r.tiles << " tiles, "

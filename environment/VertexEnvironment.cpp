@@ -1,4 +1,4 @@
-#include "scene/VertexEnvironment.h"
+#include "environment/VertexEnvironment.h"
 
 #include <atomic>
 #include <cmath>

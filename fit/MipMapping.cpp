@@ -1,5 +1,5 @@
+#include "fit/MipMapping.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 
 #include "core/MipPyramid.h"
 

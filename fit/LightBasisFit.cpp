@@ -1,4 +1,4 @@
-#include "materials/LightBasisFit.h"
+#include "fit/LightBasisFit.h"
 
 #include <algorithm>
 #include <cfloat>

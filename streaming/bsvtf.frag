@@ -69,5 +69,5 @@ vec4 fmfEigenTexture(ivec2 texel, int group) {
     return mix(fine, bsvtfSample(parentSlot, shift + 1, texel), coarser);
 }
 
-#pragma include "common/fmf_eval.glsl"
+#pragma include "fmf/fmf_eval.glsl"
 

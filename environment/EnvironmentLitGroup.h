@@ -6,8 +6,8 @@
 // or projection width, or the set of MaterialNodes and their materials changed since the last
 // computation (or after dirty()), starts the per-vertex work on a worker thread: linear methods
 // (pca, fmf, lpca) get folded per-vertex data with ray-cast visibility of everything below this
-// group (applyEnvironmentLighting's computation, scene/VertexEnvironment.h); the others are lit by
-// representative lights of the map (median cut), which the group holds and traverses itself.
+// group (applyEnvironmentLighting's computation, environment/VertexEnvironment.h); the others are
+// lit by representative lights of the map (median cut), which the group holds and traverses itself.
 // The previous lighting stays on screen until the new one is installed, in a later update
 // traversal. Exposure changes are real time. Geometry edits need dirty().
 //

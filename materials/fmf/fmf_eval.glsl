@@ -1,4 +1,4 @@
-// The evaluation of materials/fmf/fmf.frag and shaders/bsvtf.frag (materials/fmf/Fmf.h): the
+// The evaluation of materials/fmf/fmf.frag and streaming/bsvtf.frag (materials/fmf/Fmf.h): the
 // same loops as FmfMaterial::evaluate/factorSums on the CPU. The U rows of the 9 (view, light)
 // combinations are blended per group of 4 components, dotted with the texel's Eigen-Texture
 // values, then decoded once (colour model or exp), then divided by the light's cosine when the

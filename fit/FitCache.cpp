@@ -1,4 +1,4 @@
-#include "scene/FitCache.h"
+#include "fit/FitCache.h"
 
 #include <cstdint>
 #include <cstdio>
@@ -10,10 +10,10 @@
 #include "core/Error.h"
 #include "core/FloatImage.h"
 #include "core/Notify.h"
+#include "fit/MipMapping.h"
 #include "loaders/LoadBtf.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
-#include "materials/MipMapping.h"
 #include "scene/MaterialNode.h"
 
 namespace fs = std::filesystem;

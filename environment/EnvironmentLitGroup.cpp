@@ -1,4 +1,4 @@
-#include "scene/EnvironmentLitGroup.h"
+#include "environment/EnvironmentLitGroup.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,11 +12,11 @@
 
 #include "core/Error.h"
 #include "core/Notify.h"
+#include "environment/VertexEnvironment.h"
 #include "materials/EnvironmentState.h"
 #include "materials/IlluminationPca.h"
 #include "materials/LightVisibility.h"
 #include "scene/MaterialNode.h"
-#include "scene/VertexEnvironment.h"
 
 namespace osgBTF {
 
