@@ -299,7 +299,8 @@ const bool ptmRegistered = registerMethodClass<PtmMaterial>([] {
     ForeignFileFormat ptmFile;
     ptmFile.extension = ".ptm";
     ptmFile.description =
-        "Polynomial Texture Map file (PTM_1.2; PTM_FORMAT_RGB and PTM_FORMAT_LRGB): RTIBuilder's, "
+        "Polynomial Texture Map file (PTM_1.2; PTM_FORMAT_RGB, _LRGB, _JPEG_RGB, _JPEG_LRGB): "
+        "RTIBuilder's, "
         "RTIViewer's";
     ptmFile.read = [](const std::string& path) -> osg::ref_ptr<Material> {
         return readPtmFile(path);
