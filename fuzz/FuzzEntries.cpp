@@ -205,6 +205,29 @@ void fittedMaterial(const std::uint8_t* data, std::size_t size) {
 }
 
 void rtiFiles(const std::uint8_t* data, std::size_t size) {
+    if (size >= 1 && data[0] == '{') {
+        // relight's web layout, packed into one input: info.json, then each plane_N.jpg after
+        // the line "--plane--" (make_seeds.cpp packs the test fixtures so), in a fresh folder.
+        const fs::path folder =
+            fs::path(writeInput(data, 0, "relight-marker")).parent_path() / "relight";
+        std::error_code ignored;
+        fs::remove_all(folder, ignored);
+        fs::create_directories(folder);
+        const std::string bytes(reinterpret_cast<const char*>(data), size);
+        const std::string separator = "\n--plane--\n";
+        std::size_t at = 0;
+        for (int part = 0; part <= 16; ++part) {
+            const std::size_t end = bytes.find(separator, at);
+            const std::string piece = bytes.substr(at, end == std::string::npos ? end : end - at);
+            writeInput(reinterpret_cast<const std::uint8_t*>(piece.data()), piece.size(),
+                       part == 0 ? "relight/info.json"
+                                 : "relight/plane_" + std::to_string(part - 1) + ".jpg");
+            if (end == std::string::npos) break;
+            at = end + separator.size();
+        }
+        loadMaterial((folder / "info.json").string());
+        return;
+    }
     // A PTM file begins with its version; anything else is tried as an .rti (comments first).
     const bool ptm = size >= 3 && std::memcmp(data, "PTM", 3) == 0;
     loadMaterial(writeInput(data, size, ptm ? "input.ptm" : "input.rti"));

@@ -15,6 +15,7 @@
 
 #include "core/CoordinateMap.h"
 #include "core/Error.h"
+#include "core/FloatImage.h"
 #include "core/Progress.h"
 #include "harness/sample/BlockMap.h"
 #include "harness/sample/SampleBtf.h"
@@ -182,6 +183,25 @@ int main(int argc, char** argv) {
             saveMaterial(
                 *findMethod("hsh").fit(sample, FitOptions::parse(std::string("order=") + order)),
                 (out / "rti_files" / ("seed-order" + std::string(order) + ".rti")).string());
+        // The JPEG-compressed RTI files of the tests (tests/data/rti-files/, written by its
+        // make_fixtures.py): the .ptm variants as they are, each relight folder packed into one
+        // input (FuzzEntries.cpp rtiFiles: info.json, then "\n--plane--\n" before each plane).
+        const fs::path rtiData = fs::path(OSGBTF_SOURCE_DIR) / "tests" / "data" / "rti-files";
+        for (const char* name : {"jpeg-lrgb.ptm", "jpeg-rgb.ptm"})
+            fs::copy_file(rtiData / name, out / "rti_files" / (std::string("seed-") + name),
+                          fs::copy_options::overwrite_existing);
+        for (const char* folder :
+             {"relight-ptm-lrgb", "relight-ptm-rgb", "relight-hsh-rgb", "relight-hsh-lrgb"}) {
+            std::string packed = readWholeFile((rtiData / folder / "info.json").string());
+            for (int j = 0; fs::exists(rtiData / folder / ("plane_" + std::to_string(j) + ".jpg"));
+                 ++j)
+                packed +=
+                    "\n--plane--\n" +
+                    readWholeFile(
+                        (rtiData / folder / ("plane_" + std::to_string(j) + ".jpg")).string());
+            writeTextAtomically((out / "rti_files" / (std::string("seed-") + folder)).string(),
+                                packed);
+        }
         saveMaterial(*lambert, (fixtures / "m.btfmat").string());
 
         // Scenes: a MaterialNode naming m.btfmat (resolved in the fixtures folder), and one

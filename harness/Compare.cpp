@@ -33,6 +33,15 @@ std::vector<std::string> allCompareMethods() {
     return methods;
 }
 
+std::string MethodResult::label() const {
+    if (file.empty()) return method;
+    const fs::path path(file);
+    const fs::path folder = path.parent_path().filename();
+    return "file:" + (path.filename() == "info.json" && !folder.empty()
+                          ? (folder / path.filename()).generic_string()
+                          : path.filename().string());
+}
+
 namespace {
 
 std::string formatNumber(double value, int precision) {
@@ -107,10 +116,14 @@ bool fitOrReuse(const CompareOptions& options, const fs::path& work, FitJob& job
 void fitStage(const CompareOptions& options, const fs::path& work, CompareResult& result) {
     const std::string tool = options.fitTool.empty() ? defaultFitTool() : options.fitTool;
     const bool heldOut = result.holdoutFraction > 0;
+    const std::size_t fitted =
+        std::size_t(std::count_if(result.methods.begin(), result.methods.end(),
+                                  [](const MethodResult& m) { return m.file.empty(); }));
     Progress progress(heldOut ? "fitting, and fitting without the held-out pairs (child processes)"
                               : "fitting (child processes)",
-                      result.methods.size() * (heldOut ? 2 : 1));
+                      fitted * (heldOut ? 2 : 1));
     for (MethodResult& m : result.methods) {
+        if (!m.file.empty()) continue;  // a given file: nothing to fit
         FitJob job;
         job.tool = tool;
         job.input = options.input;
@@ -141,6 +154,23 @@ void fitStage(const CompareOptions& options, const fs::path& work, CompareResult
     }
 }
 
+/** A material at every measured (view, light) pair of `btf`, in MeasuredBtf::abrdf's layout
+ *  ([view][light][rgb]): for a file fitted elsewhere, whose own measured directions (none, or a
+ *  relight file's lights) are not the BTF's. */
+void evaluateAtMeasured(const Material& material, const BtfSource& btf, std::size_t texel,
+                        float* out) {
+    const int x = int(texel % std::size_t(btf.width())), y = int(texel / std::size_t(btf.width()));
+    for (std::size_t v = 0; v < btf.viewCount(); ++v) {
+        const glm::vec3 view = btf.views().vector(v);
+        for (std::size_t l = 0; l < btf.lightCount(); ++l) {
+            const glm::vec3 value = material.evaluate(x, y, view, btf.lights().vector(l));
+            *out++ = value.r;
+            *out++ = value.g;
+            *out++ = value.b;
+        }
+    }
+}
+
 void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& result,
                 std::vector<osg::ref_ptr<Material>>& materials) {
     Progress progress("error and memory tables (CPU)", result.methods.size());
@@ -154,7 +184,32 @@ void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& resul
     materials.assign(result.methods.size(), nullptr);
     for (std::size_t i = 0; i < result.methods.size(); ++i) {
         MethodResult& m = result.methods[i];
-        if (!m.failed) {
+        if (!m.failed && !m.file.empty()) {
+            // A given file: evaluated at the BTF's measured directions, not at its own.
+            try {
+                osg::ref_ptr<Material> material = loadMaterial(m.file);
+                m.method = material->methodName();
+                m.fittedFile = m.file;
+                if (material->width() != btf.width() || material->height() != btf.height())
+                    throw Error(m.file + ": " + std::to_string(material->width()) + "x" +
+                                std::to_string(material->height()) + " texels, the BTF has " +
+                                std::to_string(btf.width()) + "x" + std::to_string(btf.height()));
+                m.error = computeError(
+                    btf,
+                    [&](std::size_t texel, float* out) {
+                        evaluateAtMeasured(*material, btf, texel, out);
+                    },
+                    subsample.empty() ? nullptr : &subsample);
+                m.memory = material->memory();
+                if (m.memory.bytesPerTexel > 0)
+                    m.compressionRatio = result.rawBytesPerTexel / m.memory.bytesPerTexel;
+                m.cost = shaderCost(*material);
+                materials[i] = material;
+            } catch (const std::exception& e) {
+                m.failed = true;
+                m.failure = std::string("failed: ") + e.what();
+            }
+        } else if (!m.failed) {
             try {
                 osg::ref_ptr<Material> material = loadMaterial((work / m.fittedFile).string());
                 if (material->width() != btf.width() || material->height() != btf.height())
@@ -209,7 +264,7 @@ void environmentPicture(const CompareOptions& options, HeadlessRenderer& rendere
     int cell = 0;
     for (std::size_t i = 0; i < materials.size(); ++i) {
         if (!materials[i]) continue;
-        labels.push_back(result.methods[i].method);
+        labels.push_back(result.methods[i].label());
         const std::vector<glm::vec3> g = projectPatchEnvironment(*materials[i], map);
         const int factor = std::max(1, 128 / std::max(1, materials[i]->width()));
         for (std::size_t v = 0; v < std::size(views); ++v) {
@@ -269,7 +324,7 @@ void gpuStage(const CompareOptions& options, const BtfSource& btf, const fs::pat
                     result.methods[i].gpuCpuMaxDifference = worst;
                 } catch (const Error& e) {
                     // One method's GPU trouble must not cost the others their results.
-                    result.gpuNote += "; " + result.methods[i].method + " GPU check: " + e.what();
+                    result.gpuNote += "; " + result.methods[i].label() + " GPU check: " + e.what();
                 }
             progress.advance();
         }
@@ -289,7 +344,7 @@ void gpuStage(const CompareOptions& options, const BtfSource& btf, const fs::pat
                             *renderer, *materials[i], options.pass, result.calibrations.back(),
                             m.cost.counted ? m.cost.tex(options.pass.lights) : -1));
                     } catch (const Error& e) {
-                        result.gpuNote += "; " + result.methods[i].method + " pass timing (" +
+                        result.gpuNote += "; " + result.methods[i].label() + " pass timing (" +
                                           target.name + "): " + e.what();
                         MethodPass unmeasured;  // keeps passes aligned with the calibrations
                         unmeasured.target = target;
@@ -305,7 +360,7 @@ void gpuStage(const CompareOptions& options, const BtfSource& btf, const fs::pat
         std::vector<std::vector<FloatImage>> rows;
         std::vector<std::string> labels;
         for (std::size_t i = 0; i < materials.size(); ++i)
-            if (materials[i]) labels.push_back(result.methods[i].method);
+            if (materials[i]) labels.push_back(result.methods[i].label());
         for (const SphereSetting& setting : settings) {
             std::vector<FloatImage> row;
             for (const auto& material : materials) {
@@ -337,7 +392,7 @@ void pictureStage(const BtfSource& btf, const fs::path& work, CompareResult& res
     Progress progress("pictures", 3);
     std::vector<std::string> labels;
     for (std::size_t i = 0; i < materials.size(); ++i)
-        if (materials[i]) labels.push_back(result.methods[i].method);
+        if (materials[i]) labels.push_back(result.methods[i].label());
     const int factor = std::max(1, int(std::ceil(128.0 / std::max(btf.width(), 1))));
     const int cell = btf.width() * factor;
     constexpr int kGap = 4, kBand = 22;
@@ -424,7 +479,7 @@ void pictureStage(const BtfSource& btf, const fs::path& work, CompareResult& res
 
     std::vector<PlotPoint> points;
     for (const MethodResult& m : result.methods)
-        if (!m.failed) points.push_back({m.method, m.memory.bytesPerTexel, m.error.average});
+        if (!m.failed) points.push_back({m.label(), m.memory.bytesPerTexel, m.error.average});
     writeTextAtomically(
         (work / "pictures/error-vs-memory.svg").string(),
         errorMemorySvg(points, "Error vs memory: " + fs::path(result.input).filename().string()));
@@ -439,7 +494,7 @@ void pictureStage(const BtfSource& btf, const fs::path& work, CompareResult& res
 void recommend(CompareResult& result) {
     const MethodResult* best = nullptr;
     for (const MethodResult& m : result.methods) {
-        if (m.failed) continue;
+        if (m.failed || !m.file.empty()) continue;  // given files are references, not choices
         if (result.maxBytesPerTexel > 0 && m.memory.bytesPerTexel > result.maxBytesPerTexel)
             continue;
         const MethodPass* pass = m.primaryPass();
@@ -514,6 +569,11 @@ CompareResult runCompare(const CompareOptions& options) {
         m.method = name;
         const auto it = options.methodOptions.find(name);
         if (it != options.methodOptions.end()) m.options = it->second;
+        result.methods.push_back(std::move(m));
+    }
+    for (const std::string& file : options.materialFiles) {
+        MethodResult m;
+        m.file = file;
         result.methods.push_back(std::move(m));
     }
 

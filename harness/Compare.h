@@ -54,10 +54,21 @@ struct CompareOptions {
      *  (whole directions: harness/batch/Holdout.h) and scored on them: error, PSNR and SSIM
      *  (harness/HeldOut.h), the RTI field's figures. 0: no held-out fits. */
     double holdoutFraction = 0.1;
+    /** Already fitted files (an osgBTF fitted material, a .ptm, an .rti, a relight
+     *  DIR/info.json: anything loadMaterial reads), each a row beside the fitted methods,
+     *  evaluated at the BTF's measured directions (Material::evaluate; for an RTI capture its
+     *  lights) and labelled with its file name (MethodResult::label). Not fitted, not held out,
+     *  never the recommendation. */
+    std::vector<std::string> materialFiles;
 };
 
 struct MethodResult {
-    std::string method;
+    std::string method;  ///< for a given file: its material's method (empty until it loads)
+    /** A file given with CompareOptions::materialFiles, as given; empty for a fitted method. */
+    std::string file;
+    /** The row's name in the tables, pictures, CSV and JSON: the method, or for a given file
+     *  "file:NAME" (NAME its file name; for relight's info.json the folder's too). */
+    std::string label() const;
     std::map<std::string, std::string> options;
     bool failed = false;
     std::string failure;     ///< "failed: ..." text shown in every table

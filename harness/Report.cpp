@@ -96,7 +96,7 @@ std::string reportMarkdown(const CompareResult& r) {
        << "| method | options | avg | min | max | RMSE | PSNR dB | NaN/Inf | max GPU-CPU |\n"
        << "|---|---|---|---|---|---|---|---|---|\n";
     for (const MethodResult& m : r.methods) {
-        md << "| " << m.method << " | " << cell(optionText(m)) << " | ";
+        md << "| " << m.label() << " | " << cell(optionText(m)) << " | ";
         if (m.failed) {
             md << cell(m.failure) << " | | | | | | |\n";
             continue;
@@ -117,7 +117,7 @@ std::string reportMarkdown(const CompareResult& r) {
         md << "| method | held-out avg | RMSE | PSNR dB | SSIM | images | fit s |\n"
            << "|---|---|---|---|---|---|---|\n";
         for (const MethodResult& m : r.methods) {
-            md << "| " << m.method << " | ";
+            md << "| " << m.label() << " | ";
             if (m.failed || !m.heldOutFailure.empty()) {
                 md << cell(m.failed ? m.failure : m.heldOutFailure) << " | | | | | |\n";
                 continue;
@@ -138,7 +138,7 @@ std::string reportMarkdown(const CompareResult& r) {
        << "| raw data | " << general(double(r.views * r.lights * 3), 8) << " | "
        << general(r.rawBytesPerTexel, 8) << " | " << formatBytes(r.rawTotalBytes) << " | 1 |\n";
     for (const MethodResult& m : r.methods) {
-        md << "| " << m.method << " | ";
+        md << "| " << m.label() << " | ";
         if (m.failed) {
             md << cell(m.failure) << " | | | |\n";
             continue;
@@ -151,7 +151,7 @@ std::string reportMarkdown(const CompareResult& r) {
     for (const MethodResult& m : r.methods)
         if (!m.failed && m.memory.sharedBytes > 0)
             md << "\n"
-               << m.method << ": " << formatBytes(m.memory.sharedBytes) << " ("
+               << m.label() << ": " << formatBytes(m.memory.sharedBytes) << " ("
                << m.memory.sharedBytes
                << " bytes) of the total are tables shared by all texels, counted above divided "
                   "by the texel count.\n";
@@ -207,7 +207,7 @@ std::string reportMarkdown(const CompareResult& r) {
         md << "\n";
     }
     for (const MethodResult& m : r.methods) {
-        md << "| " << m.method << " | ";
+        md << "| " << m.label() << " | ";
         if (m.failed) {
             md << cell(m.failure) << " | | | | |" << std::string(3 * targets.size(), '|') << "\n";
             continue;
@@ -240,7 +240,11 @@ std::string reportMarkdown(const CompareResult& r) {
        << "|---|---|---|---|---|---|---|\n";
     for (const MethodResult& m : r.methods) {
         const std::string log = "fits/" + m.method + ".log";
-        md << "| " << m.method << " | ";
+        md << "| " << m.label() << " | ";
+        if (!m.file.empty()) {
+            md << "given file, not fitted | | | | " << cell(m.file) << " | |\n";
+            continue;
+        }
         if (m.failed && !m.fit.ok) {
             md << cell(m.failure) << " | " << fixed(m.fit.wallSeconds, 2) << " | "
                << formatBytes(m.fit.peakRssBytes) << " | no | | [log](" << log << ") |\n";
@@ -280,7 +284,7 @@ std::string resultsCsv(const CompareResult& r) {
         << "fit_seconds,fit_process_seconds,peak_rss_bytes,reused,fitted_file,heldout_avg,"
            "heldout_rmse,heldout_psnr_db,heldout_ssim\n";
     for (const MethodResult& m : r.methods) {
-        csv << csvField(m.method) << "," << (m.failed ? "failed" : "ok") << ","
+        csv << csvField(m.label()) << "," << (m.failed ? "failed" : "ok") << ","
             << csvField(m.failed ? m.failure : "") << "," << csvField(optionText(m)) << ",";
         if (m.failed) {
             // Empty measures (error_avg .. fit_seconds), then what the failed child reported.
@@ -370,6 +374,10 @@ std::string resultsJson(const CompareResult& r) {
     for (const MethodResult& m : r.methods) {
         nlohmann::json e{
             {"method", m.method}, {"options", m.options}, {"status", m.failed ? "failed" : "ok"}};
+        if (!m.file.empty()) {
+            e["label"] = m.label();
+            e["file"] = m.file;  // given, not fitted: "fit" holds zeros
+        }
         if (m.failed) e["message"] = m.failure;
         e["fit"] = {{"process_seconds", m.fit.wallSeconds},
                     {"peak_rss_bytes", m.fit.peakRssBytes},

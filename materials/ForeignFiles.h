@@ -1,7 +1,7 @@
 // osgBTF: files of other tools that a method reads and writes as its materials (the RTI field's
-// .ptm for `ptm`, .rti for `hsh`), registered with the method (MethodInfo::foreignFiles) so that
-// loadMaterial, saveMaterial, `btf info`, `btf fit -o` and the osgDB plugins find them by
-// extension.
+// .ptm for `ptm`, .rti for `hsh`, relight's info.json folder, read only), registered with the
+// method (MethodInfo::foreignFiles) so that loadMaterial, saveMaterial, `btf info`, `btf fit -o`
+// and the osgDB plugins find them by extension.
 #pragma once
 
 #include <functional>
@@ -16,12 +16,15 @@ namespace osgBTF {
 class Material;
 
 struct ForeignFileFormat {
-    std::string extension;    ///< lower case, with the dot: ".ptm"
+    /** How the file's name ends, lower case: an extension with its dot (".ptm"), or a whole file
+     *  name ("info.json": relight's folder, named by its info file) that the name ends with. */
+    std::string extension;
     std::string description;  ///< one line for help texts
     /** The file as a material of the method. Throws Error "PATH: problem". */
     std::function<osg::ref_ptr<Material>(const std::string& path)> read;
     /** Writes a material of the method; returns one line on what the format's quantisation
-     *  lost. Throws Error "PATH: problem" for a material the format cannot hold. */
+     *  lost. Throws Error "PATH: problem" for a material the format cannot hold. Empty for a
+     *  format osgBTF only reads (saveMaterial and `btf fit -o` refuse it). */
     std::function<std::string(const Material&, const std::string& path)> write;
     /** The file's header as `btf info` prints it (lines). */
     std::function<std::string(const std::string& path)> info;

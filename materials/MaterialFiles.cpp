@@ -9,11 +9,19 @@
 namespace osgBTF {
 
 const ForeignFileFormat* findForeignFile(const std::string& path, std::string* method) {
-    std::string extension = std::filesystem::path(path).extension().string();
-    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    // The file name's ending: an extension (".ptm") or a whole name ("info.json").
+    std::string fileName = std::filesystem::path(path).filename().string();
+    for (char& c : fileName) c = char(std::tolower(static_cast<unsigned char>(c)));
+    // An extension needs a name before it (".ptm" alone is a hidden file, as for
+    // std::filesystem); a whole name matches as itself.
+    const auto matches = [&](const std::string& ending) {
+        const bool extension = !ending.empty() && ending[0] == '.';
+        return fileName.size() >= ending.size() + (extension ? 1 : 0) &&
+               fileName.compare(fileName.size() - ending.size(), ending.size(), ending) == 0;
+    };
     for (const std::string& name : methodNames())
         for (const ForeignFileFormat& format : findMethod(name).foreignFiles)
-            if (format.extension == extension) {
+            if (matches(format.extension)) {
                 if (method) *method = name;
                 return &format;
             }
@@ -23,6 +31,9 @@ const ForeignFileFormat* findForeignFile(const std::string& path, std::string* m
 std::string saveMaterial(const Material& material, const std::string& path) {
     std::string owner;
     if (const ForeignFileFormat* format = findForeignFile(path, &owner)) {
+        if (!format->write)
+            fail(path, "osgBTF reads " + format->description +
+                           " but does not write it; save as .btfmat or another tool's file");
         if (material.methodName() != owner)
             fail(path, "a " + format->extension + " file holds a " + owner + " material, not " +
                            material.methodName());

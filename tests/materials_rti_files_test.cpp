@@ -64,12 +64,12 @@ TEST(PtmFileErrors, HeadersThatLieAreRefusedWithTheirProblem) {
     };
     EXPECT_EQ(problem("PTM_1.1\nPTM_FORMAT_RGB\n"),
               "x.ptm: not a PTM 1.2 file (the first line is 'PTM_1.1', not 'PTM_1.2')");
+    // The JPEG variants are read (materials_rti_compressed_files_test.cpp): their header goes on.
     EXPECT_EQ(problem("PTM_1.2\nPTM_FORMAT_JPEG_LRGB\n1 1\n"),
-              "x.ptm: PTM_FORMAT_JPEG_LRGB (JPEG-compressed coefficient planes) is not read; "
-              "convert it to PTM_FORMAT_RGB or PTM_FORMAT_LRGB");
+              "x.ptm: header: scale 0 '' is not a number");
     EXPECT_EQ(problem("PTM_1.2\nPTM_FORMAT_LUM\n1 1\n"),
-              "x.ptm: format 'PTM_FORMAT_LUM' is not read (PTM_FORMAT_RGB and PTM_FORMAT_LRGB "
-              "are)");
+              "x.ptm: format 'PTM_FORMAT_LUM' is not read (PTM_FORMAT_RGB, PTM_FORMAT_LRGB, "
+              "PTM_FORMAT_JPEG_RGB and PTM_FORMAT_JPEG_LRGB are)");
     EXPECT_EQ(problem("PTM_1.2\nPTM_FORMAT_RGB\nwide\n1\n"),
               "x.ptm: header: width 'wide' is not an integer");
     EXPECT_EQ(problem("PTM_1.2\nPTM_FORMAT_RGB\n0\n1\n"),

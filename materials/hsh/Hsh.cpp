@@ -13,6 +13,7 @@
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
+#include "materials/RelightFolder.h"
 #include "materials/hsh/RtiFile.h"
 
 namespace osgBTF {
@@ -326,6 +327,10 @@ const bool hshRegistered = registerMethodClass<HshMaterial>([] {
     m.foreignFiles.push_back(std::move(rtiFile));
     return m;
 }());
+const bool kRelightHsh = registerRelightType(
+    "hsh", [](const std::string& path, const RelightPlanes& planes) -> osg::ref_ptr<Material> {
+        return hshMaterialFromRelight(path, planes);
+    });
 }  // namespace
 
 }  // namespace osgBTF

@@ -10,6 +10,7 @@
 #include "core/FloatImage.h"
 #include "core/SizeGuard.h"
 #include "materials/ForeignFiles.h"
+#include "materials/RelightFolder.h"
 
 namespace osgBTF {
 
@@ -140,6 +141,32 @@ osg::ref_ptr<HshMaterial> hshMaterialFromBytes(const std::string& name, const st
 
 osg::ref_ptr<HshMaterial> readRtiFile(const std::string& path) {
     return hshMaterialFromBytes(path, readWholeFile(path));
+}
+
+osg::ref_ptr<HshMaterial> hshMaterialFromRelight(const std::string& infoPath,
+                                                 const RelightPlanes& planes) {
+    if (planes.terms != 4 && planes.terms != 9 && planes.terms != 16)
+        fail(infoPath, "type hsh with colorspace " + planes.colorspace + " has " +
+                           std::to_string(planes.terms) +
+                           " terms; 4, 9 or 16 (order 2 to 4) are read");
+    HshMaterial::Shape shape;
+    shape.order = planes.terms == 4 ? 2 : planes.terms == 9 ? 3 : 4;
+    shape.perView = false;
+    shape.storage = MaterialTexture::Float;
+    osg::ref_ptr<HshMaterial> m;
+    try {
+        m = HshMaterial::create(planes.width, planes.height,
+                                DirectionSet("relight file view", {{0, 0}}),
+                                relightLights(infoPath, planes), shape);
+    } catch (const Error& e) {
+        fail(infoPath, e.what());  // the memory guard
+    }
+    const std::size_t texels = m->texelCount();
+    for (std::size_t t = 0; t < texels; ++t)
+        for (int k = 0; k < planes.terms; ++k)
+            for (int c = 0; c < 3; ++c) m->setCoefficient(t, 0, k, c, planes.coefficient(k, c, t));
+    m->sourceFile = infoPath;
+    return m;
 }
 
 // ---- writing -----------------------------------------------------------------------------------

@@ -41,6 +41,14 @@ RtiFileHeader parseRtiHeader(const std::string& name, const std::string& bytes,
 osg::ref_ptr<HshMaterial> hshMaterialFromBytes(const std::string& name, const std::string& bytes);
 osg::ref_ptr<HshMaterial> readRtiFile(const std::string& path);
 
+struct RelightPlanes;
+/** A relight folder of type hsh (materials/RelightFolder.h) as a front-view `hsh` material of
+ *  order sqrt(terms): the web order of the terms is Hsh.h's; lrgb (luminance terms times a base
+ *  colour) becomes per-channel coefficients colour_c * L_k, the same values. Lights: info.json's,
+ *  else the nominal ones. Error "PATH: problem" for a term count other than 4, 9 or 16. */
+osg::ref_ptr<HshMaterial> hshMaterialFromRelight(const std::string& infoPath,
+                                                 const RelightPlanes& planes);
+
 /** Writes a front-view hsh material as 8-bit terms: per term the range of its values over the
  *  image and channels, each byte the nearest step. Written to PATH.tmp<pid> and renamed. Returns
  *  the largest |decoded - stored| over the coefficients and the largest step (range / 255).

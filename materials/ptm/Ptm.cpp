@@ -14,6 +14,7 @@
 #include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
+#include "materials/RelightFolder.h"
 #include "materials/ptm/PtmFile.h"
 
 namespace osgBTF {
@@ -298,7 +299,8 @@ const bool ptmRegistered = registerMethodClass<PtmMaterial>([] {
     ForeignFileFormat ptmFile;
     ptmFile.extension = ".ptm";
     ptmFile.description =
-        "Polynomial Texture Map file (PTM_1.2; PTM_FORMAT_RGB and PTM_FORMAT_LRGB): RTIBuilder's, "
+        "Polynomial Texture Map file (PTM_1.2; PTM_FORMAT_RGB, _LRGB, _JPEG_RGB, _JPEG_LRGB): "
+        "RTIBuilder's, "
         "RTIViewer's";
     ptmFile.read = [](const std::string& path) -> osg::ref_ptr<Material> {
         return readPtmFile(path);
@@ -318,8 +320,23 @@ const bool ptmRegistered = registerMethodClass<PtmMaterial>([] {
         return text;
     };
     m.foreignFiles.push_back(std::move(ptmFile));
+    // relight's web layout, whatever its type (materials/RelightFolder.h): the folder's info.json.
+    // Registered here, the RTI field's first basis; each type's method reads its own.
+    ForeignFileFormat relightFolder;
+    relightFolder.extension = "info.json";
+    relightFolder.description =
+        "relight's web layout as OpenLIME loads it (info.json + plane_N.jpg; colorspaces rgb and "
+        "lrgb)";
+    relightFolder.read = [](const std::string& path) { return readRelightMaterial(path); };
+    relightFolder.info = [](const std::string& path) { return relightInfo(path); };
+    // No write: osgBTF reads the layout, and writes .ptm, .rti and its own files.
+    m.foreignFiles.push_back(std::move(relightFolder));
     return m;
 }());
+const bool kRelightPtm = registerRelightType(
+    "ptm", [](const std::string& path, const RelightPlanes& planes) -> osg::ref_ptr<Material> {
+        return ptmMaterialFromRelight(path, planes);
+    });
 }  // namespace
 
 }  // namespace osgBTF

@@ -10,9 +10,11 @@
 
 #include "core/Error.h"
 #include "core/FloatImage.h"
+#include "core/MeasuredBtf.h"
 #include "core/SizeGuard.h"
 #include "materials/ForeignFiles.h"
 #include "materials/MaterialMath.h"
+#include "materials/RelightFolder.h"
 
 namespace osgBTF {
 
@@ -33,6 +35,13 @@ std::string nextToken(const std::string& bytes, std::size_t& at) {
 }  // namespace
 
 std::uint64_t PtmFileHeader::dataBytes() const {
+    if (jpeg()) {
+        std::uint64_t sum = 0;
+        for (std::size_t i = 0; i < compressedSize.size(); ++i)
+            for (const std::uint64_t n : {compressedSize[i], sideInfoSize[i]})
+                sum = n > UINT64_MAX - sum ? UINT64_MAX : sum + n;
+        return sum;
+    }
     return saturatedProduct({std::uint64_t(width), std::uint64_t(height), luminance() ? 9u : 18u});
 }
 
@@ -44,13 +53,11 @@ PtmFileHeader parsePtmHeader(const std::string& name, const std::string& bytes, 
                        "', not 'PTM_1.2')");
     PtmFileHeader h;
     h.format = nextToken(bytes, at);
-    if (h.format.rfind("PTM_FORMAT_JPEG", 0) == 0)
-        fail(name, h.format +
-                       " (JPEG-compressed coefficient planes) is not read; convert it to "
-                       "PTM_FORMAT_RGB or PTM_FORMAT_LRGB");
-    if (h.format != "PTM_FORMAT_RGB" && h.format != "PTM_FORMAT_LRGB")
+    if (h.format != "PTM_FORMAT_RGB" && h.format != "PTM_FORMAT_LRGB" &&
+        h.format != "PTM_FORMAT_JPEG_RGB" && h.format != "PTM_FORMAT_JPEG_LRGB")
         fail(name, "format '" + h.format.substr(0, 32) +
-                       "' is not read (PTM_FORMAT_RGB and PTM_FORMAT_LRGB are)");
+                       "' is not read (PTM_FORMAT_RGB, PTM_FORMAT_LRGB, PTM_FORMAT_JPEG_RGB and "
+                       "PTM_FORMAT_JPEG_LRGB are)");
     const auto integer = [&](const std::string& what) {
         const std::string token = nextToken(bytes, at);
         char* end = nullptr;
@@ -83,10 +90,75 @@ PtmFileHeader parsePtmHeader(const std::string& name, const std::string& bytes, 
                            " is out of range");
         h.bias[std::size_t(k)] = int(value);
     }
-    // The data start after the line that ends the biases.
+    if (h.jpeg()) {
+        const std::size_t n = std::size_t(h.streams());
+        h.compression = int(std::clamp(integer("compression parameter"), -1000000LL, 1000000LL));
+        // One line of N integers each, in the order of PtmFile.h.
+        const auto list = [&](const std::string& what, long long lo, long long hi) {
+            std::vector<long long> values;
+            for (std::size_t i = 0; i < n; ++i) {
+                const long long v = integer(what + " " + std::to_string(i));
+                if (v < lo || v > hi)
+                    fail(name, "header: " + what + " " + std::to_string(i) + " = " +
+                                   std::to_string(v) + " is out of range");
+                values.push_back(v);
+            }
+            return values;
+        };
+        const auto ints = [](const std::vector<long long>& v) {
+            return std::vector<int>(v.begin(), v.end());
+        };
+        h.transforms = ints(list("transform", -1000000, 1000000));
+        h.motionX = ints(list("motion vector x", -1000000, 1000000));
+        h.motionY = ints(list("motion vector y", -1000000, 1000000));
+        h.order = ints(list("order", 0, (long long)(n)-1));
+        h.reference = ints(list("reference", -1, (long long)(n)-1));
+        for (const long long v : list("compressed size", 0, 1LL << 40))
+            h.compressedSize.push_back(std::uint64_t(v));
+        for (const long long v : list("side-information size", 0, 1LL << 40))
+            h.sideInfoSize.push_back(std::uint64_t(v));
+        std::vector<int> rankOf(n, -1);
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::string stream = "stream " + std::to_string(i);
+            if (h.transforms[i] == 2)
+                fail(name,
+                     stream + ": transform 2 (motion compensation) is not read (0 and 1 are)");
+            if (h.transforms[i] != 0 && h.transforms[i] != 1)
+                fail(name, stream + ": transform " + std::to_string(h.transforms[i]) +
+                               " is not read (0: none, 1: inverted reference)");
+            if (h.motionX[i] != 0 || h.motionY[i] != 0)
+                fail(name, stream + ": motion vector (" + std::to_string(h.motionX[i]) + ", " +
+                               std::to_string(h.motionY[i]) + ") is not read (only 0, 0)");
+            if (rankOf[std::size_t(h.order[i])] >= 0)
+                fail(name, "header: order " + std::to_string(h.order[i]) + " is given to streams " +
+                               std::to_string(rankOf[std::size_t(h.order[i])]) + " and " +
+                               std::to_string(i) + " (a permutation of 0.." +
+                               std::to_string(n - 1) + " is read)");
+            rankOf[std::size_t(h.order[i])] = int(i);
+            if (h.sideInfoSize[i] % 5 != 0)
+                fail(name, stream + ": side-information size " + std::to_string(h.sideInfoSize[i]) +
+                               " is not a multiple of 5 (records of 5 bytes)");
+        }
+        for (std::size_t i = 0; i < n; ++i) {
+            const int r = h.reference[i];
+            if (r >= 0 && h.order[std::size_t(r)] >= h.order[i])
+                fail(name, "stream " + std::to_string(i) + " is predicted from stream " +
+                               std::to_string(r) + ", which is not decoded before it (order " +
+                               std::to_string(h.order[std::size_t(r)]) +
+                               " >= " + std::to_string(h.order[i]) + ")");
+        }
+    }
+    // The data start after the line that ends the biases (JPEG: the side-information sizes).
     while (at < bytes.size() && bytes[at] != '\n') ++at;
-    if (at >= bytes.size()) fail(name, "header: no data after the biases");
+    if (at >= bytes.size())
+        fail(name, h.jpeg() ? "header: no data after the side-information sizes"
+                            : "header: no data after the biases");
     h.dataOffset = at + 1;
+    if (checkData && h.jpeg() && bytes.size() - h.dataOffset < h.dataBytes())
+        fail(name, "truncated: the " + std::to_string(h.streams()) +
+                       " JPEG streams and their side information need " +
+                       std::to_string(h.dataBytes()) + " bytes, the file has " +
+                       std::to_string(bytes.size() - h.dataOffset));
     if (checkData && bytes.size() - h.dataOffset < h.dataBytes())
         fail(name, "truncated: " + h.format + " " + std::to_string(h.width) + "x" +
                        std::to_string(h.height) + " needs " + std::to_string(h.dataBytes()) +
@@ -96,6 +168,63 @@ PtmFileHeader parsePtmHeader(const std::string& name, const std::string& bytes, 
 }
 
 // ---- reading -----------------------------------------------------------------------------------
+
+namespace {
+
+/** The JPEG variants' streams after prediction and side information, each W x H bytes in the
+ *  JPEG's scanline order (the first scanline is the bottom row: the material's order). */
+std::vector<std::vector<unsigned char>> jpegStreams(const std::string& name,
+                                                    const std::string& bytes,
+                                                    const PtmFileHeader& h) {
+    const std::size_t n = std::size_t(h.streams());
+    const std::size_t texels = std::size_t(h.width) * std::size_t(h.height);
+    checkMemory(saturatedProduct({n + 1, texels}),
+                name + ": " + std::to_string(n) + " JPEG planes of " + std::to_string(h.width) +
+                    "x" + std::to_string(h.height));
+    // Where each stream and its side information start: in stream-index order, whatever the
+    // decoding order.
+    std::vector<std::size_t> start(n);
+    std::size_t at = h.dataOffset;
+    for (std::size_t i = 0; i < n; ++i) {
+        start[i] = at;
+        at += std::size_t(h.compressedSize[i] + h.sideInfoSize[i]);  // within the file (checked)
+    }
+    std::vector<std::vector<unsigned char>> v(n);
+    const std::string expected = "the header gives " + std::to_string(h.width) + "x" +
+                                 std::to_string(h.height) + " greyscale";
+    for (int rank = 0; rank < int(n); ++rank) {
+        const std::size_t i =
+            std::size_t(std::find(h.order.begin(), h.order.end(), rank) - h.order.begin());
+        const std::string stream = name + ": JPEG stream " + std::to_string(i);
+        const auto* data = reinterpret_cast<const unsigned char*>(bytes.data() + start[i]);
+        v[i] = decodeJpeg(stream, data, std::size_t(h.compressedSize[i]), h.width, h.height, 1,
+                          expected);
+        if (const int r = h.reference[i]; r >= 0) {
+            // Prediction: the reference (inverted for transform 1) plus the stored byte - 128,
+            // modulo 256 (docs/formats.md 8.1.1).
+            const std::vector<unsigned char>& ref = v[std::size_t(r)];
+            const bool invert = h.transforms[i] == 1;
+            for (std::size_t p = 0; p < texels; ++p)
+                v[i][p] =
+                    static_cast<unsigned char>((invert ? 255 - ref[p] : ref[p]) + v[i][p] - 128);
+        }
+        // Side information: records of a big-endian position and the value it gets.
+        const unsigned char* side = data + h.compressedSize[i];
+        for (std::size_t k = 0; k < std::size_t(h.sideInfoSize[i]); k += 5) {
+            const std::uint64_t position = std::uint64_t(side[k]) << 24 |
+                                           std::uint64_t(side[k + 1]) << 16 |
+                                           std::uint64_t(side[k + 2]) << 8 | side[k + 3];
+            if (position >= texels)
+                fail(name, "JPEG stream " + std::to_string(i) + ": side information " +
+                               std::to_string(k / 5) + " sets pixel " + std::to_string(position) +
+                               " of " + std::to_string(texels));
+            v[i][std::size_t(position)] = side[k + 4];
+        }
+    }
+    return v;
+}
+
+}  // namespace
 
 osg::ref_ptr<PtmMaterial> ptmMaterialFromBytes(const std::string& name, const std::string& bytes) {
     const PtmFileHeader h = parsePtmHeader(name, bytes);
@@ -117,7 +246,23 @@ osg::ref_ptr<PtmMaterial> ptmMaterialFromBytes(const std::string& name, const st
         return float((double(byte) - h.bias[std::size_t(k)]) * h.scale[std::size_t(k)] / 255.0);
     };
     // File pixel p: rows bottom to top, as the material's texels.
-    if (!shape.luminance) {
+    if (h.jpeg()) {
+        const std::vector<std::vector<unsigned char>> v = jpegStreams(name, bytes, h);
+        for (std::size_t p = 0; p < texels; ++p) {
+            if (shape.luminance) {
+                // Streams 0..5: a0..a5 of the luminance; 6, 7, 8: R, G, B.
+                for (int k = 0; k < 6; ++k)
+                    m->setCoefficient(p, 0, k, 0, coefficient(v[std::size_t(k)][p], k));
+                for (int c = 0; c < 3; ++c)
+                    m->colour.set(p * 3 + std::size_t(c), float(v[6 + std::size_t(c)][p]) / 255.0f);
+            } else {
+                // Stream 6 c + k: a_k of colour c (ptmlib's order, docs/formats.md 8.1.1).
+                for (int c = 0; c < 3; ++c)
+                    for (int k = 0; k < 6; ++k)
+                        m->setCoefficient(p, 0, k, c, coefficient(v[std::size_t(6 * c + k)][p], k));
+            }
+        }
+    } else if (!shape.luminance) {
         for (int c = 0; c < 3; ++c)
             for (std::size_t p = 0; p < texels; ++p)
                 for (int k = 0; k < 6; ++k)
@@ -138,6 +283,39 @@ osg::ref_ptr<PtmMaterial> ptmMaterialFromBytes(const std::string& name, const st
 
 osg::ref_ptr<PtmMaterial> readPtmFile(const std::string& path) {
     return ptmMaterialFromBytes(path, readWholeFile(path));
+}
+
+osg::ref_ptr<PtmMaterial> ptmMaterialFromRelight(const std::string& infoPath,
+                                                 const RelightPlanes& planes) {
+    if (planes.terms != 3 && planes.terms != 6)
+        fail(infoPath, "type ptm with colorspace " + planes.colorspace + " has " +
+                           std::to_string(planes.terms) +
+                           " terms; 3 (first degree: 1, x, y) or 6 are read");
+    PtmMaterial::Shape shape;
+    shape.luminance = planes.luminance();
+    shape.perView = false;
+    shape.storage = MaterialTexture::Float;
+    osg::ref_ptr<PtmMaterial> m;
+    try {
+        m = PtmMaterial::create(planes.width, planes.height,
+                                DirectionSet("relight file view", {{0, 0}}),
+                                relightLights(infoPath, planes), shape);
+    } catch (const Error& e) {
+        fail(infoPath, e.what());  // the memory guard
+    }
+    // Web term k (1, x, y, x^2, xy, y^2) is the material's a_kWeb[k] (x^2, y^2, xy, x, y, 1).
+    constexpr int kWeb[6] = {5, 3, 4, 0, 2, 1};
+    const std::size_t texels = m->texelCount();
+    for (std::size_t t = 0; t < texels; ++t) {
+        for (int k = 0; k < planes.terms; ++k)
+            for (int c = 0; c < (shape.luminance ? 1 : 3); ++c)
+                m->setCoefficient(t, 0, kWeb[k], c,
+                                  shape.luminance ? planes.at(3 + k, t) : planes.at(3 * k + c, t));
+        if (shape.luminance)
+            for (int c = 0; c < 3; ++c) m->colour.set(t * 3 + std::size_t(c), planes.at(c, t));
+    }
+    m->sourceFile = infoPath;
+    return m;
 }
 
 // ---- writing -----------------------------------------------------------------------------------

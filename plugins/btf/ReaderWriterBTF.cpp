@@ -28,6 +28,7 @@
 #include "materials/Material.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
+#include "materials/RelightFolder.h"
 #include "scene/MaterialNode.h"
 // The modules that fit on load (all but osgdb_btfmat) link libosgBTFFit for the fit and its
 // cache; osgdb_btfmat renders fitted files only and is built without them (CMakeLists.txt).
@@ -318,7 +319,19 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
         // Another tool's fitted file that a method registered (materials/ForeignFiles.h).
         supportsExtension(extension, format->description + " -> MaterialNode (a " + method +
                                          " material) over a flat patch facing -Y");
-    } else if (extension == "lp")
+    } else if (extension == "relight")
+        supportsExtension(
+            "relight",
+            "pseudo-loader: DIR/info.json.relight reads relight's web layout (DIR/"
+            "info.json + plane_N.jpg, as OpenLIME loads it; types " +
+                [] {
+                    std::string types;
+                    for (const std::string& t : relightTypes())
+                        types += (types.empty() ? "" : ", ") + t;
+                    return types;
+                }() +
+                ") -> MaterialNode over a flat patch facing -Y");
+    else if (extension == "lp")
         supportsExtension("lp",
                           "RTI capture: a light-position file (the image count, then \"IMAGE X Y "
                           "Z\" per photo) and the photos beside it, fitted on load -> "
@@ -327,7 +340,7 @@ ReaderWriterBTF::ReaderWriterBTF(const std::string& extension) {
         supportsExtension(
             "btfmaterial",
             std::string("pseudo-loader: a model under an osgBTF material, ") + kPseudoSyntax);
-    if (extension != "btfmat") {
+    if (extension != "btfmat" && extension != "relight") {
         supportsOption("method=<name>",
                        "fit method for measured BTFs (default: " + pluginDefaultMethod().name +
                            "; a UBO2014 .btf opens as its stored factors unless method= is "
@@ -405,9 +418,11 @@ osgDB::ReaderWriter::ReadResult ReaderWriterBTF::readNode(const std::string& fil
         }
 
         const Settings settings = parseSettings(options);
-        // "x.zip.btfzip": x.zip is a BTF zip, whatever else reads ".zip" in this program.
+        // "x.zip.btfzip": x.zip is a BTF zip, whatever else reads ".zip" in this program;
+        // "DIR/info.json.relight": relight's folder DIR, named by its info.json.
         const bool namedBtfZip = ext == "btfzip";
-        const std::string name = namedBtfZip ? osgDB::getNameLessExtension(file) : file;
+        const std::string name =
+            namedBtfZip || ext == "relight" ? osgDB::getNameLessExtension(file) : file;
         std::string path = osgDB::findDataFile(name, options);
         if (path.empty() && ext == "btfmat") {
             // "x.exr.btfmat": the fitted file x.exr, read as a material rather than an image.

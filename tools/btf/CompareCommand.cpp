@@ -1,5 +1,6 @@
 // btf compare INPUT --out DIR: fit every method, tabulate error / memory / pass cost, draw the
 // pictures and recommend a method (the library side is harness/Compare.h).
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -163,6 +164,14 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
                      "(0: no held-out fits, half the fitting time)")
         ->check(CLI::Range(0.0, 0.5))
         ->capture_default_str();
+    command->add_option(
+        "--material", options->compare.materialFiles,
+        "An already fitted file as one more row, beside the fitted methods (repeatable): an "
+        "osgBTF fitted material (.btfmat, .exr), a .ptm (PTM_FORMAT_RGB, _LRGB, _JPEG_RGB, "
+        "_JPEG_LRGB), an .rti (hemispherical harmonics) or relight's DIR/info.json. Evaluated at "
+        "INPUT's measured directions (an RTI capture's: its lights) and labelled file:NAME in the "
+        "tables, CSV, JSON and pictures; it must have INPUT's size in texels. Not fitted, not "
+        "held out, never the recommendation");
     command->add_flag("--refit", options->noReuse, "Fit every method again, even when DIR has it");
     command->add_flag("--no-gpu", options->noGpu,
                       "Skip the OpenGL part (GPU spot check, pass times, sphere renders)");
@@ -218,6 +227,8 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
         if (!common.memoryLimit.empty())
             compare.fitGlobalArguments = {"--memory-limit", common.memoryLimit};
 
+        for (const std::string& file : compare.materialFiles)
+            if (!std::filesystem::exists(file)) fail(file, "no such file (--material)");
         const CompareResult result = runCompare(compare);
 
         std::cout << "compared " << result.methods.size() << " methods on " << result.input << " ("
@@ -240,7 +251,7 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
             std::cout << "\n";
         }
         for (const MethodResult& m : result.methods) {
-            std::cout << std::left << std::setw(14) << m.method << std::right;
+            std::cout << std::left << std::setw(14) << m.label() << std::right;
             if (m.failed) {
                 std::cout << "  " << m.failure << "\n";
                 continue;

@@ -45,7 +45,8 @@ Runner addEvalCommand(CLI::App& app, CommonOptions&) {
     auto options = std::make_shared<Options>();
     command
         ->add_option("FITTED", options->input,
-                     "Fitted material file from btf fit, an RTI file (.ptm, .rti), or a UBO2014 "
+                     "Fitted material file from btf fit, an RTI file (.ptm, .rti, relight's "
+                     "DIR/info.json), or a UBO2014 "
                      ".btf (its stored factors, "
                      "rendered as an fmf material without decoding)")
         ->required();

@@ -114,6 +114,10 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         // Another tool's file (.ptm for ptm, .rti for hsh): the material is written as that.
         std::string foreignOwner;
         const ForeignFileFormat* foreign = findForeignFile(options->output, &foreignOwner);
+        if (foreign && !foreign->write)
+            fail(options->output, "osgBTF reads " + foreign->description +
+                                      " but does not write it; save as .btfmat or another "
+                                      "tool's file");
         if (foreign && foreignOwner != method.name)
             fail(options->output, "a " + foreign->extension + " file holds a " + foreignOwner +
                                       " material; fit it with -m " + foreignOwner);

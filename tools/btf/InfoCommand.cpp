@@ -274,9 +274,10 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
     auto options = std::make_shared<Options>();
     std::string& input = options->input;
     command
-        ->add_option("FILE", input,
-                     "UBO2003/ATRIUM zip or folder, UBO2014 .btf, an RTI set (.lp file, or a "
-                     "folder or zip with one), or an RTI fitted file (.ptm, .rti)")
+        ->add_option(
+            "FILE", input,
+            "UBO2003/ATRIUM zip or folder, UBO2014 .btf, an RTI set (.lp file, or a "
+            "folder or zip with one), or an RTI fitted file (.ptm, .rti, relight's DIR/info.json)")
         ->required();
     command->add_flag("--json", options->json, "Print JSON instead of text");
     command->add_flag("--stats", options->stats,
@@ -287,8 +288,7 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
     return [&common, options] {
         const std::string& input = options->input;
         // Another tool's fitted file (.ptm, .rti): its header and what it reads as.
-        std::string method;
-        if (const ForeignFileFormat* format = findForeignFile(input, &method)) {
+        if (const ForeignFileFormat* format = findForeignFile(input)) {
             const std::string header = format->info(input);
             const osg::ref_ptr<Material> material = loadMaterial(input);
             const MemoryFootprint memory = material->memory();
@@ -296,7 +296,7 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
                 std::cout << nlohmann::json{{"file", input},
                                             {"format", format->description},
                                             {"header", header},
-                                            {"method", method},
+                                            {"method", material->methodName()},
                                             {"width", material->width()},
                                             {"height", material->height()},
                                             {"values_per_texel", memory.valuesPerTexel}}
@@ -307,9 +307,9 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
             std::cout << "file:     " << input << "\n"
                       << "format:   " << format->description << "\n"
                       << header << "\n"
-                      << "reads as: a " << method << " material, " << material->width() << " x "
-                      << material->height() << " texels, " << memory.valuesPerTexel
-                      << " values per texel\n";
+                      << "reads as: a " << material->methodName() << " material, "
+                      << material->width() << " x " << material->height() << " texels, "
+                      << memory.valuesPerTexel << " values per texel\n";
             return;
         }
         if (isUbo2014File(input)) {

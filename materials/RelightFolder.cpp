@@ -1,0 +1,347 @@
+// Reads top to bottom: the JPEG helpers, info.json, the planes, the type registry. The layout:
+// RelightFolder.h and docs/formats.md section 8.4.
+//
+// JPEG decoding goes through the project's image codecs (core/ImageCodecs.h: OpenImageIO, whose
+// JPEG reader is libjpeg-turbo's) rather than a direct libjpeg-turbo dependency: the codecs are
+// already what every photograph of a capture is decoded with, they read from memory (the legacy
+// .ptm's JPEG streams), they report a JPEG's size before decoding it (the memory guard sees it
+// first), and they stay in their own lazily loaded module, so the render library links no image
+// library. They ask libjpeg for RGB output, which decodes relight's planes whether they were
+// written as YCbCr (colorspace rgb) or as untransformed RGB (the others).
+#include "materials/RelightFolder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
+
+#include "core/Error.h"
+#include "core/FloatImage.h"
+#include "core/ImageCodecs.h"
+#include "core/MeasuredBtf.h"
+#include "core/SizeGuard.h"
+#include "materials/ForeignFiles.h"
+#include "materials/Material.h"
+
+namespace osgBTF {
+
+namespace fs = std::filesystem;
+
+// ---- JPEG --------------------------------------------------------------------------------------
+
+void checkJpegComplete(const std::string& name, const unsigned char* bytes, std::size_t size) {
+    if (size < 4 || bytes[0] != 0xFF || bytes[1] != 0xD8)
+        fail(name, "not a JPEG (no start-of-image marker)");
+    if (bytes[size - 2] != 0xFF || bytes[size - 1] != 0xD9)
+        fail(name, "truncated JPEG (no end-of-image marker)");
+}
+
+std::vector<unsigned char> decodeJpeg(const std::string& name, const unsigned char* bytes,
+                                      std::size_t size, int width, int height, int channels,
+                                      const std::string& expected) {
+    checkJpegComplete(name, bytes, size);
+    std::string error;
+    const std::unique_ptr<ImageReader> reader =
+        imageCodecs().openBytes(bytes, size, "jpg", name, error);
+    if (!reader) fail(name, error.empty() ? "not a readable JPEG" : error);
+    reader->singleThreaded();
+    const ImageHeader& h = reader->header();
+    if (h.width != width || h.height != height || h.channels != channels || !h.eightBit)
+        fail(name, "the JPEG is " + std::to_string(h.width) + "x" + std::to_string(h.height) +
+                       " with " + std::to_string(h.channels) + " channel" +
+                       (h.channels == 1 ? "" : "s") + ", " + expected);
+    std::vector<unsigned char> pixels(std::size_t(width) * std::size_t(height) *
+                                      std::size_t(channels));
+    if (!reader->readBytes(pixels.data())) {
+        const std::string message = reader->error();
+        fail(name, message.empty() ? "cannot decode the JPEG" : message);
+    }
+    return pixels;
+}
+
+namespace {
+
+// ---- info.json ---------------------------------------------------------------------------------
+
+/** info.json is a few kilobytes (lights and 3 numbers per plane); anything far larger is no
+ *  relight file, and is refused before it is read. */
+constexpr std::uintmax_t kLargestInfo = 16u << 20;
+
+std::string folderOf(const std::string& infoPath) {
+    const fs::path folder = fs::path(infoPath).parent_path();
+    return folder.empty() ? std::string(".") : folder.string();
+}
+
+std::string planeName(const std::string& infoPath, int j) {
+    return (fs::path(folderOf(infoPath)) / ("plane_" + std::to_string(j) + ".jpg")).string();
+}
+
+/** The tiled layout whose files lie next to info.json, named as relight and OpenLIME name them;
+ *  empty when none. */
+std::string tiledLayout(const std::string& folder) {
+    std::error_code ec;
+    const fs::path d(folder);
+    if (fs::exists(d / "plane_0.dzi", ec)) return "deepzoom (plane_0.dzi)";
+    if (fs::exists(d / "planes.tzi", ec)) return "itarzoom (planes.tzi)";
+    if (fs::exists(d / "plane_0.tzi", ec)) return "tarzoom (plane_0.tzi)";
+    if (fs::exists(d / "plane_0" / "ImageProperties.xml", ec))
+        return "zoomify (plane_0/ImageProperties.xml)";
+    if (fs::is_directory(d / "plane_0", ec)) return "google (plane_0/)";
+    return {};
+}
+
+double finiteNumber(const std::string& path, const nlohmann::json& value, const std::string& what) {
+    if (!value.is_number()) fail(path, what + " is not a number");
+    const double v = value.get<double>();
+    if (!std::isfinite(v)) fail(path, what + " is not a finite number");
+    return v;
+}
+
+long long integer(const std::string& path, const nlohmann::json& info, const char* key) {
+    const auto it = info.find(key);
+    if (it == info.end()) fail(path, std::string("no \"") + key + "\"");
+    if (!it->is_number_integer()) fail(path, std::string("\"") + key + "\" is not an integer");
+    return it->get<long long>();
+}
+
+std::string text(const std::string& path, const nlohmann::json& info, const char* key) {
+    const auto it = info.find(key);
+    if (it == info.end()) fail(path, std::string("no \"") + key + "\"");
+    if (!it->is_string()) fail(path, std::string("\"") + key + "\" is not a string");
+    return it->get<std::string>().substr(0, 32);
+}
+
+struct Quantisation {
+    std::vector<double> scale, bias;
+};
+
+RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) fail(path, "is a folder; name its info.json");
+    const std::uintmax_t size = fs::file_size(path, ec);
+    if (ec) fail(path, "cannot be read: " + ec.message());
+    if (size > kLargestInfo)
+        fail(path, "is " + std::to_string(size) +
+                       " bytes, too large for a relight info.json (at most 16 MiB)");
+    nlohmann::json info;
+    try {
+        info = nlohmann::json::parse(readWholeFile(path));
+    } catch (const nlohmann::json::exception& e) {
+        fail(path, std::string("not JSON: ") + e.what());
+    }
+    if (!info.is_object()) fail(path, "not a relight info.json (not a JSON object)");
+    RelightPlanes p;
+    p.type = text(path, info, "type");
+    p.colorspace = text(path, info, "colorspace");
+    if (info.contains("format") && info["format"] != "jpg")
+        fail(path, "\"format\" is " + info["format"].dump().substr(0, 32) +
+                       " (planes in \"jpg\" are read)");
+    if (p.colorspace != "rgb" && p.colorspace != "lrgb")
+        fail(path, "colorspace '" + p.colorspace +
+                       "' is not read (rgb and lrgb are; relight writes ycc, mrgb and mycc for "
+                       "other bases)");
+    const long long planes = integer(path, info, "nplanes");
+    if (planes < 1 || planes > 3 * 64)
+        fail(path, "\"nplanes\" " + std::to_string(planes) + " is not 1..192");
+    p.planeCount = int(planes);
+    if (p.luminance()) {
+        if (planes < 4)
+            fail(path,
+                 "colorspace lrgb needs 3 colour planes and at least one luminance plane, "
+                 "\"nplanes\" is " +
+                     std::to_string(planes));
+        p.terms = int(planes) - 3;
+    } else {
+        if (planes % 3 != 0)
+            fail(path, "colorspace rgb holds 3 planes per term, \"nplanes\" " +
+                           std::to_string(planes) + " is not a multiple of 3");
+        p.terms = int(planes) / 3;
+    }
+    for (const char* key : {"width", "height"})
+        if (info.contains(key)) {
+            const long long v = integer(path, info, key);
+            if (v < 1 || v > (1 << 20))
+                fail(path,
+                     std::string("\"") + key + "\" " + std::to_string(v) + " is not 1..1048576");
+            (key[0] == 'w' ? p.width : p.height) = int(v);
+        }
+    const auto materials = info.find("materials");
+    if (materials == info.end()) fail(path, "no \"materials\"");
+    if (!materials->is_array() || materials->size() != 1 || !(*materials)[0].is_object())
+        fail(path, "\"materials\" is not an array of one object (one material is read)");
+    const nlohmann::json& material = (*materials)[0];
+    for (const char* key : {"scale", "bias"}) {
+        const auto values = material.find(key);
+        if (values == material.end()) fail(path, std::string("no materials[0].") + key);
+        if (!values->is_array() || values->size() != std::size_t(planes))
+            fail(path, std::string("materials[0].") + key + " has " +
+                           (values->is_array() ? std::to_string(values->size()) : "no") +
+                           " values, \"nplanes\" is " + std::to_string(planes));
+        std::vector<double>& out = key[0] == 's' ? quantisation.scale : quantisation.bias;
+        for (std::size_t m = 0; m < values->size(); ++m)
+            out.push_back(
+                finiteNumber(path, (*values)[m],
+                             std::string("materials[0].") + key + "[" + std::to_string(m) + "]"));
+    }
+    if (const auto lights = info.find("lights"); lights != info.end()) {
+        if (!lights->is_array() || lights->size() % 3 != 0 || lights->size() > 3 * 100000)
+            fail(path, "\"lights\" is not a list of x, y, z triples");
+        for (std::size_t i = 0; i < lights->size(); i += 3) {
+            glm::vec3 l;
+            for (int a = 0; a < 3; ++a)
+                l[a] =
+                    float(finiteNumber(path, (*lights)[i + std::size_t(a)],
+                                       "\"lights\"[" + std::to_string(i + std::size_t(a)) + "]"));
+            if (glm::length(l) <= 0) fail(path, "light " + std::to_string(i / 3) + " is zero");
+            p.lights.push_back(glm::normalize(l));
+        }
+    }
+    const std::string folder = folderOf(path);
+    if (!fs::exists(planeName(path, 0), ec)) {
+        const std::string layout = tiledLayout(folder);
+        if (!layout.empty())
+            fail(path, "relight's tiled layout " + layout +
+                           " is not read; the single-image layout (plane_0.jpg ...) is");
+        fail(planeName(path, 0), "no such file (the first plane of " + path + ")");
+    }
+    return p;
+}
+
+// ---- the registry ------------------------------------------------------------------------------
+
+std::map<std::string, RelightBuilder>& registry() {
+    static std::map<std::string, RelightBuilder> builders;
+    return builders;
+}
+
+std::mutex& registryMutex() {
+    static std::mutex m;
+    return m;
+}
+
+}  // namespace
+
+RelightPlanes readRelightHeader(const std::string& infoPath) {
+    Quantisation q;
+    return parseInfo(infoPath, q);
+}
+
+RelightPlanes readRelightPlanes(const std::string& infoPath) {
+    Quantisation q;
+    RelightPlanes p = parseInfo(infoPath, q);
+    const int jpegs = (p.planeCount + 2) / 3;
+    if (p.width == 0 || p.height == 0) {
+        // Without width and height in info.json (OpenLIME does not need them): plane_0's size.
+        std::string error;
+        const std::string first = planeName(infoPath, 0);
+        const std::unique_ptr<ImageReader> reader = imageCodecs().openFile(first, 0, error);
+        if (!reader) fail(first, error.empty() ? "not a readable JPEG" : error);
+        p.width = reader->header().width;
+        p.height = reader->header().height;
+        if (p.width < 1 || p.height < 1 || p.width > (1 << 20) || p.height > (1 << 20))
+            fail(first, "size " + std::to_string(p.width) + "x" + std::to_string(p.height) +
+                            " is not 1..1048576 on each side");
+    }
+    const std::size_t texels = std::size_t(p.width) * std::size_t(p.height);
+    // The float planes and one decoded JPEG, before either exists.
+    checkMemory(saturatedProduct({std::uint64_t(p.planeCount), texels, sizeof(float)}) +
+                    saturatedProduct({texels, 3}),
+                infoPath + ": " + std::to_string(p.planeCount) + " planes of " +
+                    std::to_string(p.width) + "x" + std::to_string(p.height));
+    p.planes.assign(std::size_t(p.planeCount) * texels, 0.0f);
+    const std::string expected = "info.json gives " + std::to_string(p.width) + "x" +
+                                 std::to_string(p.height) + " with 3 channels";
+    for (int j = 0; j < jpegs; ++j) {
+        const std::string name = planeName(infoPath, j);
+        std::error_code ec;
+        if (!fs::is_regular_file(name, ec))
+            fail(name, "no such file (" + infoPath + " has " + std::to_string(p.planeCount) +
+                           " planes: plane_0.jpg .. plane_" + std::to_string(jpegs - 1) + ".jpg)");
+        const std::uintmax_t size = fs::file_size(name, ec);
+        if (ec) fail(name, "cannot be read: " + ec.message());
+        checkMemory(size, name);
+        const std::string bytes = readWholeFile(name);
+        const std::vector<unsigned char> pixels =
+            decodeJpeg(name, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(),
+                       p.width, p.height, 3, expected);
+        for (int c = 0; c < 3; ++c) {
+            const int m = 3 * j + c;
+            if (m >= p.planeCount) break;  // the unused channels of the last JPEG
+            const double scale = q.scale[std::size_t(m)], bias = q.bias[std::size_t(m)];
+            float* plane = p.planes.data() + std::size_t(m) * texels;
+            for (int row = 0; row < p.height; ++row) {
+                // JPEG rows run top down; the material's from the bottom up.
+                const std::size_t y = std::size_t(p.height - 1 - row);
+                for (std::size_t x = 0; x < std::size_t(p.width); ++x) {
+                    const double byte =
+                        pixels[(std::size_t(row) * std::size_t(p.width) + x) * 3 + std::size_t(c)];
+                    plane[y * std::size_t(p.width) + x] = float((byte / 255.0 - bias) * scale);
+                }
+            }
+        }
+    }
+    return p;
+}
+
+bool registerRelightType(const std::string& type, RelightBuilder builder) {
+    std::lock_guard<std::mutex> lock(registryMutex());
+    registry()[type] = std::move(builder);
+    return true;
+}
+
+std::vector<std::string> relightTypes() {
+    std::lock_guard<std::mutex> lock(registryMutex());
+    std::vector<std::string> types;
+    for (const auto& entry : registry()) types.push_back(entry.first);
+    return types;
+}
+
+namespace {
+
+RelightBuilder builderFor(const std::string& infoPath, const std::string& type) {
+    std::lock_guard<std::mutex> lock(registryMutex());
+    const auto it = registry().find(type);
+    if (it != registry().end()) return it->second;
+    std::string known;
+    for (const auto& entry : registry()) known += (known.empty() ? "" : ", ") + entry.first;
+    fail(infoPath, "type '" + type + "' is not read (" + known + " are)");
+}
+
+}  // namespace
+
+osg::ref_ptr<Material> readRelightMaterial(const std::string& infoPath) {
+    // The type first: a folder of another type is refused before its planes are decoded.
+    const RelightBuilder builder = builderFor(infoPath, readRelightHeader(infoPath).type);
+    const RelightPlanes planes = readRelightPlanes(infoPath);
+    osg::ref_ptr<Material> material = builder(infoPath, planes);
+    material->sourceFile = infoPath;
+    material->fitInfo["file-format"] =
+        "relight web layout, type " + planes.type + ", colorspace " + planes.colorspace;
+    return material;
+}
+
+std::string relightInfo(const std::string& infoPath) {
+    const RelightPlanes p = readRelightHeader(infoPath);
+    builderFor(infoPath, p.type);
+    return "relight web layout (single images), type " + p.type + ", colorspace " + p.colorspace +
+           ", " + std::to_string(p.planeCount) + " planes (" + std::to_string(p.terms) +
+           " terms) in " + std::to_string((p.planeCount + 2) / 3) + " JPEGs" +
+           (p.width ? ", " + std::to_string(p.width) + "x" + std::to_string(p.height) : "") +
+           "\nlights: " +
+           (p.lights.empty() ? std::string("none recorded")
+                             : std::to_string(p.lights.size()) + " recorded");
+}
+
+DirectionSet relightLights(const std::string& infoPath, const RelightPlanes& planes) {
+    if (planes.lights.empty()) return nominalFileLights();
+    std::vector<Direction> directions;
+    for (const glm::vec3& l : planes.lights) directions.push_back(Direction::fromVector(l));
+    return DirectionSet(infoPath + " lights", std::move(directions));
+}
+
+}  // namespace osgBTF
