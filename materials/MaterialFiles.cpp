@@ -13,10 +13,10 @@ const ForeignFileFormat* findForeignFile(const std::string& path, std::string* m
     std::string fileName = std::filesystem::path(path).filename().string();
     for (char& c : fileName) c = char(std::tolower(static_cast<unsigned char>(c)));
     // An extension needs a name before it (".ptm" alone is a hidden file, as for
-    // std::filesystem); a whole name matches as itself.
+    // std::filesystem); a whole name matches only itself ("myinfo.json" is not relight's).
     const auto matches = [&](const std::string& ending) {
-        const bool extension = !ending.empty() && ending[0] == '.';
-        return fileName.size() >= ending.size() + (extension ? 1 : 0) &&
+        if (ending.empty() || ending[0] != '.') return fileName == ending;
+        return fileName.size() > ending.size() &&
                fileName.compare(fileName.size() - ending.size(), ending.size(), ending) == 0;
     };
     for (const std::string& name : methodNames())

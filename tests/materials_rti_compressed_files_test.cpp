@@ -139,6 +139,9 @@ TEST(RelightFolder, HshLrgbBecomesPerChannelCoefficientsColourTimesLuminance) {
 TEST(RelightFolder, InfoAndPluginNamesAndTheReadOnlyFormat) {
     EXPECT_NE(findForeignFile("a/b/INFO.JSON"), nullptr);
     EXPECT_EQ(findForeignFile("a/b/results.json"), nullptr);
+    EXPECT_EQ(findForeignFile("a/b/myinfo.json"), nullptr);  // a whole name matches only itself
+    EXPECT_NE(findForeignFile("a/b/coin.PTM"), nullptr);
+    EXPECT_EQ(findForeignFile("a/b/.ptm"), nullptr);
     EXPECT_EQ(relightInfo(fixture("relight-hsh-lrgb/info.json")),
               "relight web layout (single images), type hsh, colorspace lrgb, 12 planes (9 terms) "
               "in 4 JPEGs, 4x3\nlights: none recorded");

@@ -21,8 +21,6 @@
 #include <osgBTF/MaterialNode>
 #include <osgBTF/Version>
 
-#include "materials/MaterialFiles.h"
-
 namespace {
 
 constexpr int kSize = 256;
