@@ -6,6 +6,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <set>
+#include <string>
 
 #include <OpenEXR/openexr.h>
 
@@ -139,11 +142,28 @@ void checkExrAttributeSizes(const std::string& name, const unsigned char* head,
                            " but " + std::to_string(fileBytes - at) +
                            " remain in the file (truncated or corrupt file)");
     };
+    // What sizes a part, where the C++ reader and OpenEXR's C library must agree: the C++ reader
+    // starts from defaults (ZIP, a 64 x 64 window) that a missing attribute leaves in place, the
+    // C library from its own (fuzz/regression/coordinate_map/), and of two attributes of one name
+    // they keep different ones. A header without them, or with one twice, is refused.
+    const std::map<std::string, std::string> required = {
+        {"channels", "chlist"}, {"compression", "compression"}, {"dataWindow", "box2i"}};
+    std::set<std::string> names;
     for (;;) {
         for (;;) {
             std::int64_t size = 0;
             if (!readName(attribute)) return;
-            if (attribute.empty()) break;  // the end of this header
+            if (attribute.empty()) {  // the end of this header
+                for (const auto& [needed, neededType] : required)
+                    if (!names.count(needed))
+                        fail(name, "OpenEXR header: no '" + needed + "' attribute (" + neededType +
+                                       "), which every part has (corrupt file)");
+                names.clear();
+                break;
+            }
+            if (!names.insert(attribute).second)
+                fail(name, "OpenEXR header: attribute '" + printable(attribute) +
+                               "' appears twice (corrupt file)");
             if (!readName(type) || !readInt(size)) return;
             if (const std::uint64_t bytes = fixedExrValueBytes(type)) {
                 // The C++ reader reads `bytes` and goes on from there; OpenEXR's C library calls

@@ -208,6 +208,17 @@ TEST_F(FuzzFindings, ExrAttributeOfFixedTypeWithAnotherSizeIsRefused) {
                   "134217729 bytes, but a value of that type takes 1 (corrupt file)");
 }
 
+// CI's fuzz pass, the run after: the same window with no attribute named "compression" (the
+// ZIP value sits under the name "\nion"). OpenEXR's C++ reader keeps its default, ZIP (16-line
+// buffers of the full width), the C library its own: the guard saw 1-line buffers.
+TEST_F(FuzzFindings, ExrPartWithoutACompressionAttributeIsRefused) {
+    const std::string map = input("coordinate_map", "slow-zip-window-no-compression-attribute.exr");
+    EXPECT_EQ(osgBTF::test::errorOf([&] { osgBTF::readCoordinateMap(map); }),
+              map +
+                  ": OpenEXR header: no 'compression' attribute (compression), which every "
+                  "part has (corrupt file)");
+}
+
 TEST_F(FuzzFindings, Ubo2014RowsWithNoColumnToKeepAreSkippedNotWalked) {
     // The FMF header's height map is 0 texels wide and very many rows high: rows of nothing to
     // keep, which reading walked one by one. Now they are skipped, and the header's next field

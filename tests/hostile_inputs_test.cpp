@@ -493,6 +493,24 @@ TEST(HostileInputs, ExrWhoseChunkTableIsLargerThanTheFileIsRefused) {
     expectSmall(r, "EXR member with a 2^30-row window in a UBO2003 zip");
 }
 
+TEST(HostileInputs, ExrHeaderWithAnAttributeTwiceIsRefused) {
+    TempDir dir;
+    const std::string path = dir.file("twice.exr");
+    writeOnePixelExr(path, [](Imf::Header& header) {
+        header.insert("noteA", Imf::StringAttribute("abcd"));
+        header.insert("noteB", Imf::StringAttribute("efgh"));
+    });
+    // Attribute names are NUL-terminated in the header: "noteB" becomes a second "noteA". OpenEXR's
+    // C++ reader keeps the last of two, its C library the first.
+    std::string bytes = readBytes(path);
+    const std::size_t at = bytes.find(std::string("noteB") + '\0');
+    ASSERT_NE(at, std::string::npos);
+    bytes[at + 4] = 'A';
+    writeBytes(path, bytes);
+    EXPECT_EQ(refusalOf([&] { readFloatImage(path); }).message,
+              path + ": OpenEXR header: attribute 'noteA' appears twice (corrupt file)");
+}
+
 TEST(HostileInputs, ExrAttributeClaimingTwoGiBIsRefusedBeforeOpenExrAllocatesIt) {
     TempDir dir;
     const std::string path = dir.file("note.exr");
