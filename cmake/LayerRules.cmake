@@ -42,13 +42,13 @@ set(OSGBTF_LIBRARY_ALLOWED_osgBTFStreaming ${OSGBTF_LAYER_ALLOWED_streaming})
 set(OSGBTF_LIBRARY_ALLOWED_osgBTFEnvironment ${OSGBTF_LAYER_ALLOWED_environment})
 set(OSGBTF_LIBRARY_ALLOWED_osgBTFHarness ${OSGBTF_LAYER_ALLOWED_harness})
 
-# Sets OUT_VAR to one message per include, in FILES (paths relative to ROOT) that LIBRARY
-# compiles, of a layer that library may not use:
-#   <file> (LIBRARY): includes "<path>", but LIBRARY may include only <allowed>/
-function(osgbtf_library_include_violations ROOT LIBRARY FILES OUT_VAR)
-  set(violations)
-  set(allowed ${OSGBTF_LIBRARY_ALLOWED_${LIBRARY}})
-  string(REPLACE ";" "/, " allowed_text "${allowed}")
+# Appends to OUT_VAR one message per quoted include, in FILES (relative to ROOT, sorted here),
+# whose first folder is a layer not in ALLOWED: "<file><WHO>: includes "<path>", but <RULE>
+# may include only <allowed>/". Quoted includes whose first folder is not a layer (same-folder
+# headers such as "Commands.h") are not part of the graph.
+function(osgbtf_forbidden_includes ROOT FILES ALLOWED WHO RULE OUT_VAR)
+  set(violations ${${OUT_VAR}})
+  string(REPLACE ";" "/, " allowed_text "${ALLOWED}")
   set(files ${FILES})
   list(SORT files)
   foreach(file IN LISTS files)
@@ -58,12 +58,22 @@ function(osgbtf_library_include_violations ROOT LIBRARY FILES OUT_VAR)
       string(REGEX REPLACE ".*\"([^\"]+)\"" "\\1" path "${include}")
       string(REGEX MATCH "^[^/]+/" first "${path}")
       string(REPLACE "/" "" first "${first}")
-      if(first AND first IN_LIST OSGBTF_LAYERS AND NOT first IN_LIST allowed)
+      if(first AND first IN_LIST OSGBTF_LAYERS AND NOT first IN_LIST ALLOWED)
         list(APPEND violations
-             "${file} (${LIBRARY}): includes \"${path}\", but ${LIBRARY} may include only ${allowed_text}/")
+             "${file}${WHO}: includes \"${path}\", but ${RULE} may include only ${allowed_text}/")
       endif()
     endforeach()
   endforeach()
+  set(${OUT_VAR} "${violations}" PARENT_SCOPE)
+endfunction()
+
+# Sets OUT_VAR to one message per include, in FILES (paths relative to ROOT) that LIBRARY
+# compiles, of a layer that library may not use:
+#   <file> (LIBRARY): includes "<path>", but LIBRARY may include only <allowed>/
+function(osgbtf_library_include_violations ROOT LIBRARY FILES OUT_VAR)
+  set(violations)
+  osgbtf_forbidden_includes(${ROOT} "${FILES}" "${OSGBTF_LIBRARY_ALLOWED_${LIBRARY}}"
+                            " (${LIBRARY})" ${LIBRARY} violations)
   set(${OUT_VAR} "${violations}" PARENT_SCOPE)
 endfunction()
 
@@ -82,22 +92,8 @@ function(osgbtf_layer_violations ROOT OUT_VAR)
       file(GLOB_RECURSE files RELATIVE ${ROOT} ${ROOT}/${layer}/*.h ${ROOT}/${layer}/*.hpp
            ${ROOT}/${layer}/*.cpp ${ROOT}/${layer}/*.inc)
     endif()
-    list(SORT files)
-    set(allowed ${OSGBTF_LAYER_ALLOWED_${layer}})
-    string(REPLACE ";" "/, " allowed_text "${allowed}")
-    foreach(file IN LISTS files)
-      file(READ ${ROOT}/${file} text)
-      string(REGEX MATCHALL "#[ \t]*include[ \t]*\"[^\"]+\"" includes "${text}")
-      foreach(include IN LISTS includes)
-        string(REGEX REPLACE ".*\"([^\"]+)\"" "\\1" path "${include}")
-        string(REGEX MATCH "^[^/]+/" first "${path}")
-        string(REPLACE "/" "" first "${first}")
-        if(first AND first IN_LIST OSGBTF_LAYERS AND NOT first IN_LIST allowed)
-          list(APPEND violations
-               "${file}: includes \"${path}\", but ${layer}/ may include only ${allowed_text}/")
-        endif()
-      endforeach()
-    endforeach()
+    osgbtf_forbidden_includes(${ROOT} "${files}" "${OSGBTF_LAYER_ALLOWED_${layer}}" ""
+                              ${layer}/ violations)
   endforeach()
   set(${OUT_VAR} "${violations}" PARENT_SCOPE)
 endfunction()
