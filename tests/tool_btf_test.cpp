@@ -61,6 +61,20 @@ TEST(BtfTool, SampleInfoAndContactSheetEndToEnd) {
     EXPECT_NE(r.output.find("56 x   38"), std::string::npos) << r.output;
 }
 
+// One measured view (an RTI capture): every asked view is that view, so the sheet has one row.
+TEST(BtfTool, ContactSheetOfAOneViewCaptureHasOneRow) {
+    TempDir dir;
+    const std::string sheet = dir.file("sheet.png");
+    const CommandResult r =
+        btf("contact-sheet " + shellQuote(sourceDir() + "/tests/data/rti-icon-64") + " -o " +
+            shellQuote(sheet) + " --lights '10,0;45,0;45,0'");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find(": 1 view x 2 lights of "), std::string::npos) << r.output;
+    // 2 columns of 64-pixel cells, 1 row, 2-pixel gaps.
+    const CommandResult info = runCommand("oiiotool --info " + shellQuote(sheet));
+    EXPECT_NE(info.output.find("134 x   68"), std::string::npos) << info.output;
+}
+
 TEST(BtfTool, MemoryLimitRefusesALoadCleanly) {
     TempDir dir;
     const std::string zip = dir.file("s.zip");

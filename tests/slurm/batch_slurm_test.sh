@@ -105,13 +105,15 @@ done
 same_scores "$work/local" "$work/slurm-results" || fail "Slurm's scores differ from the local run's"
 ls "$work"/slurm-results/slurm/*_*.out >/dev/null || fail "no Slurm task logs"
 
-# A slower job for the faults: lpca on a 48x48 sample takes seconds, not milliseconds.
+# A slower job for the faults: lpca on a 32x32 sample takes seconds, not milliseconds. One fit per
+# job (no held-out fit: section 2 checks those scores): each fit here competes with CI's other
+# tests for the machine's cores.
 mkdir -p "$work/slow"
-b sample -o "$work/slow/big01.zip" --size 48 >/dev/null
+b sample -o "$work/slow/big01.zip" --size 32 >/dev/null
 lock_held() { ! flock -n "$1" true 2>/dev/null && [ -e "$1" ]; }
 
 echo "== 3. scancel of a task while it fits"
-b batch plan "$work/slow" --out "$work/cancel" --methods lpca >/dev/null
+b batch plan "$work/slow" --out "$work/cancel" --methods lpca --holdout-fraction 0 >/dev/null
 b batch run "$work/cancel" --slurm >/dev/null
 lock=$work/cancel/jobs/big01--lpca/lock
 wait_for 60 "the task to take its lock" lock_held "$lock"
@@ -128,7 +130,7 @@ grep -q '"state": "done"' "$work/cancel/jobs/big01--lpca/result.json" || fail "r
 no_partial_files "$work/cancel"
 
 echo "== 4. kill -9 of slurmd while a task runs"
-b batch plan "$work/slow" "$work/db" --out "$work/killed" --methods lpca,pca >/dev/null
+b batch plan "$work/slow" "$work/db" --out "$work/killed" --methods lpca,pca --holdout-fraction 0 >/dev/null
 b batch run "$work/killed" --slurm >/dev/null
 wait_for 60 "a task to take its lock" sh -c "for l in '$work'/killed/jobs/*/lock; do [ -e \"\$l\" ] && ! flock -n \"\$l\" true && exit 0; done; exit 1"
 pkill -KILL -f "slurmd -f $SLURM_CONF" || fail "no slurmd to kill"

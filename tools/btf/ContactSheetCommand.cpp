@@ -46,13 +46,25 @@ std::size_t nearest(const DirectionSet& set, const Direction& d) {
     return best;
 }
 
+/** The measured directions nearest to the asked ones, each once, in the order asked: a capture
+ *  with one view (an RTI set) gets one row, not the same row three times. */
+std::vector<std::size_t> nearestDistinct(const DirectionSet& set,
+                                         const std::vector<Direction>& asked) {
+    std::vector<std::size_t> result;
+    for (const Direction& d : asked) {
+        const std::size_t i = nearest(set, d);
+        if (std::find(result.begin(), result.end(), i) == result.end()) result.push_back(i);
+    }
+    return result;
+}
+
 }  // namespace
 
 Runner addContactSheetCommand(CLI::App& app, CommonOptions& common) {
     auto* command = app.add_subcommand(
         "contact-sheet",
         "Write a PNG grid of (view, light) images: one row per view, one column per light "
-        "(nearest measured directions)");
+        "(nearest measured directions, each once)");
     struct Options {
         std::string input, output;
         std::string views = "0,0;45,0;75,0";
@@ -72,16 +84,17 @@ Runner addContactSheetCommand(CLI::App& app, CommonOptions& common) {
     addLoadOptions(*command, common);
     return [&common, options] {
         const MeasuredBtf btf = loadMeasuredBtf(options->input, common.loadOptions());
-        const auto views = parseDirections(options->views, "--views");
-        const auto lights = parseDirections(options->lights, "--lights");
+        const auto views = nearestDistinct(btf.views(), parseDirections(options->views, "--views"));
+        const auto lights =
+            nearestDistinct(btf.lights(), parseDirections(options->lights, "--lights"));
         const int gap = 2, w = btf.width(), h = btf.height();
         FloatImage sheet(int(lights.size()) * (w + gap) + gap, int(views.size()) * (h + gap) + gap,
                          3);
         std::fill(sheet.pixels.begin(), sheet.pixels.end(), 0.15f);
         for (std::size_t row = 0; row < views.size(); ++row) {
-            const std::size_t v = nearest(btf.views(), views[row]);
+            const std::size_t v = views[row];
             for (std::size_t col = 0; col < lights.size(); ++col) {
-                const std::size_t l = nearest(btf.lights(), lights[col]);
+                const std::size_t l = lights[col];
                 const std::vector<float> image = btf.image(v, l);
                 for (int y = 0; y < h; ++y)
                     for (int x = 0; x < w; ++x)
@@ -93,8 +106,9 @@ Runner addContactSheetCommand(CLI::App& app, CommonOptions& common) {
             }
         }
         writeFloatImage(sheet, options->output);
-        std::cout << "wrote " << options->output << ": " << views.size() << " views x "
-                  << lights.size() << " lights of " << options->input << "\n";
+        std::cout << "wrote " << options->output << ": " << views.size()
+                  << (views.size() == 1 ? " view x " : " views x ") << lights.size()
+                  << (lights.size() == 1 ? " light of " : " lights of ") << options->input << "\n";
     };
 }
 
