@@ -159,55 +159,52 @@ private:
 
 /** Allocates a texture array object with glTexImage3D (mutable storage, so that an object OSG
  *  recycles for it is simply specified again) and uploads each layer as `source` writes it. */
-class GeneratedLayers : public osg::Texture2DArray::SubloadCallback {
+/** Uploads a stored texture's values as they are held (halves as GL_HALF_FLOAT, floats as
+ *  GL_FLOAT) in one call: nothing converted or copied on this side, and the driver stores halves
+ *  into a half texture as they come. */
+class StoredLayers : public osg::Texture2DArray::SubloadCallback {
 public:
-    GeneratedLayers(const MaterialTexture& shape, LayerSource source)
-        : _width(shape.width),
-          _height(shape.height),
-          _depth(shape.depth),
-          _channels(shape.channels),
-          _internalFormat(internalFormat(shape)),
-          _source(std::move(source)) {}
+    explicit StoredLayers(std::shared_ptr<const MaterialTexture> stored)
+        : _stored(std::move(stored)), _internalFormat(internalFormat(*_stored)) {}
 
     void load(const osg::Texture2DArray& texture, osg::State& state) const override {
+        const MaterialTexture& t = *_stored;
         const osg::GLExtensions* gl = state.get<osg::GLExtensions>();
-        const GLenum format = pixelFormat(_channels);
         glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
         glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
-        gl->glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, _internalFormat, _width, _height, _depth, 0,
-                         format, GL_FLOAT, nullptr);
-        std::vector<float> layer(std::size_t(_width) * std::size_t(_height) * _channels);
-        for (int z = 0; z < _depth; ++z) {
-            _source(z, layer.data());
-            gl->glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, z, _width, _height, 1, format,
-                                GL_FLOAT, layer.data());
-        }
+        const bool half = !t.halves.empty();
+        gl->glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, _internalFormat, t.width, t.height, t.depth, 0,
+                         pixelFormat(t.channels), half ? GL_HALF_FLOAT : GL_FLOAT,
+                         half ? static_cast<const void*>(t.halves.data())
+                              : static_cast<const void*>(t.data.data()));
         if (osg::Texture::TextureObject* object = texture.getTextureObject(state.getContextID()))
-            object->setAllocated(1, _internalFormat, _width, _height, _depth, 0);
+            object->setAllocated(1, _internalFormat, t.width, t.height, t.depth, 0);
     }
 
     // Everything is uploaded by load(); there is nothing to update later.
     void subload(const osg::Texture2DArray&, osg::State&) const override {}
 
 private:
-    int _width, _height, _depth, _channels;
+    std::shared_ptr<const MaterialTexture> _stored;
     GLint _internalFormat;
-    LayerSource _source;
 };
 
 }  // namespace
 
-osg::ref_ptr<osg::Texture2DArray> createGeneratedTextureArray(const MaterialTexture& shape,
-                                                              LayerSource source, bool bilinear) {
-    if (shape.kind == MaterialTexture::UNorm8)
-        throw Error("texture '" + shape.name + "': generated textures are half or float");
-    if (shape.width < 1 || shape.height < 1 || shape.depth < 1)
-        throw Error("texture '" + shape.name + "': generated texture of no texels");
+osg::ref_ptr<osg::Texture2DArray> createStoredTextureArray(
+    std::shared_ptr<const MaterialTexture> stored, bool bilinear) {
+    const MaterialTexture& t = *stored;
+    if (t.kind == MaterialTexture::UNorm8 || !t.bytes.empty())
+        throw Error("texture '" + t.name + "': stored textures are half or float");
+    if (t.width < 1 || t.height < 1 || t.depth < 1)
+        throw Error("texture '" + t.name + "': stored texture of no texels");
+    if (t.storedCount() != t.valueCount())
+        throw Error("texture '" + t.name + "': data size does not match its dimensions");
     osg::ref_ptr<osg::Texture2DArray> array = new osg::Texture2DArray;
-    array->setTextureSize(shape.width, shape.height, shape.depth);
-    array->setSubloadCallback(new GeneratedLayers(shape, std::move(source)));
-    configure(*array, shape, bilinear, bilinear);
-    array->setName(shape.name);
+    array->setTextureSize(t.width, t.height, t.depth);
+    configure(*array, t, bilinear, bilinear);
+    array->setName(t.name);
+    array->setSubloadCallback(new StoredLayers(std::move(stored)));
     return array;
 }
 

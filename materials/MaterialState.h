@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 
 #include <osg/Program>
@@ -31,19 +32,14 @@ osg::ref_ptr<osg::Texture2DArray> createFloatTextureArray(const MaterialTexture&
                                                           bool bilinear = false);
 osg::ref_ptr<osg::Texture3D> createFloatTexture3D(const MaterialTexture& texture, bool linear);
 
-/** Fills layer `layer` of a generated texture: width * height * channels floats, rows bottom-up. */
-using LayerSource = std::function<void(int layer, float* values)>;
-
-/** A texture array of `shape` (name, size, channels, Half or Float; its data are ignored) whose
- *  layers `source` writes at upload, one at a time, into a buffer of one layer: the GPU gets the
- *  values with no image of the whole texture in host memory, and a context that needs the
- *  texture again (a new one, or after a release) gets it from `source` again. For textures that
- *  a method can produce from what it holds anyway (fmf's U and SxV from its factors): `source`
- *  must own, or share ownership of, what it reads, since the texture can outlive the material.
- *  Filtering as createFloatTextureArray. Throws Error for a UNorm8 shape or an empty one. */
-osg::ref_ptr<osg::Texture2DArray> createGeneratedTextureArray(const MaterialTexture& shape,
-                                                              LayerSource source,
-                                                              bool bilinear = false);
+/** A texture array of `stored` (Half or Float values, in `halves` or `data`) uploaded straight
+ *  from them in one call: no copy of the texture in host memory besides `stored` itself, whose
+ *  ownership the texture shares (it can outlive the material), and a context that needs the
+ *  texture again (a new one, or after a release) gets it from `stored` again. For textures a
+ *  method holds anyway in the GPU's layout (fmf's U and SxV). Filtering as
+ *  createFloatTextureArray. Throws Error for 8-bit values, no texels or a size mismatch. */
+osg::ref_ptr<osg::Texture2DArray> createStoredTextureArray(
+    std::shared_ptr<const MaterialTexture> stored, bool bilinear = false);
 
 /** An empty osg::Texture2DArray that uploads its layers again into a texture object created after
  *  a release. OSG 3.6.5's Texture2DArray keeps each context's "layer uploaded" counts when its

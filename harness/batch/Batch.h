@@ -63,8 +63,9 @@ struct PlanOptions {
     std::string storage = "float", decode = "auto";
 };
 
-/** Every measured BTF below `folder`: UBO2014 .btf files, UBO2003/ATRIUM zips, and folders that
- *  hold UBO2003-named images (a folder is one BTF, not searched further). Sorted by path. */
+/** Every measured BTF below `folder`: UBO2014 .btf files, UBO2003/ATRIUM zips, RTI zips (images
+ *  and their .lp file), and folders that hold UBO2003-named images or an .lp file (a folder is
+ *  one BTF, not searched further). Sorted by path. */
 std::vector<std::string> findMeasuredBtfs(const std::string& folder);
 
 /** Opens every material (a UBO2014 file's header and factors; a UBO2003 zip or folder is read

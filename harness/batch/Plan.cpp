@@ -20,6 +20,7 @@
 #include "harness/batch/Batch.h"
 #include "harness/batch/BatchFiles.h"
 #include "loaders/LoadBtf.h"
+#include "loaders/Rti.h"
 #include "loaders/Ubo2003.h"
 #include "materials/MethodOptions.h"
 #include "materials/MethodRegistry.h"
@@ -43,6 +44,21 @@ bool holdsUbo2003Images(const fs::path& folder) {
             return true;
     }
     return false;
+}
+
+/** An RTI capture set: a light-position file (".lp", any case) among the folder's own files. */
+bool holdsLightPositionFile(const fs::path& folder) {
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(folder, ec))
+        if (entry.is_regular_file(ec) && lower(entry.path().extension().string()) == ".lp")
+            return true;
+    return false;
+}
+
+/** A folder that is one measured BTF (UBO2003-named images, or an RTI set), not searched further.
+ */
+bool isCaptureFolder(const fs::path& folder) {
+    return holdsUbo2003Images(folder) || holdsLightPositionFile(folder);
 }
 
 /** Letters, digits, '.', '_' and '-' (a job id is a folder name and a Slurm argument). */
@@ -70,12 +86,12 @@ std::vector<std::pair<std::string, std::string>> expandInputs(const std::vector<
     for (const std::string& input : in) {
         std::error_code ec;
         if (!fs::exists(input, ec)) fail(input, "no such file or folder");
-        if (fs::is_directory(input) && !holdsUbo2003Images(input)) {
+        if (fs::is_directory(input) && !isCaptureFolder(input)) {
             const std::vector<std::string> btfs = findMeasuredBtfs(input);
             if (btfs.empty())
                 fail(input,
                      "no measured BTF found (UBO2014 .btf files, UBO2003/ATRIUM zips, folders "
-                     "of UBO2003-named images)");
+                     "of UBO2003-named images, RTI sets: images with their .lp file)");
             for (const std::string& path : btfs) found.emplace_back(path, input);
         } else if (fs::is_regular_file(input) &&
                    lower(fs::path(input).extension().string()) == ".txt") {
@@ -124,12 +140,13 @@ std::vector<std::string> findMeasuredBtfs(const std::string& folder) {
         const fs::path& path = it->path();
         const std::string extension = lower(path.extension().string());
         if (it->is_directory(ec)) {
-            if (holdsUbo2003Images(path)) {
+            if (isCaptureFolder(path)) {
                 found.push_back(path.string());
                 it.disable_recursion_pending();
             }
         } else if (it->is_regular_file(ec)) {
-            if (extension == ".btf" || (extension == ".zip" && mayBeUbo2003(path.string())))
+            if (extension == ".btf" || (extension == ".zip" && (mayBeUbo2003(path.string()) ||
+                                                                isRtiCapture(path.string()))))
                 found.push_back(path.string());
         }
     }
@@ -202,7 +219,11 @@ Manifest planBatch(const PlanOptions& options) {
         material.input = path;
         const fs::path asPath(path);
         const bool folder = fs::is_directory(asPath);
-        const std::string stem = folder ? asPath.filename().string() : asPath.stem().string();
+        // An RTI set named by its .lp file ("dirs.lp", as capture tools call it) is its folder.
+        const bool lightPositions = !folder && lower(asPath.extension().string()) == ".lp";
+        const std::string stem = folder           ? asPath.filename().string()
+                                 : lightPositions ? asPath.parent_path().filename().string()
+                                                  : asPath.stem().string();
         material.name = safeName(stem);
         for (int n = 2; names.count(material.name); ++n)
             material.name = safeName(stem) + "-" + std::to_string(n);

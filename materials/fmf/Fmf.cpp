@@ -610,20 +610,11 @@ osg::ref_ptr<osg::StateSet> FmfMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
     // Arrays even with one layer (rank <= 4, one view): fmf.frag samples sampler2DArrays.
-    // Generated layer by layer from the shared factors: no copy of the textures stays in host
-    // memory (a full-size UBO2014 file's are 110 MB as halves, 220 MB as the floats uploaded).
-    const MaterialTexture u = uShape();
-    addTexture(*stateSet,
-               createGeneratedTextureArray(
-                   u, [texture = _u](int view, float* out) { copyLayer(*texture, view, out); })
-                   .get(),
-               "fmfU", 0);
-    addTexture(*stateSet,
-               createGeneratedTextureArray(
-                   sxvShape(), [sxv = _sxv](int layer, float* out) { copyLayer(*sxv, layer, out); },
-                   filtersParameters())
-                   .get(),
-               "fmfSxV", 1);
+    // Uploaded straight from the shared U and SxV, which are held in the textures' layout: no
+    // copy of the textures in host memory, and halves go to the driver as halves (a full-size
+    // UBO2014 file's are 110 MB; converted to floats first, the upload took ~3x as long).
+    addTexture(*stateSet, createStoredTextureArray(_u).get(), "fmfU", 0);
+    addTexture(*stateSet, createStoredTextureArray(_sxv, filtersParameters()).get(), "fmfSxV", 1);
     _viewLookup.addToStateSet(*stateSet, "fmfViewTable", 2);
     _lightLookup.addToStateSet(*stateSet, "fmfLightTable", 3);
     const bool fmf = _factors->model == FactorModel::Fmf;

@@ -39,8 +39,8 @@ inline constexpr char kFmfPlainModel[] = "fmf";
 /** FmfMaterial's members (materials/MethodMaterial.h). */
 struct FmfData {
 protected:
-    /** Shared, never changed once set: the GPU textures generate their layers from it
-     *  (createGeneratedTextureArray), so the factors are held once, by the material and its
+    /** Shared, never changed once set: the GPU textures upload from U and SxV below
+     *  (createStoredTextureArray), so the factors are held once, by the material and its
      *  textures together, and copies of the material share them. */
     std::shared_ptr<const FactoredBtf> _factors = std::make_shared<const FactoredBtf>();
     /** SxV, the bulk (a row per texel), as the GPU gets it: the "sxv" texture (sxvShape()), in
