@@ -218,10 +218,11 @@ const bool neuralRegistered = registerMethodClass<NeuralMaterial>([] {
                             "stored)"),
         OptionSpec::integer("batch", 4096, 16, 65536, "(texel, view, light) samples per step"),
         OptionSpec::integer("seed", 1, 0, OptionSpec::kNoLimit,
-                            "initial weights and sample order; the same seed and threads fit "
-                            "the same material on the same machine"),
-        OptionSpec::integer("threads", 0, 0, 256,
-                            "training threads (torch's intra-op threads); 0: every core")};
+                            "initial weights and sample order; the same seed fits the same "
+                            "material on the same machine"),
+        OptionSpec::integer("threads", 1, 0, 256,
+                            "training threads (torch's intra-op threads); 0: every core. More "
+                            "than 1 pays only on an idle machine (README)")};
     // One decode of the latents blended over the filtered texels (TexelFilter::Inputs), not a
     // blend of four (eight) decodes: the fit trains every mip level's latents on that level's
     // box-filtered data, and the decoder on latents blended between texels and levels.

@@ -111,8 +111,12 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
     checkMemory(blockTexels * texelBytes + std::uint64_t(texels) * latentSize * 4 * 4,
                 "neural: a block of ABRDFs and the latents");
 
-    // Intra-op threads: the option's count, 0 every core. The same seed and thread count give
-    // the same fit (the batch is drawn on this thread; torch splits each product the same way).
+    // Intra-op threads: the option's count, 0 every core. The same seed gives the same fit at any
+    // thread count (measured at 1 and 2: the batch is drawn on this thread, and the products of a
+    // step are split, not reordered). One by default: a step's products are small, and on a
+    // machine whose other core is busy, a second thread waits at every product's barrier
+    // (README: 5-8x slower under load with OpenMP's active waiting, about even with
+    // OMP_WAIT_POLICY=passive).
     const int threads = o.integer("threads") > 0
                             ? o.integer("threads")
                             : int(std::max(1u, std::thread::hardware_concurrency()));
