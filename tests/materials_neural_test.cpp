@@ -82,7 +82,7 @@ TEST(Neural, OptionErrorsHaveTheRegistryFormat) {
               "neural: option layers must be an integer in 1..4, got 0");
     EXPECT_EQ(errorOf([&] { fit(btf, "width=8"); }),
               "neural: option width is unknown (known: latent, layers, units, steps, batch, seed, "
-              "threads)");
+              "filtered, threads)");
     EXPECT_EQ(errorOf([&] { fit(MeasuredBtf(), ""); }), "neural: the BTF is empty");
 }
 

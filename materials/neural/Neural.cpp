@@ -220,6 +220,9 @@ const bool neuralRegistered = registerMethodClass<NeuralMaterial>([] {
         OptionSpec::integer("seed", 1, 0, OptionSpec::kNoLimit,
                             "initial weights and sample order; the same seed fits the same "
                             "material on the same machine"),
+        OptionSpec::integer("filtered", 25, 0, 100,
+                            "percent of each batch trained on latents blended as filtered "
+                            "lookups blend them (between texels and mip levels)"),
         OptionSpec::integer("threads", 1, 0, 256,
                             "training threads (torch's intra-op threads); 0: every core. More "
                             "than 1 pays only on an idle machine (README)")};

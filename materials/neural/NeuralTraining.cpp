@@ -51,8 +51,6 @@ struct Decoder {
 
 /** Taps per training sample: one texel, or the blends of filteredTaps. */
 constexpr int kTaps = 4;
-/** One in this many samples of a batch is a filtered one (filteredTaps). */
-constexpr int kFilteredShare = 4;
 
 /** The taps of a filtered sample around atlas texel `texel` (of level levelOf[texel]), with random
  *  fractions a, b in [0, 1): half of them (a < 0.5, as a coin) GL_LINEAR's four texels of the
@@ -146,7 +144,7 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
     torch::optim::Adam decoderOptimizer(decoder.parameters(),
                                         torch::optim::AdamOptions(kDecoderRate));
 
-    // Filtered samples (a quarter of each batch, kFilteredShare): the shader decodes the latents
+    // Filtered samples (option `filtered`, percent of each batch): the shader decodes the latents
     // blended over the texels a lookup filters (TexelFilter::Inputs), so the decoder and the
     // latents also train on blends: the four texels around a random point of a level (GL_LINEAR
     // between texel centres, wrapping inside the level) or a texel and the coarser level's texel
@@ -163,7 +161,7 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
             for (int x = 0; x < levels[l].width; ++x)
                 levelOf[std::size_t(levels[l].y + y) * std::size_t(btf.width()) +
                         std::size_t(levels[l].x + x)] = std::int8_t(l);
-    const int filteredSamples = batch / kFilteredShare;
+    const int filteredSamples = int(std::int64_t(batch) * o.integer("filtered") / 100);
 
     std::vector<float> values(blockTexels * pairs * 3);
     std::vector<std::int64_t> texelIndex(std::size_t(batch) * kTaps), pairIndex(batch);
