@@ -207,13 +207,13 @@ const bool neuralRegistered = registerMethodClass<NeuralMaterial>([] {
         "neural BTF (Rainer et al. 2019): a latent texture (L half values per texel) decoded with "
         "the light and view directions by one small MLP per material";
     m.options = {
-        OptionSpec::integer("latent", 8, 4, NeuralMaterial::kMaxLatent,
+        OptionSpec::integer("latent", 16, 4, NeuralMaterial::kMaxLatent,
                             "latent values per texel (a multiple of 4; 2 bytes each)"),
         OptionSpec::integer("layers", 2, 1, NeuralMaterial::kMaxHiddenLayers,
                             "hidden layers of the decoder"),
         OptionSpec::integer("units", 32, 4, NeuralMaterial::kMaxUnits,
                             "units per hidden layer (a multiple of 4)"),
-        OptionSpec::integer("steps", 4000, 1, OptionSpec::kNoLimit,
+        OptionSpec::integer("steps", 8000, 1, OptionSpec::kNoLimit,
                             "Adam steps (the last tenth trains the decoder on the latents as "
                             "stored)"),
         OptionSpec::integer("batch", 4096, 16, 65536, "(texel, view, light) samples per step"),
