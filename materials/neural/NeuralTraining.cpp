@@ -54,7 +54,7 @@ constexpr int kTaps = 4;
 
 /** The taps of a filtered sample around atlas texel `texel` (of level levelOf[texel]), with random
  *  fractions a, b in [0, 1): half of them (a < 0.5, as a coin) GL_LINEAR's four texels of the
- *  level at fraction (b, 2a) past the texel's centre, wrapping inside the level; the others the
+ *  level at fraction (2a, b) past the texel's centre, wrapping inside the level; the others the
  *  texel and the coarser level's texel over it, the coarser one weighted b (between two mip
  *  levels), or the four texels where the level is the last. */
 void filteredTaps(const std::vector<MipLevel>& levels, const std::vector<std::int8_t>& levelOf,
@@ -109,12 +109,11 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
     checkMemory(blockTexels * texelBytes + std::uint64_t(texels) * latentSize * 4 * 4,
                 "neural: a block of ABRDFs and the latents");
 
-    // Intra-op threads: the option's count, 0 every core. The same seed gives the same fit at any
-    // thread count (measured at 1 and 2: the batch is drawn on this thread, and the products of a
-    // step are split, not reordered). One by default: a step's products are small, and on a
-    // machine whose other core is busy, a second thread waits at every product's barrier
-    // (README: 5-8x slower under load with OpenMP's active waiting, about even with
-    // OMP_WAIT_POLICY=passive).
+    // Intra-op threads: the option's count, 0 every core. The batch is drawn on this thread; the
+    // same seed gave the same material at 1 and 2 threads (README). One by default: a step's
+    // products are small, and on a machine whose other core is busy, a second thread waits at every
+    // product's barrier (README: 5-8x slower under load with OpenMP's active waiting, about even
+    // with OMP_WAIT_POLICY=passive).
     const int threads = o.integer("threads") > 0
                             ? o.integer("threads")
                             : int(std::max(1u, std::thread::hardware_concurrency()));
