@@ -207,7 +207,7 @@ const bool neuralRegistered = registerMethodClass<NeuralMaterial>([] {
         "neural BTF (Rainer et al. 2019): a latent texture (L half values per texel) decoded with "
         "the light and view directions by one small MLP per material";
     m.options = {
-        OptionSpec::integer("latent", 16, 4, NeuralMaterial::kMaxLatent,
+        OptionSpec::integer("latent", 8, 4, NeuralMaterial::kMaxLatent,
                             "latent values per texel (a multiple of 4; 2 bytes each)"),
         OptionSpec::integer("layers", 2, 1, NeuralMaterial::kMaxHiddenLayers,
                             "hidden layers of the decoder"),
