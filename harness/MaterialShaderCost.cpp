@@ -16,7 +16,9 @@ ShaderCost shaderCost(const Material& material) {
             // four texels, eight between two mip levels (the worst case, as the counting rule
             // takes every branch).
             const ShaderCost one = info.shaderCost(material);
-            if (material.filtersParameters()) return one;
+            // A method that blends its inputs (TexelFilter::Inputs) counts their blend in its own
+            // count: one evaluation.
+            if (material.texelFilter() != Material::TexelFilter::Values) return one;
             return material.mipLayout().mipMapped() ? one.blendingTexels(8, 2)
                                                     : one.blendingTexels(4, 1);
         }

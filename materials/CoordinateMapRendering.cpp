@@ -195,13 +195,11 @@ void addMapTaps(FilterTaps& taps, const CoordinateMap& level, float u, float v, 
     add(x1, y1, share * a * b);
 }
 
+/** The entries' values blended, or their inputs blended and evaluated once
+ *  (Material::evaluateTaps; TexelFilter::Inputs), as btf_main.glsl does through a map. */
 glm::vec3 blend(const Material& material, const FilterTaps& taps, const glm::vec3& view,
                 const glm::vec3& light) {
-    glm::vec3 value(0.0f);
-    for (int k = 0; k < taps.count; ++k)
-        value +=
-            taps.taps[k].weight * material.evaluate(taps.taps[k].x, taps.taps[k].y, view, light);
-    return value;
+    return material.evaluateTaps(taps, view, light);
 }
 
 }  // namespace

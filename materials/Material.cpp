@@ -66,7 +66,11 @@ glm::vec3 Material::evaluateFiltered(float u, float v, float lod, const glm::vec
         return finishLinear(linear, view, light);
     }
     // The level selection environment lighting shares (evaluateFoldedFiltered).
-    const FilterTaps taps = mipFilterTaps(_mipLayout, _width, _height, u, v, lod);
+    return evaluateTaps(mipFilterTaps(_mipLayout, _width, _height, u, v, lod), view, light);
+}
+
+glm::vec3 Material::evaluateTaps(const FilterTaps& taps, const glm::vec3& view,
+                                 const glm::vec3& light) const {
     glm::vec3 value(0.0f);
     for (int k = 0; k < taps.count; ++k)
         value += taps.taps[k].weight * evaluate(taps.taps[k].x, taps.taps[k].y, view, light);
@@ -78,6 +82,7 @@ Material::TexelFilter Material::texelFilter() const {
     // A material of no registered method (BSVTF's StreamedFmfMaterial, made by its streamer,
     // never loaded by name) has no MethodInfo to declare it: its linearInParameters() does.
     const bool filters = method ? method->filtersParameters : true;
+    if (method && method->blendsInputs) return TexelFilter::Inputs;
     return filters && !_mipLayout.mipMapped() && linearInParameters() ? TexelFilter::Parameters
                                                                       : TexelFilter::Values;
 }

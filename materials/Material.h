@@ -28,6 +28,8 @@
 
 namespace osgBTF {
 
+struct FilterTaps;  // materials/BilinearTaps.h
+
 /** Storage per texel as Meseth et al. 2003 Table 2 counts it: values and bytes, derived from the
  * model's actual arrays (per-texel arrays count fully; shared tables are divided by the texel
  * count). */
@@ -91,12 +93,25 @@ public:
          *  values (uniform osgBTF_blendTexels): works for any method, four evaluations per light
          *  where the texel weights are not 0 or 1. */
         Values,
+        /** The method blends its per-texel inputs over the same four (eight) texels and weights
+         *  itself and evaluates the blend once (uniform osgBTF_blendInputs; evaluateTaps): for a
+         *  method whose value is not linear in its inputs but which is fitted so that blended
+         *  inputs decode well (neural's latents, MethodInfo::blendsInputs). One evaluation per
+         *  light, also between mip levels and through a coordinate map. */
+        Inputs,
     };
-    /** Parameters when the method sets MethodInfo::filtersParameters, the material has no mip
-     *  levels (they sit in an atlas, where the hardware filter cannot wrap inside a level) and
-     *  linearInParameters(); Values otherwise. */
+    /** Inputs when the method sets MethodInfo::blendsInputs; Parameters when it sets
+     *  MethodInfo::filtersParameters, the material has no mip levels (they sit in an atlas, where
+     *  the hardware filter cannot wrap inside a level) and linearInParameters(); Values
+     *  otherwise. */
     TexelFilter texelFilter() const;
     bool filtersParameters() const { return texelFilter() == TexelFilter::Parameters; }
+    /** The value a filtered lookup over `taps` shows (their texels' values blended by their
+     *  weights, in the taps' order): evaluateFiltered's and evaluateThroughMap's last step. A
+     *  method of TexelFilter::Inputs overrides it to blend its inputs and evaluate once, as its
+     *  shader does. */
+    virtual glm::vec3 evaluateTaps(const FilterTaps& taps, const glm::vec3& view,
+                                   const glm::vec3& light) const;
 
     virtual MemoryFootprint memory() const = 0;
     virtual FittedMaterial toFittedMaterial() const = 0;

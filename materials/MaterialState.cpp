@@ -287,6 +287,9 @@ void addCommonState(osg::StateSet& stateSet, const Material& material) {
     // the evaluations of the four texels (per mip level).
     stateSet.addUniform(new osg::Uniform(shader::kBilinear, material.filtersParameters()));
     stateSet.addUniform(new osg::Uniform(shader::kBlendTexels, !material.filtersParameters()));
+    // Or the method blends its inputs over those texels itself and main() evaluates it once.
+    stateSet.addUniform(new osg::Uniform(shader::kBlendInputs,
+                                         material.texelFilter() == Material::TexelFilter::Inputs));
     // The real eye direction unless a rectified image fixes the view (addRectifiedLighting,
     // harness/MaterialImage.h: on this StateSet, below it, or above it with OVERRIDE). Set here
     // for the same reason as the terminator below: a draw after a rectified one would otherwise

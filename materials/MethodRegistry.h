@@ -57,6 +57,12 @@ struct MethodInfo {
      *  parameters blends the texels' values. False: btf_main.glsl blends four evaluations
      *  (TexelFilter::Values), which any method's shader supports unchanged. */
     bool filtersParameters = false;
+    /** The shader blends the method's per-texel inputs over the texels a lookup filters (four,
+     *  eight between two mip levels, each tap of a coordinate map) and evaluates the blend once
+     *  (Material::TexelFilter::Inputs; btf_main.glsl's btfBlendInputs, Material::evaluateTaps on
+     *  the CPU): for a method not linear in its inputs whose fit makes blended inputs decode
+     *  well (neural's latents). Overrides filtersParameters. */
+    bool blendsInputs = false;
     /** The baseline every comparison starts with (baselineMethod()); one method sets it. */
     bool baseline = false;
     /** A material that is a factorisation in the UBO2014 files' terms (materials/FactorHooks.h):

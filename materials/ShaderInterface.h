@@ -29,6 +29,10 @@ constexpr const char* kBilinear = "osgBTF_bilinear";
 /** bool: btf_main.glsl blends the evaluations of the four texels around the texture coordinate
  *  (per mip level; Material::TexelFilter::Values); false with kBilinear false: nearest texel. */
 constexpr const char* kBlendTexels = "osgBTF_blendTexels";
+/** bool: with kBlendTexels, the method's btfEvaluate blends its per-texel inputs over the taps
+ *  itself (btfTapTexel, btfTapWeight) and main() calls it once per light
+ *  (Material::TexelFilter::Inputs). */
+constexpr const char* kBlendInputs = "osgBTF_blendInputs";
 /** Mip-mapped materials (core/MipPyramid.h): the level count (1: not mip-mapped) and each level's
  *  rectangle (x, y, width, height) in the material's texels; level 0 is the base. */
 constexpr const char* kMipLevels = "osgBTF_mipLevels";  ///< int

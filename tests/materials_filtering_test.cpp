@@ -55,12 +55,16 @@ TEST(MaterialFiltering, MethodsLinearInTheirParametersFilterThemTheOthersBlendVa
     for (const std::string& name : methodNamesInOrder()) {
         const MethodInfo& method = findMethod(name);
         const osg::ref_ptr<Material> m = method.fit(btf, FitOptions::parse(method.quickFitOptions));
-        EXPECT_EQ(m->texelFilter(), method.filtersParameters ? Material::TexelFilter::Parameters
-                                                             : Material::TexelFilter::Values)
+        // A method that blends its inputs itself does so at every level.
+        EXPECT_EQ(m->texelFilter(), method.blendsInputs        ? Material::TexelFilter::Inputs
+                                    : method.filtersParameters ? Material::TexelFilter::Parameters
+                                                               : Material::TexelFilter::Values)
             << name;
         const osg::ref_ptr<Material> mip =
             fitMipMapped(method, btf, FitOptions::parse(method.quickFitOptions));
-        EXPECT_EQ(mip->texelFilter(), Material::TexelFilter::Values) << name;
+        EXPECT_EQ(mip->texelFilter(), method.blendsInputs ? Material::TexelFilter::Inputs
+                                                          : Material::TexelFilter::Values)
+            << name;
     }
 }
 

@@ -51,10 +51,10 @@ void setNeuron(NeuralMaterial& m, int k, int j, float bias, const std::vector<fl
     std::copy(weights.begin(), weights.end(), row + 4);
 }
 
-/** 1 x 1 texels, 4 latents, one hidden layer of 4 units, written by hand. */
-osg::ref_ptr<NeuralMaterial> handMadeNetwork() {
+/** 1 x 1 texels (or `width` x 1), 4 latents, one hidden layer of 4 units, written by hand. */
+osg::ref_ptr<NeuralMaterial> handMadeNetwork(int width = 1) {
     osg::ref_ptr<NeuralMaterial> m = new NeuralMaterial;
-    m->setShape(1, 1, DirectionSet::bonn81(), DirectionSet::bonn81(), 4, 1, 4);
+    m->setShape(width, 1, DirectionSet::bonn81(), DirectionSet::bonn81(), 4, 1, 4);
     const float latent[4] = {1.0f, -2.0f, 3.0f, 0.5f};
     for (int i = 0; i < 4; ++i) m->latent.set(m->latentIndex(0, 0, i), latent[i]);
     // Inputs: z0..z3, then v.x, v.y, l.x, l.y, h.x, h.y, h.z, l.z.
@@ -81,7 +81,8 @@ TEST(Neural, OptionErrorsHaveTheRegistryFormat) {
     EXPECT_EQ(errorOf([&] { fit(btf, "layers=0"); }),
               "neural: option layers must be an integer in 1..4, got 0");
     EXPECT_EQ(errorOf([&] { fit(btf, "width=8"); }),
-              "neural: option width is unknown (known: latent, layers, units, steps, batch, seed)");
+              "neural: option width is unknown (known: latent, layers, units, steps, batch, seed, "
+              "filtered, threads)");
     EXPECT_EQ(errorOf([&] { fit(MeasuredBtf(), ""); }), "neural: the BTF is empty");
 }
 
@@ -101,6 +102,23 @@ TEST(Neural, DecoderComputesTheNetworkWrittenByHand) {
     EXPECT_NEAR(v.r, 1.5 * 0.5, 1e-6);
     EXPECT_NEAR(v.g, -2.0 * 0.5, 1e-6);
     EXPECT_NEAR(v.b, 2 * hz * 0.5, 1e-6);
+}
+
+TEST(Neural, AFilteredLookupDecodesTheBlendedLatentsOnce) {
+    // Texel 0 as above, texel 1 with latents (-1, 2, 1, 0.5): half-way between their centres
+    // the latents blend to (0, 0, 2, 0.5), which decode (view and light at the normal) to
+    // (0.5 + 0, 0 - 1, 2 h.z): not the mean of the two texels' values ((1.5, -2, 2) and
+    // (0.5, 2, 2)), which a blend of decodes would give.
+    const osg::ref_ptr<NeuralMaterial> m = handMadeNetwork(2);
+    const float second[4] = {-1.0f, 2.0f, 1.0f, 0.5f};
+    for (int i = 0; i < 4; ++i) m->latent.set(m->latentIndex(1, 0, i), second[i]);
+    ASSERT_EQ(m->texelFilter(), Material::TexelFilter::Inputs);
+    const glm::vec3 up(0, 0, 1);
+    EXPECT_EQ(m->evaluate(1, 0, up, up), glm::vec3(0.5f, 2.0f, 2.0f));
+    // u = 0.5 lies half-way between the centres 0.25 and 0.75.
+    EXPECT_EQ(m->evaluateFiltered(0.5f, 0.5f, 0.0f, up, up), glm::vec3(0.5f, -1.0f, 2.0f));
+    // At a texel's centre the texel itself.
+    EXPECT_EQ(m->evaluateFiltered(0.75f, 0.5f, 0.0f, up, up), m->evaluate(1, 0, up, up));
 }
 
 TEST(Neural, ShapesOutsideTheLimitsAreRefused) {
@@ -185,6 +203,11 @@ TEST(Neural, TheSameSeedFitsTheSameMaterialAndAnotherSeedAnother) {
     EXPECT_EQ(a->latent, b->latent);
     EXPECT_EQ(a->decoder.data, b->decoder.data);
     EXPECT_NE(a->decoder.data, c->decoder.data);
+    // Two threads: a batch and network large enough for torch to split its products.
+    const std::string twoThreads = "latent=8 units=32 layers=2 steps=20 batch=8192 threads=2";
+    const osg::ref_ptr<NeuralMaterial> d = fit(btf, twoThreads), e = fit(btf, twoThreads);
+    EXPECT_EQ(d->latent, e->latent);
+    EXPECT_EQ(d->decoder.data, e->decoder.data);
 }
 
 TEST(Neural, AMemoryLimitSplitsTheMeasuredDataIntoBlocks) {

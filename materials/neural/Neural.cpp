@@ -6,6 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include "core/Error.h"
+#include "materials/BilinearTaps.h"
 #include "materials/CoordinateMapRendering.h"
 #include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
@@ -96,6 +97,18 @@ glm::vec3 NeuralMaterial::evaluate(int x, int y, const glm::vec3& view,
     return decode(in) * light.z;
 }
 
+glm::vec3 NeuralMaterial::evaluateTaps(const FilterTaps& taps, const glm::vec3& view,
+                                       const glm::vec3& light) const {
+    // The shader's vec4 `z += w * texelFetch(...)` per group, tap by tap.
+    float in[kMaxLatent + kDirectionFeatures] = {};
+    for (int k = 0; k < taps.count; ++k) {
+        const FilterTap& t = taps.taps[k];
+        for (int i = 0; i < _latentSize; ++i) in[i] += t.weight * latent[latentIndex(t.x, t.y, i)];
+    }
+    directionFeatures(view, light, in + _latentSize);
+    return decode(in) * light.z;
+}
+
 MemoryFootprint NeuralMaterial::memory() const {
     const double texels = double(_width) * _height;
     const std::uint64_t shared = std::uint64_t(decoder.valueCount()) * 4;
@@ -161,11 +174,26 @@ osg::ref_ptr<NeuralMaterial> NeuralMaterial::fromFile(FittedMaterial file) {
     return m;
 }
 
+MaterialTexture NeuralMaterial::gpuDecoder() const {
+    const int groups = _units / 4, columns = 1 + std::max(inputs(), _units);
+    MaterialTexture t{"decoder", columns, _hiddenLayers * groups + 1, 1, 4, MaterialTexture::Float,
+                      {}};
+    t.data.assign(t.valueCount(), 0.0f);
+    for (int k = 0; k <= _hiddenLayers; ++k)
+        for (int j = 0; j < layerOutputs(k); ++j) {
+            const float* row = &decoder.data[std::size_t(decoderRow(k, j)) * decoder.width * 4];
+            float* out = &t.data[std::size_t(k * groups + j / 4) * std::size_t(columns) * 4];
+            out[j % 4] = row[0];
+            for (int i = 0; i < layerInputs(k); ++i) out[4 * (1 + i) + j % 4] = row[4 + i];
+        }
+    return t;
+}
+
 osg::ref_ptr<osg::StateSet> NeuralMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
     addTexture(*stateSet, createFloatTextureArray(latentTexture()).get(), "neuralLatent", 0);
-    addTexture(*stateSet, createFloatTexture(decoder).get(), "neuralDecoder", 1);
+    addTexture(*stateSet, createFloatTexture(gpuDecoder()).get(), "neuralDecoder", 1);
     stateSet->addUniform(new osg::Uniform("neuralLatentGroups", _latentSize / 4));
     stateSet->addUniform(new osg::Uniform("neuralHiddenLayers", _hiddenLayers));
     stateSet->addUniform(new osg::Uniform("neuralUnits", _units));
@@ -185,29 +213,46 @@ const bool neuralRegistered = registerMethodClass<NeuralMaterial>([] {
                             "hidden layers of the decoder"),
         OptionSpec::integer("units", 32, 4, NeuralMaterial::kMaxUnits,
                             "units per hidden layer (a multiple of 4)"),
-        OptionSpec::integer("steps", 4000, 1, OptionSpec::kNoLimit,
+        OptionSpec::integer("steps", 8000, 1, OptionSpec::kNoLimit,
                             "Adam steps (the last tenth trains the decoder on the latents as "
                             "stored)"),
         OptionSpec::integer("batch", 4096, 16, 65536, "(texel, view, light) samples per step"),
         OptionSpec::integer("seed", 1, 0, OptionSpec::kNoLimit,
                             "initial weights and sample order; the same seed fits the same "
-                            "material on the same machine")};
+                            "material on the same machine"),
+        OptionSpec::integer("filtered", 25, 0, 100,
+                            "percent of each batch trained on latents blended as filtered "
+                            "lookups blend them (between texels and mip levels)"),
+        OptionSpec::integer("threads", 1, 0, 256,
+                            "training threads (torch's intra-op threads); 0: every core. More "
+                            "than 1 pays only on an idle machine (README)")};
+    // One decode of the latents blended over the filtered texels (TexelFilter::Inputs), not a
+    // blend of four (eight) decodes: the fit trains every mip level's latents on that level's
+    // box-filtered data, and the decoder on latents blended between texels and levels.
+    m.blendsInputs = true;
     m.shaderCost = [](const Material& material) {
-        // Per neuron of a layer with n inputs: the bias fetch and n/4 weight fetches; a dot product
-        // and an add per group (counted as 4 ALU + 1), the ReLU 1. Features: normalize 6, rest 2.
+        // Features: normalize 6, rest 2. The latent blend: per tap (4, 8 between two mip levels)
+        // and group of 4 latents a fetch and a multiply-add (2), per tap its texel and weight (4);
+        // per level the taps' selection (ShaderCost::kBlendLevelAlu).
         const NeuralMaterial& n = static_cast<const NeuralMaterial&>(material);
-        int alu = 8, tex = n.latentSize() / 4;
+        const bool mip = n.mipLayout().mipMapped();
+        const int taps = mip ? 8 : 4, groups = n.latentSize() / 4;
+        int alu = 8 + taps * (4 + 2 * groups), tex = taps * groups;
         for (int k = 0; k <= n.hiddenLayers(); ++k) {
-            const int groups = n.layerInputs(k) / 4;
-            alu += n.layerOutputs(k) * (groups * 5 + 1);
-            tex += n.layerOutputs(k) * (groups + 1);
+            // Four neurons at a time (gpuDecoder): per input 4 weights in one fetch, per group of
+            // 4 inputs 4 multiplies and 4 adds; the bias fetch, the loop and the ReLU.
+            const int outputGroups = (n.layerOutputs(k) + 3) / 4, inputs = n.layerInputs(k);
+            alu += outputGroups * (inputs / 4 * 8 + 2);
+            tex += outputGroups * (inputs + 1);
         }
         alu += 3;  // times l_z
-        return ShaderCost::ofEvaluate(alu, tex,
-                                      "ALU ~1.25 x weights, TEX weights / 4 + neurons + L/4 (L " +
-                                          std::to_string(n.latentSize()) + ", " +
-                                          std::to_string(n.hiddenLayers()) + " x " +
-                                          std::to_string(n.units()) + " units)");
+        ShaderCost cost = ShaderCost::ofEvaluate(
+            alu, tex,
+            "ALU ~2 x weights / 4, TEX weights / 4 + neurons / 4 + " + std::to_string(taps) +
+                " taps x L/4, one decode (L " + std::to_string(n.latentSize()) + ", " +
+                std::to_string(n.hiddenLayers()) + " x " + std::to_string(n.units()) + " units)");
+        cost.fixedAlu += (mip ? 2 : 1) * ShaderCost::kBlendLevelAlu;
+        return cost;
     };
     m.order = 90;
     m.quickFitOptions = "latent=4 units=16 layers=1 steps=300 batch=512";

@@ -70,6 +70,10 @@ public:
     }
 
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
+    /** Decode once (TexelFilter::Inputs): the taps' latents blended by their weights, in the
+     *  taps' order (neural.frag's btfBlendInputs branch), then one decode of the blend. */
+    glm::vec3 evaluateTaps(const FilterTaps& taps, const glm::vec3& view,
+                           const glm::vec3& light) const override;
     MemoryFootprint memory() const override;
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
@@ -89,6 +93,12 @@ public:
     std::size_t latentIndex(int x, int y, int i) const {
         return ((std::size_t(i / 4) * _height + y) * _width + x) * 4 + std::size_t(i % 4);
     }
+
+    /** The decoder as the shader reads it (neural.frag): four neurons a row, row k W/4 + j/4 for
+     *  neuron j of layer k (the output layer's 3 in the last row, the fourth channel 0); texel 0
+     *  their biases, texel 1 + i their weights of input i. One fetch gives an input's weights of
+     *  four neurons, which the shader accumulates in one vec4. */
+    MaterialTexture gpuDecoder() const;
 
     /** f(v, l) = (v.x, v.y, l.x, l.y, h.x, h.y, h.z, l.z), h = normalize(v + l): the projected
      *  directions (what Rainer et al. 2019 feed their decoder) plus the half vector and the

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <thread>
 
 #include <Imath/half.h>
 #include <tbb/parallel_for.h>
@@ -15,6 +16,7 @@
 
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
+#include "core/MipPyramid.h"
 #include "core/Progress.h"
 #include "materials/neural/Neural.h"
 
@@ -47,6 +49,41 @@ struct Decoder {
     }
 };
 
+/** Taps per training sample: one texel, or the blends of filteredTaps. */
+constexpr int kTaps = 4;
+
+/** The taps of a filtered sample around atlas texel `texel` (of level levelOf[texel]), with random
+ *  fractions a, b in [0, 1): half of them (a < 0.5, as a coin) GL_LINEAR's four texels of the
+ *  level at fraction (2a, b) past the texel's centre, wrapping inside the level; the others the
+ *  texel and the coarser level's texel over it, the coarser one weighted b (between two mip
+ *  levels), or the four texels where the level is the last. */
+void filteredTaps(const std::vector<MipLevel>& levels, const std::vector<std::int8_t>& levelOf,
+                  std::size_t width, std::size_t texel, float a, float b, std::size_t* tap,
+                  float* weight) {
+    const std::size_t l = std::size_t(levelOf[texel]);
+    const MipLevel& r = levels[l];
+    const int x = int(texel % width) - r.x, y = int(texel / width) - r.y;
+    const auto at = [&](const MipLevel& level, int tx, int ty) {
+        return std::size_t(level.y + ty) * width + std::size_t(level.x + tx);
+    };
+    if (a >= 0.5f && l + 1 < levels.size()) {
+        const MipLevel& c = levels[l + 1];
+        tap[1] = at(c, std::min(x / 2, c.width - 1), std::min(y / 2, c.height - 1));
+        weight[0] = 1.0f - b;
+        weight[1] = b;
+        return;
+    }
+    const float s = a < 0.5f ? 2.0f * a : 2.0f * a - 1.0f, t = b;
+    const int x1 = (x + 1) % r.width, y1 = (y + 1) % r.height;
+    tap[1] = at(r, x1, y);
+    tap[2] = at(r, x, y1);
+    tap[3] = at(r, x1, y1);
+    weight[0] = (1.0f - s) * (1.0f - t);
+    weight[1] = s * (1.0f - t);
+    weight[2] = (1.0f - s) * t;
+    weight[3] = s * t;
+}
+
 /** A cosine decay from `rate` to a tenth of it over the steps. */
 double decayed(double rate, int step, int steps) {
     const double t = double(step) / std::max(1, steps - 1);
@@ -72,9 +109,15 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
     checkMemory(blockTexels * texelBytes + std::uint64_t(texels) * latentSize * 4 * 4,
                 "neural: a block of ABRDFs and the latents");
 
-    // One thread: a step's products are too small to split (the sample at 32 x 32 fitted in 25.6 s
-    // on one thread, 38.4 s on two), and a seed then gives the same fit whatever the core count.
-    at::set_num_threads(1);
+    // Intra-op threads: the option's count, 0 every core. The batch is drawn on this thread; the
+    // same seed gave the same material at 1 and 2 threads (README). One by default: a step's
+    // products are small, and on a machine whose other core is busy, a second thread waits at every
+    // product's barrier (README: 5-8x slower under load with OpenMP's active waiting, about even
+    // with OMP_WAIT_POLICY=passive).
+    const int threads = o.integer("threads") > 0
+                            ? o.integer("threads")
+                            : int(std::max(1u, std::thread::hardware_concurrency()));
+    at::set_num_threads(threads);
     torch::manual_seed(seed);
     std::mt19937_64 random(seed);
     // Features and cosines of every measured (view, light) pair, in the ABRDF's order.
@@ -100,8 +143,28 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
     torch::optim::Adam decoderOptimizer(decoder.parameters(),
                                         torch::optim::AdamOptions(kDecoderRate));
 
+    // Filtered samples (option `filtered`, percent of each batch): the shader decodes the latents
+    // blended over the texels a lookup filters (TexelFilter::Inputs), so the decoder and the
+    // latents also train on blends: the four texels around a random point of a level (GL_LINEAR
+    // between texel centres, wrapping inside the level) or a texel and the coarser level's texel
+    // over it (between two mip levels), against the same blend of their measured values, which
+    // is what the methods that blend values show there. The levels: a mip atlas's (each level
+    // fitted to its own box-filtered data, fit/MipMapping.h), else the whole texture.
+    std::vector<MipLevel> levels;
+    if (const auto* atlas = dynamic_cast<const MipAtlasSource*>(&btf))
+        levels = atlas->layout().levels();
+    if (levels.empty()) levels.push_back(MipLevel{0, 0, btf.width(), btf.height()});
+    std::vector<std::int8_t> levelOf(texels, -1);  // -1: the atlas's unused corner
+    for (std::size_t l = 0; l < levels.size(); ++l)
+        for (int y = 0; y < levels[l].height; ++y)
+            for (int x = 0; x < levels[l].width; ++x)
+                levelOf[std::size_t(levels[l].y + y) * std::size_t(btf.width()) +
+                        std::size_t(levels[l].x + x)] = std::int8_t(l);
+    const int filteredSamples = int(std::int64_t(batch) * o.integer("filtered") / 100);
+
     std::vector<float> values(blockTexels * pairs * 3);
-    std::vector<std::int64_t> texelIndex(batch), pairIndex(batch);
+    std::vector<std::int64_t> texelIndex(std::size_t(batch) * kTaps), pairIndex(batch);
+    std::vector<float> tapWeight(std::size_t(batch) * kTaps);
     std::vector<float> targets(std::size_t(batch) * 3);
     std::vector<std::size_t> order(blocks);
     for (std::size_t b = 0; b < blocks; ++b) order[b] = b;
@@ -147,18 +210,36 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
             }
             std::uniform_int_distribution<std::size_t> pickTexel(0, blockCount - 1),
                 pickPair(0, pairs - 1);
+            std::uniform_real_distribution<float> fraction(0.0f, 1.0f);
             for (int i = 0; i < batch; ++i) {
                 const std::size_t t = pickTexel(random), p = pickPair(random);
-                texelIndex[i] = std::int64_t(blockFirst + t);
+                std::size_t tap[kTaps];
+                float weight[kTaps] = {1.0f, 0.0f, 0.0f, 0.0f};
+                for (std::size_t& k : tap) k = blockFirst + t;
+                if (i < filteredSamples && levelOf[blockFirst + t] >= 0)
+                    filteredTaps(levels, levelOf, std::size_t(btf.width()), blockFirst + t,
+                                 fraction(random), fraction(random), tap, weight);
                 pairIndex[i] = std::int64_t(p);
-                const float* v = values.data() + (t * pairs + p) * 3;
-                std::copy(v, v + 3, targets.begin() + std::ptrdiff_t(i) * 3);
+                float* target = targets.data() + std::ptrdiff_t(i) * 3;
+                std::fill(target, target + 3, 0.0f);
+                for (int k = 0; k < kTaps; ++k) {
+                    // A neighbour outside the block in memory: the texel itself instead.
+                    if (tap[k] < blockFirst || tap[k] >= blockFirst + blockCount)
+                        tap[k] = blockFirst + t;
+                    texelIndex[std::size_t(i) * kTaps + k] = std::int64_t(tap[k]);
+                    tapWeight[std::size_t(i) * kTaps + k] = weight[k];
+                    const float* v = values.data() + ((tap[k] - blockFirst) * pairs + p) * 3;
+                    for (int c = 0; c < 3; ++c) target[c] += weight[k] * v[c];
+                }
             }
-            const torch::Tensor ti = torch::from_blob(texelIndex.data(), {batch}, torch::kLong);
+            const torch::Tensor ti =
+                torch::from_blob(texelIndex.data(), {batch * kTaps}, torch::kLong);
+            const torch::Tensor wi = torch::from_blob(tapWeight.data(), {batch, kTaps, 1});
             const torch::Tensor pi = torch::from_blob(pairIndex.data(), {batch}, torch::kLong);
             const torch::Tensor target = torch::from_blob(targets.data(), {batch, 3});
-            const torch::Tensor input =
-                torch::cat({latent.index_select(0, ti), features.index_select(0, pi)}, 1);
+            const torch::Tensor blended =
+                (latent.index_select(0, ti).view({batch, kTaps, latentSize}) * wi).sum(1);
+            const torch::Tensor input = torch::cat({blended, features.index_select(0, pi)}, 1);
             const torch::Tensor prediction = decoder.forward(input) * cosines.index_select(0, pi);
             const torch::Tensor loss = torch::mse_loss(prediction, target);
             if (!std::isfinite(loss.item<float>()))

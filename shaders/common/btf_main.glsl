@@ -27,13 +27,19 @@ uniform vec4 osgBTF_fixedView = vec4(0.0);
 //   in non-uniform control flow, where implicit derivatives are undefined. One evaluation.
 // - TexelFilter::Values (osgBTF_blendTexels): main() evaluates btfEvaluate at each of the four
 //   texels (per level) and blends the values; no method's shader takes part.
+// - TexelFilter::Inputs (osgBTF_blendInputs, with osgBTF_blendTexels): main() sets btfBlendInputs
+//   and calls btfEvaluate once per light; the method's btfEvaluate blends its own per-texel
+//   inputs over the taps (btfTapTexel(k), btfTapWeight(k)) and evaluates the blend (neural's
+//   latents: Material::evaluateTaps is the CPU reference). Also through a coordinate map.
 // Neither set: the nearest texel (of each of two levels). Through a coordinate map every method
 // takes the second way over the map's four entries per level (btfAddMapTaps), whatever its
 // TexelFilter: neighbouring entries name unrelated sample texels, so no hardware filter of the
 // parameter textures can blend them; btfBilinear stays false there.
 uniform bool osgBTF_bilinear = false;
 uniform bool osgBTF_blendTexels = false;
+uniform bool osgBTF_blendInputs = false;
 bool btfBilinear = false;
+bool btfBlendInputs = false;
 vec2 btfBilinearCoordinate = vec2(0.0);
 // The fragment's level of detail in base texels (btfMipLod), set by main() in uniform control
 // flow before any evaluation: for a method that picks levels itself (the BSVTF cache,
@@ -145,6 +151,9 @@ void main() {
     // btfBilinear stays false: the method reads each tap's own sample texel.
     btfAddMapTaps(btfTexCoord);
 #endif
+    // The method blends its inputs over the taps itself: one evaluation per light.
+    btfBlendInputs = osgBTF_blendInputs;
+    int evaluations = btfBlendInputs ? min(btfTapCount, 1) : btfTapCount;
     vec3 color = vec3(0.0);
     if (view.z > 0.0) {
         for (int i = 0; i < osgBTF_lightCount && i < osgBTF_maxLights; ++i) {
@@ -156,8 +165,9 @@ void main() {
             // Skipped when dark: shadowed lights cost no method evaluation.
             if (visible > 0.0) {
                 vec3 value = vec3(0.0);
-                for (int k = 0; k < btfTapCount; ++k)
-                    value += btfTapWeight(k) * btfEvaluate(btfTapTexel(k), view, light);
+                for (int k = 0; k < evaluations; ++k)
+                    value += (btfBlendInputs ? 1.0 : btfTapWeight(k)) *
+                             btfEvaluate(btfTapTexel(k), view, light);
                 color += visible * osgBTF_lightColor[i] * value;
             }
         }
