@@ -4,6 +4,9 @@
 #include <numeric>
 #include <random>
 
+#include "core/Error.h"
+#include "core/MeasuredBtf.h"
+
 namespace osgBTF {
 
 void BtfSource::readAbrdfRange(std::size_t first, std::size_t count, float* out) const {
@@ -24,6 +27,17 @@ std::vector<std::size_t> randomTexels(const BtfSource& source, std::size_t count
     all.resize(count);
     std::sort(all.begin(), all.end());
     return all;
+}
+
+void checkMemoryBeside(const BtfSource& held, std::uint64_t bytes, const std::string& what) {
+    checkMemory(bytes, what);
+    const std::uint64_t resident = held.residentBytes(), limit = memoryLimit();
+    if (resident > limit || bytes > limit - resident)
+        throw Error(what + ": needs " + formatBytes(bytes) + " beside the " +
+                    formatBytes(resident) + " of measured values held in memory, more than the " +
+                    "memory limit of " + formatBytes(limit) +
+                    " together (raise it with --memory-limit or OSGBTF_MEMORY_LIMIT, or keep an "
+                    "RTI capture on disk with --storage disk)");
 }
 
 std::size_t errorTexelCount(const BtfSource& source, long long requested) {

@@ -52,6 +52,10 @@ public:
      *  (then a method should read each value as few times as it can). */
     virtual bool inMemory() const = 0;
 
+    /** Bytes this source holds in memory while it is read (a MeasuredBtf's values, a factored
+     *  BTF's factors; 0 for data kept on disk): what a fit allocates comes on top of it. */
+    virtual std::uint64_t residentBytes() const = 0;
+
     /** Bytes of the values as floats (texels x images x 3 x 4): what materialising would need. */
     std::uint64_t decodedBytes() const {
         return std::uint64_t(texelCount()) * imageCount() * 3 * sizeof(float);
@@ -82,5 +86,12 @@ std::vector<std::size_t> randomTexels(const BtfSource& source, std::size_t count
  *  data in memory, 4096 of factored input (an exact error over a full-size UBO2014 file decodes
  *  all its ~11 G values once per method). */
 std::size_t errorTexelCount(const BtfSource& source, long long requested);
+
+/** checkMemory for what a fit allocates beside the measured data it reads: refused when `bytes`
+ *  and held.residentBytes() together exceed the memory limit ("<what>: needs N beside the M of
+ *  measured values held in memory, more than the memory limit of L ..."), with checkMemory's own
+ *  message when `bytes` alone does. Each allocation checked alone let a 12.7-megapixel capture's
+ *  11 GB of floats and a ptm fit's 11 GB of images pass a 17.6 GB limit, to the OOM killer. */
+void checkMemoryBeside(const BtfSource& held, std::uint64_t bytes, const std::string& what);
 
 }  // namespace osgBTF

@@ -125,6 +125,7 @@ public:
     std::size_t abrdfBlockTexels() const override;
     std::size_t imageBlock() const override;
     bool inMemory() const override { return false; }
+    std::uint64_t residentBytes() const override { return _factors.factorBytes(); }
 
     const FactoredBtf& factors() const { return _factors; }
 

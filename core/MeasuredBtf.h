@@ -48,6 +48,7 @@ public:
     std::size_t abrdfBlockTexels() const override { return 16; }
     std::size_t imageBlock() const override { return 1; }
     bool inMemory() const override { return true; }
+    std::uint64_t residentBytes() const override { return memoryBytes(); }
 
     /** Index of one RGB triple in the flat storage. */
     std::size_t index(std::size_t view, std::size_t light, std::size_t texel) const {

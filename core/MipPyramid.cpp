@@ -65,32 +65,51 @@ MipAtlasSource::MipAtlasSource(const BtfSource& base)
 
 void MipAtlasSource::readAbrdfs(const std::size_t* texels, std::size_t count, float* out) const {
     const std::size_t values = imageCount() * 3;
-    // Footprints are read in blocks: a coarse level's texel covers the whole base.
-    const std::size_t block = std::max<std::size_t>(16, _base.abrdfBlockTexels());
-    std::vector<std::size_t> baseTexels;
-    std::vector<float> read(block * values);
-    std::vector<double> sum(values);
+    // The footprints of every requested texel are read together, in chunks of base texels: one
+    // read covers many atlas texels (a source out of core reads a chunk's rows once), and a
+    // coarse level's texel, whose footprint is the whole base, never needs it all at once. Each
+    // texel's sum runs over its footprint in row order, whatever the chunks.
+    const std::size_t chunk = std::max<std::size_t>(
+        std::max<std::size_t>(16, _base.abrdfBlockTexels()),
+        std::min<std::size_t>(std::size_t(1) << 16,
+                              (std::size_t(32) << 20) / std::max<std::size_t>(values * 4, 1)));
+    std::vector<std::size_t> baseTexels, owners;
+    baseTexels.reserve(chunk);
+    owners.reserve(chunk);
+    std::vector<float> read;
+    std::vector<double> sums(count * values, 0.0);
+    const auto flush = [&] {
+        read.resize(baseTexels.size() * values);
+        _base.readAbrdfs(baseTexels.data(), baseTexels.size(), read.data());
+        for (std::size_t i = 0; i < baseTexels.size(); ++i) {
+            double* sum = sums.data() + owners[i] * values;
+            const float* value = read.data() + i * values;
+            for (std::size_t v = 0; v < values; ++v) sum[v] += value[v];
+        }
+        baseTexels.clear();
+        owners.clear();
+    };
     for (std::size_t t = 0; t < count; ++t) {
         const int x = int(texels[t] % std::size_t(_width)),
                   y = int(texels[t] / std::size_t(_width));
         int x0, y0, x1, y1;
         _layout.footprint(x, y, x0, y0, x1, y1);
-        std::fill(sum.begin(), sum.end(), 0.0);
-        baseTexels.clear();
-        const auto flush = [&] {
-            _base.readAbrdfs(baseTexels.data(), baseTexels.size(), read.data());
-            for (std::size_t i = 0; i < baseTexels.size(); ++i)
-                for (std::size_t v = 0; v < values; ++v) sum[v] += read[i * values + v];
-            baseTexels.clear();
-        };
         for (int by = y0; by < y1; ++by)
             for (int bx = x0; bx < x1; ++bx) {
                 baseTexels.push_back(std::size_t(by) * std::size_t(_base.width()) + bx);
-                if (baseTexels.size() == block) flush();
+                owners.push_back(t);
+                if (baseTexels.size() == chunk) flush();
             }
-        if (!baseTexels.empty()) flush();
+    }
+    if (!baseTexels.empty()) flush();
+    for (std::size_t t = 0; t < count; ++t) {
+        const int x = int(texels[t] % std::size_t(_width)),
+                  y = int(texels[t] / std::size_t(_width));
+        int x0, y0, x1, y1;
+        _layout.footprint(x, y, x0, y0, x1, y1);
         const double n = double(x1 - x0) * double(y1 - y0);
-        for (std::size_t v = 0; v < values; ++v) out[t * values + v] = float(sum[v] / n);
+        for (std::size_t v = 0; v < values; ++v)
+            out[t * values + v] = float(sums[t * values + v] / n);
     }
 }
 

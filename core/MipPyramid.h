@@ -70,6 +70,7 @@ public:
     std::size_t abrdfBlockTexels() const override { return _base.abrdfBlockTexels(); }
     std::size_t imageBlock() const override { return _base.imageBlock(); }
     bool inMemory() const override { return false; }
+    std::uint64_t residentBytes() const override { return _base.residentBytes(); }
 
 private:
     const BtfSource& _base;

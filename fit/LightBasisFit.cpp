@@ -48,13 +48,68 @@ std::size_t fitWorkers(const BtfSource& btf, bool perView) {
 }
 }  // namespace
 
+/** Texels per coefficient product (and, for data not in memory, per read): the same blocks on
+ *  both paths, so that they give the same coefficients bit for bit. */
+constexpr std::size_t kTexelBlock = 4096;
+
+namespace {
+/** Data not in memory is read in texel blocks when a block of every image is smaller than a
+ *  view's images (a one-view capture of any size); factored data of many views (a UBO2014 file:
+ *  151 views) stays with image reads of a view. */
+bool fitsInTexelBlocks(const BtfSource& btf) {
+    return !btf.inMemory() && kTexelBlock * btf.viewCount() < btf.texelCount();
+}
+}  // namespace
+
 std::uint64_t lightBasisFitWorkingBytes(const BtfSource& btf, bool perView) {
+    if (fitsInTexelBlocks(btf))
+        // A block of texels' values (every image) per worker.
+        return std::uint64_t(std::max(1, tbb::this_task_arena::max_concurrency())) * kTexelBlock *
+               btf.imageCount() * 3 * sizeof(float);
     return std::uint64_t(fitWorkers(btf, perView)) * btf.texelCount() * 3 * btf.lightCount() *
            sizeof(float);
 }
 
+namespace {
+/** The fit of data not in memory (an out-of-core capture, factored data): texel block by texel
+ *  block, every slot of a block from one read, so that memory holds blocks, never a view. */
+void fitLightBasisInBlocks(const BtfSource& btf, const LightBasisDesign& design, bool perView,
+                           std::size_t frontView, const std::string& label,
+                           const LightBasisStore& store) {
+    const std::size_t texels = btf.texelCount(), lights = btf.lightCount();
+    const std::size_t perTexel = btf.imageCount() * 3;
+    const int slots = perView ? int(btf.viewCount()) : 1;
+    const std::size_t blocks = (texels + kTexelBlock - 1) / kTexelBlock;
+    Progress progress(label, texels);
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+        const std::size_t first = b * kTexelBlock, count = std::min(kTexelBlock, texels - first);
+        std::vector<float> abrdfs(count * perTexel);
+        btf.readAbrdfRange(first, count, abrdfs.data());
+        // Row 3 t + c, column l: the layout of the in-memory path's image columns.
+        Eigen::MatrixXf y(Eigen::Index(count * 3), Eigen::Index(lights));
+        for (int slot = 0; slot < slots; ++slot) {
+            const std::size_t view = perView ? std::size_t(slot) : frontView;
+            for (std::size_t t = 0; t < count; ++t)
+                for (std::size_t l = 0; l < lights; ++l)
+                    for (std::size_t c = 0; c < 3; ++c)
+                        y(Eigen::Index(t * 3 + c), Eigen::Index(l)) =
+                            abrdfs[t * perTexel + (view * lights + l) * 3 + c];
+            const Eigen::MatrixXd coefficients = y.cast<double>() * design.pinvT;
+            for (std::size_t t = 0; t < count; ++t)
+                store(first + t, slot, coefficients.middleRows(Eigen::Index(t * 3), 3));
+        }
+        progress.advance(count);
+    });
+    progress.finish();
+}
+}  // namespace
+
 void fitLightBasis(const BtfSource& btf, const LightBasisDesign& design, bool perView,
                    std::size_t frontView, const std::string& label, const LightBasisStore& store) {
+    if (fitsInTexelBlocks(btf)) {
+        fitLightBasisInBlocks(btf, design, perView, frontView, label, store);
+        return;
+    }
     const std::size_t texels = btf.texelCount(), lights = btf.lightCount(), rows = texels * 3;
     const int slots = perView ? int(btf.viewCount()) : 1;
     // Images per read: ~16 MiB, at least what the source reads efficiently.
@@ -63,7 +118,7 @@ void fitLightBasis(const BtfSource& btf, const LightBasisDesign& design, bool pe
                                 std::max<std::size_t>(btf.imageBlock(), 1), lights);
     const std::size_t reads = (lights + perRead - 1) / perRead;
     // Texels per coefficient product: the double copy of their rows stays small.
-    const std::size_t texelBlock = 4096;
+    const std::size_t texelBlock = kTexelBlock;
     const std::size_t texelBlocks = (texels + texelBlock - 1) / texelBlock;
 
     Progress progress(label, std::size_t(slots) * lights);

@@ -325,11 +325,13 @@ std::vector<float> upright(const std::vector<float>& stored, int sw, int sh, int
     return out;
 }
 
-/** Decodes an image (the bytes of a file) into bottom-up RGB. destination receives the decoded
- *  size and returns where to write; it throws when the size is wrong, before pixels are decoded. */
-void decodeImage(const std::string& archive, const ImageSetEntry& member,
-                 const std::vector<unsigned char>& bytes, const Curve& curve,
-                 DecodeScratch& scratch, const std::function<Target(int, int)>& destination) {
+/** Decodes an image (the bytes of a file) into `scratch`, top-down as stored: 8-bit images
+ *  without an EXIF rotation as their raw values (bytes8), others as floats through the curve,
+ *  turned upright (floats). `checkSize` receives the upright size and throws when it is wrong,
+ *  before pixels are decoded. */
+DecodedImage decodePixels(const std::string& archive, const ImageSetEntry& member,
+                          const std::vector<unsigned char>& bytes, const Curve& curve,
+                          DecodeScratch& scratch, const std::function<void(int, int)>& checkSize) {
     const std::string where = "member '" + member.name + "'";
     // OpenEXR's C++ reader (OpenImageIO's) allocates chunk offset tables sized from the header as
     // it opens a file; the headers are checked against the member's size first.
@@ -346,46 +348,59 @@ void decodeImage(const std::string& archive, const ImageSetEntry& member,
     int orientation = spec.orientation;
     if (orientation < 1 || orientation > 8) orientation = 1;
     const bool swapsAxes = orientation >= 5 && orientation <= 8;
-    const int width = swapsAxes ? spec.height : spec.width;
-    const int height = swapsAxes ? spec.width : spec.height;
-    const Target target = destination(width, height);
+    DecodedImage out;
+    out.width = swapsAxes ? spec.height : spec.width;
+    out.height = swapsAxes ? spec.width : spec.height;
+    checkSize(out.width, out.height);
 
     const int storedW = spec.width, storedH = spec.height;
-    const int channels = std::min(spec.channels, 3);
+    out.channels = std::min(spec.channels, 3);
     const std::size_t pixels = std::size_t(storedW) * storedH;
-    const bool is8bit = spec.eightBit;
-    const bool isFloat = spec.floating;
     bool ok;
-    if (is8bit && orientation == 1) {
+    if (spec.eightBit && orientation == 1) {
         // Native reads of all channels: OpenImageIO 2.4's converting read allocates a 64 MiB
         // scanline buffer per call, which dominated small-image loads (and crawled under ASan).
         const int fileChannels = spec.channels;
         scratch.bytes8.resize(pixels * fileChannels);
         ok = input->readBytes(scratch.bytes8.data());
-        if (ok && fileChannels != channels) {
+        if (ok && fileChannels != out.channels) {
             for (std::size_t p = 0; p < pixels; ++p)
-                for (int c = 0; c < channels; ++c)
-                    scratch.bytes8[p * channels + c] = scratch.bytes8[p * fileChannels + c];
-            scratch.bytes8.resize(pixels * channels);
+                for (int c = 0; c < out.channels; ++c)
+                    scratch.bytes8[p * out.channels + c] = scratch.bytes8[p * fileChannels + c];
+            scratch.bytes8.resize(pixels * out.channels);
         }
-        if (ok && target.f)
-            storeRows(scratch.bytes8.data(), storedW, storedH, channels, target,
-                      [&](unsigned char v) { return curve.byte(v); });
-        else if (ok)
-            storeRows(scratch.bytes8.data(), storedW, storedH, channels, target,
-                      [&](unsigned char v) { return curve.byteHalf(v); });
+        out.bytes = scratch.bytes8.data();
     } else {
-        scratch.floats.resize(pixels * channels);
-        ok = input->readFloats(channels, scratch.floats.data());
-        if (ok && !isFloat)
+        scratch.floats.resize(pixels * out.channels);
+        ok = input->readFloats(out.channels, scratch.floats.data());
+        if (ok && !spec.floating)
             for (float& v : scratch.floats) v = curve.apply(v);
         if (ok && orientation != 1)
-            scratch.floats = upright(scratch.floats, storedW, storedH, channels, orientation);
-        if (ok)
-            storeRows(scratch.floats.data(), width, height, channels, target,
-                      [](float v) { return v; });
+            scratch.floats = upright(scratch.floats, storedW, storedH, out.channels, orientation);
+        out.floats = scratch.floats.data();
     }
     if (!ok) fail(archive, where + ": corrupt image: " + input->error());
+    return out;
+}
+
+/** Decodes an image (the bytes of a file) into bottom-up RGB. destination receives the decoded
+ *  size and returns where to write; it throws when the size is wrong, before pixels are decoded. */
+void decodeImage(const std::string& archive, const ImageSetEntry& member,
+                 const std::vector<unsigned char>& bytes, const Curve& curve,
+                 DecodeScratch& scratch, const std::function<Target(int, int)>& destination) {
+    Target target;
+    const DecodedImage image =
+        decodePixels(archive, member, bytes, curve, scratch,
+                     [&](int width, int height) { target = destination(width, height); });
+    if (image.bytes && target.f)
+        storeRows(image.bytes, image.width, image.height, image.channels, target,
+                  [&](unsigned char v) { return curve.byte(v); });
+    else if (image.bytes)
+        storeRows(image.bytes, image.width, image.height, image.channels, target,
+                  [&](unsigned char v) { return curve.byteHalf(v); });
+    else
+        storeRows(image.floats, image.width, image.height, image.channels, target,
+                  [](float v) { return v; });
 }
 
 }  // namespace
@@ -482,6 +497,83 @@ MeasuredBtf decodeImageSet(const ImageSetSource& source, const std::vector<Image
     progress.finish();
     btf.decoding = decodeCurveLabel(decode);
     return btf;
+}
+
+ImageSetHeader readImageSetHeader(const ImageSetSource& source, const ImageSetEntry& entry) {
+    const std::vector<unsigned char> bytes = source._impl->read(entry);
+    if (entry.extension == "exr")
+        readExrPartSizes(source.path() + ": member '" + entry.name + "'", bytes.data(),
+                         bytes.size());
+    std::string error;
+    const std::unique_ptr<ImageReader> input = imageCodecs().openBytes(
+        bytes.data(), bytes.size(), entry.extension, imageSetBasename(entry.name), error);
+    if (!input) fail(source.path(), "member '" + entry.name + "': not a decodable image: " + error);
+    const ImageHeader& spec = input->header();
+    if (spec.channels < 1 || spec.width <= 0 || spec.height <= 0 || spec.depth > 1)
+        fail(source.path(), "member '" + entry.name + "': unsupported image layout");
+    const int orientation = spec.orientation < 1 || spec.orientation > 8 ? 1 : spec.orientation;
+    const bool swapsAxes = orientation >= 5;
+    ImageSetHeader header;
+    header.width = swapsAxes ? spec.height : spec.width;
+    header.height = swapsAxes ? spec.width : spec.height;
+    header.rawBytes = spec.eightBit && orientation == 1;
+    return header;
+}
+
+std::array<float, 256> decodeTable(LoadOptions::DecodeCurve decode) {
+    const Curve curve(decode);
+    std::array<float, 256> table;
+    for (int i = 0; i < 256; ++i) table[std::size_t(i)] = curve.byte((unsigned char)i);
+    return table;
+}
+
+void decodeEachImage(const ImageSetSource& source, const std::vector<ImageSetEntry>& entries,
+                     LoadOptions::DecodeCurve decode, const std::string& label,
+                     const std::function<void(const ImageSetEntry&, int, int)>& checkSize,
+                     const std::function<void(const ImageSetEntry&, const DecodedImage&)>& store) {
+    const std::string& path = source.path();
+    const Curve curve(decode);
+    std::vector<const ImageSetEntry*> order;
+    for (const ImageSetEntry& m : entries) order.push_back(&m);
+    std::sort(order.begin(), order.end(), [](const ImageSetEntry* a, const ImageSetEntry* b) {
+        return a->zipIndex < b->zipIndex;
+    });
+    Progress progress(label, entries.size());
+    tbb::enumerable_thread_specific<DecodeScratch> scratches;
+    struct Job {
+        const ImageSetEntry* member;
+        std::vector<unsigned char> bytes;
+    };
+    std::size_t next = 0;
+    std::uint64_t mostBytes = 0;  // from the first image's size, as decodeImageSet bounds them
+    // One image in flight per worker and one being read: the memory is a few decoded images,
+    // whatever the number of photos.
+    const std::size_t tokens = std::size_t(tbb::this_task_arena::max_concurrency()) + 1;
+    tbb::parallel_pipeline(
+        tokens, tbb::make_filter<void, std::shared_ptr<Job>>(
+                    tbb::filter_mode::serial_in_order,
+                    [&](tbb::flow_control& control) -> std::shared_ptr<Job> {
+                        if (next == order.size()) {
+                            control.stop();
+                            return nullptr;
+                        }
+                        auto job = std::make_shared<Job>();
+                        job->member = order[next++];
+                        job->bytes = source._impl->read(*job->member, mostBytes);
+                        return job;
+                    }) &
+                    tbb::make_filter<std::shared_ptr<Job>, void>(
+                        tbb::filter_mode::parallel, [&](const std::shared_ptr<Job>& job) {
+                            const ImageSetEntry& m = *job->member;
+                            DecodeScratch& scratch = scratches.local();
+                            const DecodedImage image =
+                                decodePixels(path, m, job->bytes, curve, scratch,
+                                             [&](int w, int h) { checkSize(m, w, h); });
+                            job->bytes = {};
+                            store(m, image);
+                            progress.advance();
+                        }));
+    progress.finish();
 }
 
 }  // namespace osgBTF

@@ -4,7 +4,9 @@
 // parallel into a MeasuredBtf.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -24,6 +26,22 @@ struct ImageSetEntry {
     int view = -1, light = -1;
 };
 
+/** One decoded image as stored in its file: rows top-down, `channels` (1 to 3; 1 is gray) values
+ *  per pixel. 8-bit images without an EXIF rotation keep their raw values in `bytes` (the decode
+ *  curve not applied: decodeTable gives it); every other image is in `floats`, through the curve
+ *  and turned upright. Points into the decoder's scratch: valid during the call that gets it. */
+struct DecodedImage {
+    int width = 0, height = 0, channels = 0;
+    const unsigned char* bytes = nullptr;
+    const float* floats = nullptr;
+};
+
+/** What an image's header says, read without decoding its pixels. */
+struct ImageSetHeader {
+    int width = 0, height = 0;  ///< upright (EXIF orientation applied)
+    /** 8-bit without an EXIF rotation: decodeEachImage gives its raw bytes. */
+    bool rawBytes = false;
+};
 /** The files of a zip archive or of a folder (searched recursively), without what archivers add
  *  (`__MACOSX/`, `._*`, folder entries). Reading is serial (libzip is not thread-safe on one
  *  archive). Throws Error naming the path when it cannot be opened or listed. */
@@ -43,12 +61,34 @@ public:
 
 private:
     class Impl;
+    friend void decodeEachImage(
+        const ImageSetSource&, const std::vector<ImageSetEntry>&, LoadOptions::DecodeCurve,
+        const std::string&, const std::function<void(const ImageSetEntry&, int, int)>&,
+        const std::function<void(const ImageSetEntry&, const DecodedImage&)>&);
+    friend ImageSetHeader readImageSetHeader(const ImageSetSource&, const ImageSetEntry&);
     friend MeasuredBtf decodeImageSet(const ImageSetSource&, const std::vector<ImageSetEntry>&,
                                       const DirectionSet&, const DirectionSet&, const LoadOptions&,
                                       LoadOptions::DecodeCurve);
     std::string _path;
     std::unique_ptr<Impl> _impl;
 };
+
+/** Reads the header of `entry` (its file's bytes are read, its pixels not decoded). Throws Error
+ *  naming the source and the entry for what is not a decodable image. */
+ImageSetHeader readImageSetHeader(const ImageSetSource& source, const ImageSetEntry& entry);
+
+/** The linear value decodeImageSet stores for each 8-bit code under `decode`. */
+std::array<float, 256> decodeTable(LoadOptions::DecodeCurve decode);
+
+/** Decodes `entries` in parallel, one image per worker at a time (memory: a few decoded images
+ *  whatever their number), with a progress bar under `label`. `checkSize(entry, w, h)` sees each
+ *  image's upright size before its pixels are decoded (it throws to refuse one); `store` gets each
+ *  decoded image, from the decoding thread (several at once, distinct entries). Errors name the
+ *  source's path and the entry, as decodeImageSet's. */
+void decodeEachImage(const ImageSetSource& source, const std::vector<ImageSetEntry>& entries,
+                     LoadOptions::DecodeCurve decode, const std::string& label,
+                     const std::function<void(const ImageSetEntry&, int, int)>& checkSize,
+                     const std::function<void(const ImageSetEntry&, const DecodedImage&)>& store);
 
 /** `text` with ASCII letters in lower case (file names and extensions). */
 std::string asciiLower(std::string text);

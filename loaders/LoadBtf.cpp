@@ -77,6 +77,7 @@ std::unique_ptr<BtfSource> openBtfSource(const std::string& path, const LoadOpti
         return std::make_unique<FactoredBtfSource>(
             std::shared_ptr<const FactoredBtf>(std::move(factors)));
     }
+    if (isRtiCapture(path)) return openRtiCapture(path, options);
     return std::make_unique<MeasuredBtf>(loadMeasuredBtf(path, options));
 }
 

@@ -20,7 +20,8 @@ MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options 
 
 /** Opens measured data for fitting and comparing: a UBO2014 file stays factored (a
  *  FactoredBtfSource that decodes the blocks a method reads; the factors are ~1/200 of the
- *  values of a full-size file), anything else is loaded with loadMeasuredBtf. Same errors. */
+ *  values of a full-size file), an RTI set goes through openRtiCapture (out of core when it is
+ *  large: options.placement), anything else is loaded with loadMeasuredBtf. Same errors. */
 std::unique_ptr<BtfSource> openBtfSource(const std::string& path, const LoadOptions& options = {});
 
 /** Whether loadMeasuredBtf would read `path` as a UBO2014 file: a file (not a folder) named

@@ -19,6 +19,14 @@ struct LoadOptions {
     enum class DecodeCurve { Auto, Linear, Srgb, Gamma22 };
     DecodeCurve curve = DecodeCurve::Auto;
 
+    /** Where openBtfSource keeps an RTI capture's values: Memory (a MeasuredBtf), Disk (decoded
+     *  once to a temporary file and read back in blocks: OutOfCoreImageSet, for captures larger
+     *  than memory), or Auto, the default: Memory when its values take at most a quarter of the
+     *  memory limit, else Disk. The tools' --storage disk; loadMeasuredBtf always reads into
+     *  memory. */
+    enum class Placement { Auto, Memory, Disk };
+    Placement placement = Placement::Auto;
+
     /** Label of the progress bar (osgBTF::Progress draws only when enabled globally); empty means
      *  "loading <file name>". */
     std::string progressLabel;

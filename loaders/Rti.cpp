@@ -13,6 +13,7 @@
 #include "core/Error.h"
 #include "core/SizeGuard.h"
 #include "loaders/ImageSet.h"
+#include "loaders/OutOfCoreImageSet.h"
 #include "loaders/Ubo2003.h"
 
 namespace osgBTF {
@@ -137,7 +138,17 @@ bool isRtiCapture(const std::string& path) {
     }
 }
 
-MeasuredBtf loadRti(const std::string& path, const LoadOptions& options) {
+namespace {
+
+/** An RTI set's images, found: what both loadRti and openRtiCapture decode. */
+struct RtiImages {
+    std::unique_ptr<ImageSetSource> source;
+    std::vector<ImageSetEntry> entries;
+    DirectionSet views, lights;
+    LoadOptions::DecodeCurve curve = LoadOptions::DecodeCurve::Srgb;
+};
+
+RtiImages findRtiImages(const std::string& path, const LoadOptions& options) {
     std::error_code ec;
     const bool lpGiven = fs::is_regular_file(path, ec) && endsWithLp(path);
     // The images come from the .lp file's folder (a given .lp), or from the folder or zip given.
@@ -145,7 +156,9 @@ MeasuredBtf loadRti(const std::string& path, const LoadOptions& options) {
                                                  ? std::string(".")
                                                  : fs::path(path).parent_path().string()
                                            : path;
-    ImageSetSource source(sourcePath);
+    RtiImages found;
+    found.source = std::make_unique<ImageSetSource>(sourcePath);
+    const ImageSetSource& source = *found.source;
     std::string lpName;  // the .lp file's entry name in the source
     if (lpGiven) {
         lpName = fs::path(path).filename().string();
@@ -184,7 +197,7 @@ MeasuredBtf loadRti(const std::string& path, const LoadOptions& options) {
         byPath[entry.first] = entry;
         byName[imageSetBasename(entry.first)].push_back(entry);
     }
-    std::vector<ImageSetEntry> entries;
+    std::vector<ImageSetEntry>& entries = found.entries;
     std::vector<Direction> directions;
     for (std::size_t i = 0; i < lights.size(); ++i) {
         const RtiLight& light = lights[i];
@@ -215,14 +228,65 @@ MeasuredBtf loadRti(const std::string& path, const LoadOptions& options) {
         entries.push_back(entry);
         directions.push_back(Direction::fromVector(light.direction));
     }
-    const DirectionSet views("rti-view", {{0, 0}});
-    const DirectionSet lightSet("rti-lights", std::move(directions));
+    found.views = DirectionSet("rti-view", {{0, 0}});
+    found.lights = DirectionSet("rti-lights", std::move(directions));
     // Camera photos are sRGB-encoded unless the caller says otherwise.
-    const LoadOptions::DecodeCurve curve = options.curve == LoadOptions::DecodeCurve::Auto
-                                               ? LoadOptions::DecodeCurve::Srgb
-                                               : options.curve;
-    MeasuredBtf btf = decodeImageSet(source, entries, views, lightSet, options, curve);
+    found.curve = options.curve == LoadOptions::DecodeCurve::Auto ? LoadOptions::DecodeCurve::Srgb
+                                                                  : options.curve;
+    return found;
+}
+
+}  // namespace
+
+MeasuredBtf loadRti(const std::string& path, const LoadOptions& options) {
+    const RtiImages found = findRtiImages(path, options);
+    MeasuredBtf btf = decodeImageSet(*found.source, found.entries, found.views, found.lights,
+                                     options, found.curve);
     btf.source = path;
+    return btf;
+}
+
+RtiCaptureHeader readRtiCaptureHeader(const std::string& path, const LoadOptions& options) {
+    const RtiImages found = findRtiImages(path, options);
+    const ImageSetHeader first = readImageSetHeader(*found.source, found.entries.front());
+    RtiCaptureHeader header;
+    header.width = first.width;
+    header.height = first.height;
+    header.rawBytes = first.rawBytes;
+    header.lights = found.lights;
+    header.decoding = decodeCurveLabel(found.curve);
+    return header;
+}
+
+bool rtiCaptureOnDisk(int width, int height, std::size_t lights, const LoadOptions& options) {
+    switch (options.placement) {
+        case LoadOptions::Placement::Disk:
+            return true;
+        case LoadOptions::Placement::Memory:
+            return false;
+        case LoadOptions::Placement::Auto:
+            break;
+    }
+    // A quarter: the fits hold their model and working blocks beside the measured values.
+    return MeasuredBtf::bytesNeeded(width, height, 1, lights, options.storage) > memoryLimit() / 4;
+}
+
+std::unique_ptr<BtfSource> openRtiCapture(const std::string& path, const LoadOptions& options) {
+    const RtiImages found = findRtiImages(path, options);
+    const ImageSetHeader first = readImageSetHeader(*found.source, found.entries.front());
+    if (!rtiCaptureOnDisk(first.width, first.height, found.lights.size(), options)) {
+        auto btf = std::make_unique<MeasuredBtf>(decodeImageSet(
+            *found.source, found.entries, found.views, found.lights, options, found.curve));
+        btf->source = path;
+        return btf;
+    }
+    const std::string label =
+        options.progressLabel.empty()
+            ? "decoding " + std::to_string(found.entries.size()) + " photos to " + outOfCoreFolder()
+            : options.progressLabel;
+    auto btf = std::make_unique<OutOfCoreImageSet>(*found.source, found.entries, found.views,
+                                                   found.lights, found.curve, label);
+    btf->source = path;
     return btf;
 }
 

@@ -4,6 +4,7 @@
 // BTF of one view (formats.md section 7).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -41,5 +42,23 @@ bool isRtiCapture(const std::string& path);
  *  unless options.curve says otherwise. Throws Error naming the file (and line) for a malformed
  *  .lp, a missing or ambiguous image, images of different sizes, a corrupt image. */
 MeasuredBtf loadRti(const std::string& path, const LoadOptions& options = {});
+
+/** What an RTI set is, from its light file and its first photo's header: nothing decoded. */
+struct RtiCaptureHeader {
+    int width = 0, height = 0;
+    bool rawBytes = false;  ///< 8-bit photos (kept as bytes when out of core)
+    DirectionSet lights;
+    std::string decoding;  ///< the decode curve's label
+};
+RtiCaptureHeader readRtiCaptureHeader(const std::string& path, const LoadOptions& options = {});
+
+/** Whether openRtiCapture keeps a capture of this size out of core under `options`. */
+bool rtiCaptureOnDisk(int width, int height, std::size_t lights, const LoadOptions& options);
+
+/** Opens an RTI set for fitting: in memory as loadRti does when options.placement says Memory, or
+ *  says Auto and its floats take at most a quarter of the memory limit; else out of core (an
+ *  OutOfCoreImageSet: the photos decoded once to a temporary file, read back in blocks). Same
+ *  errors as loadRti. */
+std::unique_ptr<BtfSource> openRtiCapture(const std::string& path, const LoadOptions& options = {});
 
 }  // namespace osgBTF

@@ -214,7 +214,7 @@ RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
 
 // ---- the registry ------------------------------------------------------------------------------
 
-std::map<std::string, RelightBuilder>& registry() {
+std::map<std::string, RelightBuilder>& relightBuilders() {
     static std::map<std::string, RelightBuilder> builders;
     return builders;
 }
@@ -290,14 +290,14 @@ RelightPlanes readRelightPlanes(const std::string& infoPath) {
 
 bool registerRelightType(const std::string& type, RelightBuilder builder) {
     std::lock_guard<std::mutex> lock(registryMutex());
-    registry()[type] = std::move(builder);
+    relightBuilders()[type] = std::move(builder);
     return true;
 }
 
 std::vector<std::string> relightTypes() {
     std::lock_guard<std::mutex> lock(registryMutex());
     std::vector<std::string> types;
-    for (const auto& entry : registry()) types.push_back(entry.first);
+    for (const auto& entry : relightBuilders()) types.push_back(entry.first);
     return types;
 }
 
@@ -305,10 +305,10 @@ namespace {
 
 RelightBuilder builderFor(const std::string& infoPath, const std::string& type) {
     std::lock_guard<std::mutex> lock(registryMutex());
-    const auto it = registry().find(type);
-    if (it != registry().end()) return it->second;
+    const auto it = relightBuilders().find(type);
+    if (it != relightBuilders().end()) return it->second;
     std::string known;
-    for (const auto& entry : registry()) known += (known.empty() ? "" : ", ") + entry.first;
+    for (const auto& entry : relightBuilders()) known += (known.empty() ? "" : ", ") + entry.first;
     fail(infoPath, "type '" + type + "' is not read (" + known + " are)");
 }
 

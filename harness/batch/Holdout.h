@@ -38,6 +38,7 @@ public:
     std::size_t abrdfBlockTexels() const override { return _parent.abrdfBlockTexels(); }
     std::size_t imageBlock() const override { return 1; }
     bool inMemory() const override { return _parent.inMemory(); }
+    std::uint64_t residentBytes() const override { return _parent.residentBytes(); }
 
 private:
     const BtfSource& _parent;

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 
+#include <tbb/task_arena.h>
+
 #include "core/Error.h"
 #include "core/LowRank.h"
 #include "core/Progress.h"
@@ -50,6 +52,20 @@ osg::ref_ptr<FmfMaterial> FmfMaterial::fit(const BtfSource& btf, const FitOption
         }
     };
     StreamedSvdOptions svdOptions;
+    // What the streamed SVD holds (core/LowRank.cpp): on the Gram path four partial texels x
+    // texels sums and the total, in double; on the randomised path A^T Y (texels x (rank +
+    // oversampling)) as four float partial sums, their double total and the basis; beside them one
+    // block of images per worker, read and de-interleaved.
+    const std::uint64_t sketch = std::min<std::uint64_t>(
+        std::uint64_t(components) + std::uint64_t(svdOptions.oversampling), rows);
+    const std::uint64_t workers =
+        std::uint64_t(std::max(1, tbb::this_task_arena::max_concurrency()));
+    checkMemoryBeside(btf,
+                      (texels <= svdOptions.gramColumns ? std::uint64_t(texels) * texels * 8 * 5
+                                                        : std::uint64_t(texels) * sketch * 32) +
+                          workers * std::uint64_t(blockImages) * texels * 3 * sizeof(float) * 2,
+                      "fmf: the streamed SVD of " + std::to_string(rows) + " x " +
+                          std::to_string(texels) + " values");
     Progress progress(
         "fmf: factorising " + std::to_string(rows) + " x " + std::to_string(texels) + " values",
         rows * std::size_t(svdOptions.passes(texels)));

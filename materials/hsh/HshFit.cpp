@@ -25,10 +25,11 @@ osg::ref_ptr<HshMaterial> HshMaterial::fit(const BtfSource& btf, const FitOption
     const std::size_t front = frontViewOf(btf.views());
     const int slots = shape.perView ? int(btf.viewCount()) : 1;
     const int terms = shape.order * shape.order;
-    checkMemory(std::uint64_t(btf.texelCount()) * std::size_t(slots) * std::size_t(terms) * 3 *
-                        sizeof(float) +
-                    lightBasisFitWorkingBytes(btf, shape.perView),
-                "hsh: the model and the images of the views fitted at once");
+    checkMemoryBeside(btf,
+                      std::uint64_t(btf.texelCount()) * std::size_t(slots) * std::size_t(terms) *
+                              3 * sizeof(float) +
+                          lightBasisFitWorkingBytes(btf, shape.perView),
+                      "hsh: the model and the images of the views fitted at once");
     osg::ref_ptr<HshMaterial> m =
         create(btf.width(), btf.height(), btf.views(), btf.lights(), shape, front);
 

@@ -294,8 +294,8 @@ osg::ref_ptr<LpcaMaterial> LpcaFitter::run(const BtfSource& btf, const LpcaSetti
         train.resize(trainCount);
         std::sort(train.begin(), train.end());
     }
-    checkMemory(std::uint64_t(train.size()) * dims * sizeof(float),
-                "lpca: the ABRDFs of " + std::to_string(train.size()) + " training texels");
+    checkMemoryBeside(btf, std::uint64_t(train.size()) * dims * sizeof(float),
+                      "lpca: the ABRDFs of " + std::to_string(train.size()) + " training texels");
     RowMatrix x;
     gatherRows(btf, train.data(), train.size(), x);
     const Eigen::VectorXf norms2 = x.rowwise().squaredNorm();

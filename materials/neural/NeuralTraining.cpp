@@ -106,8 +106,8 @@ void train(const BtfSource& btf, const OptionValues& o, NeuralMaterial& m) {
     const std::size_t blocks = (texels + blockTexels - 1) / blockTexels;
     const int stepsPerBlock = int(
         std::clamp<std::int64_t>(std::int64_t(steps) / std::int64_t(blocks), 1, kStepsPerBlock));
-    checkMemory(blockTexels * texelBytes + std::uint64_t(texels) * latentSize * 4 * 4,
-                "neural: a block of ABRDFs and the latents");
+    checkMemoryBeside(btf, blockTexels * texelBytes + std::uint64_t(texels) * latentSize * 4 * 4,
+                      "neural: a block of ABRDFs and the latents");
 
     // Intra-op threads: the option's count, 0 every core. The batch is drawn on this thread; the
     // same seed gave the same material at 1 and 2 threads (README). One by default: a step's

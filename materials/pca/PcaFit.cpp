@@ -10,6 +10,7 @@
 
 #include <Imath/half.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "core/Error.h"
 #include "core/LowRank.h"
@@ -86,10 +87,15 @@ osg::ref_ptr<PcaMaterial> PcaMaterial::fit(const BtfSource& btf, const FitOption
     // 8-bit Eigen-Textures are held as bytes: a quarter of the memory of floats (1.2 GB instead
     // of 4.6 for a full-size UBO2014 file at 16 components).
     const bool bytes = storage == MaterialTexture::UNorm8;
-    checkMemory(std::uint64_t(m->eigenTextures.valueCount()) * (bytes ? 1 : sizeof(float)) +
-                    std::uint64_t(m->weights.valueCount()) * sizeof(float),
-                "pca: " + std::to_string(components) + " Eigen-Textures for each of " +
-                    std::to_string(btf.viewCount()) + " views");
+    // Beside it, each worker holds one view's images as floats (rows x lights) and their SVD.
+    const std::uint64_t workers = std::min<std::uint64_t>(
+        btf.viewCount(), std::uint64_t(std::max(1, tbb::this_task_arena::max_concurrency())));
+    checkMemoryBeside(btf,
+                      std::uint64_t(m->eigenTextures.valueCount()) * (bytes ? 1 : sizeof(float)) +
+                          std::uint64_t(m->weights.valueCount()) * sizeof(float) +
+                          workers * std::uint64_t(rows) * lights * sizeof(float),
+                      "pca: " + std::to_string(components) + " Eigen-Textures for each of " +
+                          std::to_string(btf.viewCount()) + " views");
     if (bytes)
         m->eigenTextures.bytes.assign(m->eigenTextures.valueCount(), 0);
     else

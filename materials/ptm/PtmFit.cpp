@@ -73,7 +73,7 @@ osg::ref_ptr<PtmMaterial> PtmMaterial::fit(const BtfSource& btf, const FitOption
     const std::size_t layers = shape.luminance ? 2 : kTerms;
     const std::uint64_t modelBytes = std::uint64_t(btf.texelCount()) * std::size_t(slots) *
                                      (layers * 3 + (shape.luminance ? 3 : 0)) * sizeof(float);
-    checkMemory(modelBytes + lightBasisFitWorkingBytes(btf, shape.perView),
+    checkMemoryBeside(btf, modelBytes + lightBasisFitWorkingBytes(btf, shape.perView),
                 "ptm: the model and the images of the views fitted at once");
     osg::ref_ptr<PtmMaterial> m =
         create(btf.width(), btf.height(), btf.views(), btf.lights(), shape, front);

@@ -15,7 +15,7 @@ namespace osgBTF::tool {
 /** Options every subcommand that reads a measured BTF shares. */
 struct CommonOptions {
     std::string memoryLimit;
-    std::string storage = "float";
+    std::string storage = "auto";
     std::string decode = "auto";
     LoadOptions loadOptions() const;
 };

@@ -19,6 +19,8 @@
 #include "core/MeasuredBtf.h"
 #include "core/Progress.h"
 #include "loaders/LoadBtf.h"
+#include "loaders/OutOfCoreImageSet.h"
+#include "loaders/Rti.h"
 #include "loaders/Ubo2014.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
@@ -113,6 +115,26 @@ ValueStats scan(const FactoredBtf& f, const std::string& label) {
     ValueStats s;
     for (const ValueStats& p : partial) s.merge(p);
     s.perChannel = texels * images;
+    return s;
+}
+
+/** Every value of a source read texel block by texel block (an out-of-core capture). */
+ValueStats scan(const BtfSource& source, const std::string& label) {
+    const std::size_t texels = source.texelCount(), perTexel = source.imageCount() * 3;
+    const std::size_t block = std::max<std::size_t>(1, source.abrdfBlockTexels());
+    tbb::enumerable_thread_specific<ValueStats> partial;
+    Progress progress(label, texels);
+    tbb::parallel_for(std::size_t(0), (texels + block - 1) / block, [&](std::size_t b) {
+        const std::size_t first = b * block, count = std::min(block, texels - first);
+        std::vector<float> values(count * perTexel);
+        source.readAbrdfRange(first, count, values.data());
+        partial.local().add(values.data(), values.size());
+        progress.advance(count);
+    });
+    progress.finish();
+    ValueStats s;
+    for (const ValueStats& p : partial) s.merge(p);
+    s.perChannel = texels * source.imageCount();
     return s;
 }
 
@@ -260,6 +282,65 @@ void infoFactored(const std::string& input, bool json, bool stats, LoadOptions l
     }
 }
 
+/** btf info on an RTI capture kept out of core: the light file and the first photo's header,
+ *  nothing decoded unless `stats` (then every photo, through the out-of-core source). */
+void infoLargeCapture(const std::string& input, const RtiCaptureHeader& h, bool json, bool stats,
+                      const LoadOptions& load) {
+    const std::size_t lights = h.lights.size();
+    const std::uint64_t floats =
+        MeasuredBtf::bytesNeeded(h.width, h.height, 1, lights, Storage::Float);
+    const std::uint64_t disk =
+        OutOfCoreImageSet::diskBytesNeeded(h.width, h.height, lights, h.rawBytes);
+    const DirectionSet view("rti-view", {{0, 0}});
+    nlohmann::json out = {
+        {"file", input},
+        {"width", h.width},
+        {"height", h.height},
+        {"views", directionJson(view)},
+        {"lights", directionJson(h.lights)},
+        {"storage", "disk"},
+        {"float_bytes", floats},
+        {"disk_bytes", disk},
+        {"raw_8bit_bytes", std::uint64_t(h.width) * h.height * lights * 3},
+        {"decoded", h.decoding},
+    };
+    if (stats) {
+        LoadOptions onDisk = load;
+        onDisk.placement = LoadOptions::Placement::Disk;
+        const std::unique_ptr<BtfSource> source = openRtiCapture(input, onDisk);
+        scan(*source, "statistics of " + std::filesystem::path(input).filename().string())
+            .toJson(out);
+    }
+    if (json) {
+        std::cout << out.dump(2) << "\n";
+        return;
+    }
+    std::cout << std::fixed << std::setprecision(4);
+    std::cout << "file:     " << input << "\n"
+              << "texels:   " << h.width << " x " << h.height << " (" << std::setprecision(1)
+              << double(h.width) * h.height / 1e6 << " megapixels)\n"
+              << std::setprecision(4);
+    for (const char* key : {"views", "lights"}) {
+        const auto& d = out[key];
+        std::cout << (std::string(key) + ":").append(10 - std::string(key).size() - 1, ' ')
+                  << d["count"] << " (" << d["name"].get<std::string>() << ", theta "
+                  << d["theta_min"].get<float>() << " to " << d["theta_max"].get<float>()
+                  << " deg)\n";
+    }
+    std::cout << "images:   " << lights << " photos (from the light file; the first one's header "
+              << "read, no pixel decoded)\n"
+              << "storage:  disk: " << formatBytes(disk) << " decoded into " << outOfCoreFolder()
+              << " when fitted (" << formatBytes(floats)
+              << " as floats, more than a quarter of the memory limit of "
+              << formatBytes(memoryLimit()) << ")\n"
+              << "decoded:  " << h.decoding
+              << " (8/16-bit image values to radiance; --decode to choose)\n";
+    if (stats)
+        printStats(out);
+    else
+        std::cout << "stats:    not computed (--stats decodes every photo)\n";
+}
+
 }  // namespace
 
 Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
@@ -316,7 +397,16 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
             infoFactored(input, options->json, options->stats, common.loadOptions());
             return;
         }
-        const MeasuredBtf btf = loadMeasuredBtf(input, common.loadOptions());
+        const LoadOptions load = common.loadOptions();
+        if (load.placement != LoadOptions::Placement::Memory && isRtiCapture(input)) {
+            // A capture that a fit would keep out of core is described from its headers.
+            const RtiCaptureHeader h = readRtiCaptureHeader(input, load);
+            if (rtiCaptureOnDisk(h.width, h.height, h.lights.size(), load)) {
+                infoLargeCapture(input, h, options->json, options->stats, load);
+                return;
+            }
+        }
+        const MeasuredBtf btf = loadMeasuredBtf(input, load);
         const ValueStats s = scan(btf);
         const std::uint64_t raw8bit =
             std::uint64_t(btf.texelCount()) * btf.viewCount() * btf.lightCount() * 3;

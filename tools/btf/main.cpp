@@ -20,13 +20,22 @@ namespace osgBTF::tool {
 LoadOptions CommonOptions::loadOptions() const {
     LoadOptions options;
     options.storage = storage == "half" ? Storage::Half : Storage::Float;
+    options.placement = storage == "disk"   ? LoadOptions::Placement::Disk
+                        : storage == "auto" ? LoadOptions::Placement::Auto
+                                            : LoadOptions::Placement::Memory;
     options.curve = decodeCurveFromName(decode);
     return options;
 }
 
 void addLoadOptions(CLI::App& command, CommonOptions& common) {
-    command.add_option("--storage", common.storage, "Sample storage in memory: float or half")
-        ->check(CLI::IsMember({"float", "half"}))
+    command
+        .add_option("--storage", common.storage,
+                    "Where measured values are kept: float or half in memory, disk (an RTI "
+                    "capture's photos decoded once to a temporary file in $OSGBTF_CACHE_DIR, "
+                    "$TMPDIR or /tmp and read back in blocks: captures larger than memory), or "
+                    "auto (float in memory when it takes at most a quarter of the memory limit, "
+                    "else disk)")
+        ->check(CLI::IsMember({"auto", "float", "half", "disk"}))
         ->capture_default_str();
     command
         .add_option("--decode", common.decode,
