@@ -77,7 +77,9 @@ std::string shaderOrigin(const std::string& name) {
 }
 
 std::string addShaderDefine(const std::string& source, const std::string& name) {
-    const std::string line = "#define " + name + " 1\n";
+    // "NAME VALUE" defines NAME as VALUE, a bare NAME as 1.
+    const std::string line =
+        "#define " + name + (name.find(' ') == std::string::npos ? " 1\n" : "\n");
     const auto start = source.find_first_not_of(" \t\r\n");
     if (start == std::string::npos || source.compare(start, 8, "#version") != 0)
         return line + source;

@@ -27,8 +27,9 @@ std::string shaderOrigin(const std::string& name);
  *  file on OSG_FILE_PATH still wins. Call before the first use (not thread-safe). */
 void addShaderSource(const std::string& name, const std::string& text);
 
-/** `source` with `#define NAME 1` after its `#version` line (GLSL wants #version first), or at
- *  the top when it has none: how a program variant is made from one source. */
+/** `source` with `#define NAME 1` (`#define NAME VALUE` for a `name` of "NAME VALUE") after its
+ *  `#version` line (GLSL wants #version first), or at the top when it has none: how a program
+ *  variant is made from one source. */
 std::string addShaderDefine(const std::string& source, const std::string& name);
 
 /** Names of all embedded shaders (those built into the library). */

@@ -286,7 +286,7 @@ osg::ref_ptr<osg::StateSet> createCoordinateMapStateSet(const Material& material
                                                         const osg::StateSet& materialState,
                                                         osg::Texture2D* mapTexture) {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    const osg::ref_ptr<osg::Program> program = coordinateMapProgram(material.methodName());
+    const osg::ref_ptr<osg::Program> program = coordinateMapProgram(material);
     stateSet->setAttributeAndModes(program.get(), osg::StateAttribute::ON);
     const int unit = shader::kCoordinateMapUnit;
     if (int(materialState.getTextureAttributeList().size()) > unit)

@@ -122,6 +122,13 @@ public:
 
     /** Textures and uniforms of this material plus the method's shared program. */
     virtual osg::ref_ptr<osg::StateSet> createStateSet() const = 0;
+    /** The `#define`s (a name, or "NAME VALUE") the method's program is compiled with for this
+     *  material: a shape the material keeps for its life (ptm's colour and view models, hsh's
+     *  order) as a compile-time choice instead of a uniform branch. A software rasterizer
+     *  (llvmpipe) runs both sides of a branch and the whole of a loop whatever a uniform says, so
+     *  code a material never takes still costs its pass (materials/ptm/README.md, "Pass cost").
+     *  Every distinct list is a program of its own (MethodPrograms.h); the default: none. */
+    virtual std::vector<std::string> shaderDefines() const { return {}; }
 
     /** createStateSet(), built once per material and shared by everything that renders it (every
      *  osgBTF::MaterialNode using this material): textures are uploaded once per context. Safe to

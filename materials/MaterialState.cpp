@@ -265,8 +265,7 @@ void addSamplerUnits(osg::StateSet& stateSet, const osg::Program& program,
 }
 
 void addCommonState(osg::StateSet& stateSet, const Material& material) {
-    stateSet.setAttributeAndModes(methodProgram(material.methodName()).get(),
-                                  osg::StateAttribute::ON);
+    stateSet.setAttributeAndModes(methodProgram(material).get(), osg::StateAttribute::ON);
     stateSet.addUniform(new osg::Uniform(shader::kSize, material.width(), material.height()));
     const MipLayout layout = material.mipLayout().mipMapped()
                                  ? material.mipLayout()

@@ -1,9 +1,12 @@
 #include "materials/MethodPrograms.h"
 
+#include <algorithm>
 #include <map>
 #include <mutex>
+#include <string>
 #include <tuple>
 #include <utility>
+#include <vector>
 
 #include <osg/Shader>
 
@@ -11,6 +14,7 @@
 #include "materials/CoordinateMapRendering.h"
 #include "materials/EnvironmentState.h"
 #include "materials/LightVisibility.h"
+#include "materials/Material.h"
 #include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
 #include "materials/ShaderInterface.h"
@@ -23,7 +27,9 @@ namespace {
  *  it, so OSG compiles it once per context); releaseCachedPrograms empties its per-context part. */
 struct ProgramCache {
     std::mutex mutex;
-    std::map<std::tuple<std::string, bool, bool>, osg::ref_ptr<osg::Program>> programs;
+    std::map<std::tuple<std::string, bool, bool, std::vector<std::string>>,
+             osg::ref_ptr<osg::Program>>
+        programs;
     osg::ref_ptr<osg::Program> depthOnly;
 };
 
@@ -33,13 +39,19 @@ ProgramCache& programCache() {
 }
 
 osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordinateMap,
-                                          bool shadowMap = false) {
+                                          bool shadowMap = false,
+                                          const std::vector<std::string>& defines = {}) {
     ProgramCache& cache = programCache();
     std::lock_guard<std::mutex> lock(cache.mutex);
-    auto& program = cache.programs[{method, coordinateMap, shadowMap}];
+    auto& program = cache.programs[{method, coordinateMap, shadowMap, defines}];
     if (!program) {
         osg::ref_ptr<osg::Program> created = new osg::Program;
-        created->setName("osgBTF_" + method + (coordinateMap ? "_coordinateMap" : "") +
+        std::string name = "osgBTF_" + method;
+        for (const std::string& define : defines) {
+            name += "_" + define;
+            std::replace(name.begin(), name.end(), ' ', '=');
+        }
+        created->setName(name + (coordinateMap ? "_coordinateMap" : "") +
                          (shadowMap ? "_shadowMap" : ""));
         const std::string vert = "common/btf.vert", frag = method + ".frag";
         std::string vertex = shaderSource(vert);
@@ -50,6 +62,7 @@ osg::ref_ptr<osg::Program> programVariant(const std::string& method, bool coordi
         std::string fragment = shaderSource(frag);
         if (coordinateMap) fragment = addShaderDefine(fragment, shader::kCoordinateMapDefine);
         if (shadowMap) fragment = addShaderDefine(fragment, shader::kShadowMapDefine);
+        for (const std::string& define : defines) fragment = addShaderDefine(fragment, define);
         osg::ref_ptr<osg::Shader> fs = new osg::Shader(osg::Shader::FRAGMENT, fragment);
         fs->setName(shaderOrigin(frag));
         created->addShader(vs);
@@ -103,6 +116,18 @@ osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method) {
 
 osg::ref_ptr<osg::Program> shadowMapProgram(const std::string& method, bool coordinateMap) {
     return programVariant(method, coordinateMap, true);
+}
+
+osg::ref_ptr<osg::Program> methodProgram(const Material& material) {
+    return programVariant(material.methodName(), false, false, material.shaderDefines());
+}
+
+osg::ref_ptr<osg::Program> coordinateMapProgram(const Material& material) {
+    return programVariant(material.methodName(), true, false, material.shaderDefines());
+}
+
+osg::ref_ptr<osg::Program> shadowMapProgram(const Material& material, bool coordinateMap) {
+    return programVariant(material.methodName(), coordinateMap, true, material.shaderDefines());
 }
 
 }  // namespace osgBTF

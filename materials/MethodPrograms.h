@@ -14,6 +14,8 @@ class State;
 
 namespace osgBTF {
 
+class Material;
+
 /** The method's shared program: common/btf.vert + <method>.frag (materials/<method>/, or the
  *  method's MethodInfo::fragmentShader), the tangent bound to shader::kTangentAttribute. Compiled
  * by OSG at first use; built once per process and method. Throws Error if a source is missing. */
@@ -27,6 +29,12 @@ osg::ref_ptr<osg::Program> coordinateMapProgram(const std::string& method);
  *  coordinate-map variant's). Built once per process, method and variant; used by MaterialNode
  *  below an osgShadow::ShadowedScene. */
 osg::ref_ptr<osg::Program> shadowMapProgram(const std::string& method, bool coordinateMap);
+/** The three programs above for one material: compiled also with its
+ *  Material::shaderDefines() (after the variant's own defines), one program per method, variant
+ *  and list of defines. What a material's state sets use. */
+osg::ref_ptr<osg::Program> methodProgram(const Material& material);
+osg::ref_ptr<osg::Program> coordinateMapProgram(const Material& material);
+osg::ref_ptr<osg::Program> shadowMapProgram(const Material& material, bool coordinateMap);
 /** What MaterialNode draws with in a shadow technique's depth pass, for every method: the
  *  fixed-function position and an empty fragment stage (shaders/common/depth_only.*), so a depth
  *  map costs what it costs for a plain textured node. One per process. */

@@ -817,9 +817,8 @@ osg::StateSet* MaterialNode::shadowStateSet(osgUtil::CullVisitor& cv) {
                        entry.shadowMapState != _mapStateSet.get() || entry.shadowOwn != own;
     if (stale) {
         osg::ref_ptr<osg::StateSet> state = new osg::StateSet;
-        state->setAttributeAndModes(
-            shadowMapProgram(_material->methodName(), _mapStateSet.valid()).get(),
-            osg::StateAttribute::ON | osg::StateAttribute::PROTECTED);
+        state->setAttributeAndModes(shadowMapProgram(*_material, _mapStateSet.valid()).get(),
+                                    osg::StateAttribute::ON | osg::StateAttribute::PROTECTED);
         state->setTextureAttribute(shader::kShadowMapUnit, depth, osg::StateAttribute::ON);
         state->addUniform(new osg::Uniform(shader::kShadowMap, shader::kShadowMapUnit));
         state->addUniform(new osg::Uniform(shader::kShadowTexGenUnit, unit));

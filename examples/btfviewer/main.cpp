@@ -41,6 +41,7 @@
 #include "core/Error.h"
 #include "examples/ExampleScenes.h"
 #include "examples/btfviewer/EnvironmentControl.h"
+#include "examples/btfviewer/WindowSetup.h"
 #include "materials/MethodRegistry.h"
 #include "scene/MaterialNode.h"
 #include "scene/OwnPlugins.h"
@@ -938,8 +939,7 @@ int run(osg::ArgumentParser& arguments) {
     if (!captureFile.empty())
         viewer.setThreadingModel(osgViewer::Viewer::SingleThreaded);  // the read-back is in step
     viewer.setRealizeOperation(new GlInfoOperation);
-    viewer.realize();
-    if (!viewer.isRealized()) throw osgBTF::Error("cannot open a window (is DISPLAY set?)");
+    btfviewer::openWindow(viewer);  // --window's, or one that fits the screen; throws why not
     osg::ref_ptr<CaptureSwapCallback> capture;
     if (!captureFile.empty()) {
         osg::GraphicsContext* context = viewer.getCamera()->getGraphicsContext();

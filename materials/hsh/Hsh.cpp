@@ -255,9 +255,15 @@ osg::ref_ptr<osg::StateSet> HshMaterial::createStateSet() const {
         _viewLookup.addToStateSet(*stateSet, "hshViewTable", 1);
     else
         stateSet->addUniform(new osg::Uniform("hshViewTable", 1));
-    stateSet->addUniform(new osg::Uniform("hshTerms", terms()));
-    stateSet->addUniform(new osg::Uniform("hshPerView", _shape.perView ? 1 : 0));
+    // The order and the view model are the program's (shaderDefines), not uniforms.
     return stateSet;
+}
+
+std::vector<std::string> HshMaterial::shaderDefines() const {
+    std::vector<std::string> defines = {"OSGBTF_HSH_TERMS " + std::to_string(terms())};
+    if (_shape.perView) defines.push_back("OSGBTF_HSH_PER_VIEW");
+    if (filtersParameters()) defines.push_back("OSGBTF_HSH_FILTERED");
+    return defines;
 }
 
 // ---- registration ------------------------------------------------------------------------------
@@ -282,18 +288,19 @@ const bool hshRegistered = registerMethodClass<HshMaterial>([] {
     m.filtersParameters = true;
     m.shaderCost = [](const Material& material) {
         // hshBasis: ~45 ALU (sqrt 2, divisions 2, the 16 products and sums); hshField: per term a
-        // layer address 1, a fetch and a multiply-add (2); btfEvaluate: per-view test and final
-        // max 2; views=all adds the view lookup and per blended view (3) loop 2, weight test 1,
-        // weighted add 2.
+        // layer address 1, a fetch and a multiply-add (2), the loop to a constant unrolled (the
+        // order and the view model are compiled in: HshMaterial::shaderDefines, no test);
+        // btfEvaluate: the final max 1; views=all adds the view lookup and per blended view (3)
+        // loop 2, weight test 1, weighted add 2.
         const HshMaterial& m = static_cast<const HshMaterial&>(material);
         const int n = m.terms(), field = 3 * n, basisAlu = 45;
         if (!m.shape().perView)
-            return ShaderCost::ofEvaluate(2 + basisAlu + field, n,
-                                          "ALU " + std::to_string(2 + basisAlu + field) + ", TEX " +
+            return ShaderCost::ofEvaluate(1 + basisAlu + field, n,
+                                          "ALU " + std::to_string(1 + basisAlu + field) + ", TEX " +
                                               std::to_string(n) + " (" + std::to_string(n) +
                                               " terms, front view)");
         const DirectionLookup::Cost v = m.viewLookup().cost();
-        const int alu = 2 + basisAlu + 3 * (5 + field), tex = 3 * n;
+        const int alu = 1 + basisAlu + 3 * (5 + field), tex = 3 * n;
         return ShaderCost::ofEvaluate(v.alu + alu, v.tex + tex,
                                       "ALU " + std::to_string(alu) + "+L, TEX " +
                                           std::to_string(tex) + "+T (" + std::to_string(n) +

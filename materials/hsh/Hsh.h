@@ -91,6 +91,10 @@ public:
     MemoryFootprint memory() const override;
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
+    /** "OSGBTF_HSH_TERMS n", OSGBTF_HSH_PER_VIEW and OSGBTF_HSH_FILTERED (TexelFilter::
+     *  Parameters) as the material has them: hsh.frag's loops run to a constant and hold only
+     *  the variant's code (README.md, "Pass cost"). */
+    std::vector<std::string> shaderDefines() const override;
 
     const Shape& shape() const { return _shape; }
     int terms() const { return _shape.order * _shape.order; }

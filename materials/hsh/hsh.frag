@@ -7,11 +7,19 @@
 #pragma include "common/btf_main.glsl"
 #pragma include "common/directions.glsl"
 
-// RGB; layer hshTerms * s + k = c_k of (R, G, B), s = the view slot (0 for front).
+// The material's shape is compiled in (HshMaterial::shaderDefines), not read from uniforms: a
+// software rasterizer runs the views=all path whatever a uniform says, and a loop to a uniform
+// count keeps the basis in memory indexed per lane (README.md, "Pass cost"):
+//   OSGBTF_HSH_TERMS     4, 9 or 16
+//   OSGBTF_HSH_PER_VIEW  one fit per measured view (else slot 0 for every view)
+//   OSGBTF_HSH_FILTERED  the coefficients are filtered (TexelFilter::Parameters)
+#ifndef OSGBTF_HSH_TERMS
+#error "hsh.frag is compiled with OSGBTF_HSH_TERMS (HshMaterial::shaderDefines)"
+#endif
+
+// RGB; layer OSGBTF_HSH_TERMS * s + k = c_k of (R, G, B), s = the view slot (0 for front).
 uniform sampler2DArray hshCoefficients;
 uniform sampler2D hshViewTable;  // views=all: view interpolation (common/directions.glsl)
-uniform int hshTerms;            // 4, 9 or 16
-uniform int hshPerView;          // 1: one fit per measured view, 0: slot 0 for every view
 
 // The basis of Hsh.h; the constants are its normalisations rounded to float (the literals
 // HshMaterial::basis rounds to).
@@ -47,17 +55,23 @@ void hshBasis(vec3 light, out float h[16]) {
     h[15] = 6.67558098 * s3 * s3t;
 }
 
-// Filtered (btfBilinear): the field is linear in the coefficients, so filtering them blends the
-// texels' fields, and btfEvaluate clamps the blend (HshMaterial::finishLinear).
+// Filtered: the field is linear in the coefficients, so filtering them blends the texels'
+// fields, and btfEvaluate clamps the blend (HshMaterial::finishLinear). A filtered material
+// reads at btfBilinearCoordinate whenever btf_main.glsl sets btfBilinear (always, but through a
+// coordinate map, whose variant reads each tap's own texel): one fetch, not both sides of a
+// select.
 vec3 hshTexel(ivec2 texel, int layer) {
-    return btfBilinear
-               ? textureLod(hshCoefficients, vec3(btfBilinearCoordinate, float(layer)), 0.0).rgb
-               : texelFetch(hshCoefficients, ivec3(texel, layer), 0).rgb;
+#if defined(OSGBTF_HSH_FILTERED) && !defined(OSGBTF_COORDINATE_MAP)
+    return textureLod(hshCoefficients, vec3(btfBilinearCoordinate, float(layer)), 0.0).rgb;
+#else
+    return texelFetch(hshCoefficients, ivec3(texel, layer), 0).rgb;
+#endif
 }
 
 vec3 hshField(ivec2 texel, int slot, float h[16]) {
     vec3 sum = vec3(0.0);
-    for (int k = 0; k < hshTerms; ++k) sum += hshTexel(texel, slot * hshTerms + k) * h[k];
+    for (int k = 0; k < OSGBTF_HSH_TERMS; ++k)
+        sum += hshTexel(texel, slot * OSGBTF_HSH_TERMS + k) * h[k];
     return sum;
 }
 
@@ -65,7 +79,9 @@ vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
     float h[16];
     hshBasis(light, h);
     // Measured values are never negative: a dip of the harmonics below 0 is clamped.
-    if (hshPerView == 0) return max(hshField(texel, 0, h), vec3(0.0));
+#ifndef OSGBTF_HSH_PER_VIEW
+    return max(hshField(texel, 0, h), vec3(0.0));
+#else
     ivec3 index;
     vec3 weight;
     btfLookupDirections(hshViewTable, view, index, weight);
@@ -74,4 +90,5 @@ vec3 btfEvaluate(ivec2 texel, vec3 view, vec3 light) {
         if (weight[j] > 0.0) sum += weight[j] * hshField(texel, index[j], h);
     }
     return max(sum, vec3(0.0));
+#endif
 }

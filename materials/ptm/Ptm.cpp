@@ -242,9 +242,16 @@ osg::ref_ptr<osg::StateSet> PtmMaterial::createStateSet() const {
         _viewLookup.addToStateSet(*stateSet, "ptmViewTable", 2);
     else
         stateSet->addUniform(new osg::Uniform("ptmViewTable", 2));
-    stateSet->addUniform(new osg::Uniform("ptmLuminance", _shape.luminance ? 1 : 0));
-    stateSet->addUniform(new osg::Uniform("ptmPerView", _shape.perView ? 1 : 0));
+    // The colour and view models are the program's (shaderDefines), not uniforms.
     return stateSet;
+}
+
+std::vector<std::string> PtmMaterial::shaderDefines() const {
+    std::vector<std::string> defines;
+    if (_shape.luminance) defines.push_back("OSGBTF_PTM_LUMINANCE");
+    if (_shape.perView) defines.push_back("OSGBTF_PTM_PER_VIEW");
+    if (filtersParameters()) defines.push_back("OSGBTF_PTM_FILTERED");
+    return defines;
 }
 
 // ---- registration ------------------------------------------------------------------------------
@@ -272,22 +279,22 @@ const bool ptmRegistered = registerMethodClass<PtmMaterial>([] {
     // PtmMaterial::linearInParameters).
     m.filtersParameters = true;
     m.shaderCost = [](const Material& material) {
-        // ptmField: monomials 3, variant test 1; rgb: layer base 1, 5 layer offsets, 6 fetches,
-        // 5 multiply-adds (10) = 20 ALU, 6 TEX; luminance: layer addresses 3, 5 multiply-adds
-        // (10), colour multiply 1 = 18 ALU, 3 TEX. btfEvaluate: per-view test 1 and the final max
-        // 1; views=all adds the view lookup and per blended view (3) loop 2, weight test 1,
-        // weighted add 2.
+        // ptmField: monomials 3; rgb: layer base 1, 5 layer offsets, 6 fetches, 5 multiply-adds
+        // (10) = 19 ALU, 6 TEX; luminance: layer addresses 3, 5 multiply-adds (10), colour
+        // multiply 1 = 17 ALU, 3 TEX (the colour model and the view model are compiled in:
+        // PtmMaterial::shaderDefines, no test). btfEvaluate: the final max 1; views=all adds the
+        // view lookup and per blended view (3) loop 2, weight test 1, weighted add 2.
         const PtmMaterial& m = static_cast<const PtmMaterial&>(material);
         const bool luminance = m.shape().luminance;
-        const int fieldAlu = luminance ? 18 : 20, fieldTex = luminance ? 3 : 6;
+        const int fieldAlu = luminance ? 17 : 19, fieldTex = luminance ? 3 : 6;
         const std::string variant = luminance ? "luminance" : "rgb";
         if (!m.shape().perView)
-            return ShaderCost::ofEvaluate(2 + fieldAlu, fieldTex,
-                                          "ALU " + std::to_string(2 + fieldAlu) + ", TEX " +
+            return ShaderCost::ofEvaluate(1 + fieldAlu, fieldTex,
+                                          "ALU " + std::to_string(1 + fieldAlu) + ", TEX " +
                                               std::to_string(fieldTex) + " (" + variant +
                                               ", front view)");
         const DirectionLookup::Cost v = m.viewLookup().cost();
-        const int alu = 2 + 3 * (5 + fieldAlu), tex = 3 * fieldTex;
+        const int alu = 1 + 3 * (5 + fieldAlu), tex = 3 * fieldTex;
         return ShaderCost::ofEvaluate(v.alu + alu, v.tex + tex,
                                       "ALU " + std::to_string(alu) + "+L, TEX " +
                                           std::to_string(tex) + "+T (" + variant +

@@ -104,6 +104,10 @@ public:
     MemoryFootprint memory() const override;
     FittedMaterial toFittedMaterial() const override;
     osg::ref_ptr<osg::StateSet> createStateSet() const override;
+    /** OSGBTF_PTM_LUMINANCE, OSGBTF_PTM_PER_VIEW and OSGBTF_PTM_FILTERED (the parameters
+     *  filtered: TexelFilter::Parameters) as the material has them: ptm.frag holds only the
+     *  variant's code (README.md, "Pass cost"). */
+    std::vector<std::string> shaderDefines() const override;
 
     const Shape& shape() const { return _shape; }
     /** View slots stored: 1 (front) or the measured views (all). */

@@ -6,8 +6,11 @@
 #include <cmath>
 #include <iostream>
 
+#include <osg/Program>
 #include "harness/sample/SampleBtf.h"
+
 #include "materials/MethodOptions.h"
+#include "materials/MethodPrograms.h"
 #include "materials/ptm/Ptm.h"
 #include "materials/ptm/PtmFile.h"
 #include "tests/TestUtil.h"
@@ -29,7 +32,50 @@ void expectGpuEqualsCpu(const std::string& options,
     test::expectGpuEqualsCpuAtPairs(*m, test::ptmGpuTolerance(*m), pairs, "ptm [" + options + "]");
 }
 
+/** The fragment source of the program in `material`'s own state set. */
+std::string fragmentSourceOf(const Material& material) {
+    const auto* program = dynamic_cast<const osg::Program*>(
+        material.sharedStateSet()->getAttribute(osg::StateAttribute::PROGRAM));
+    if (!program) return "";
+    for (unsigned i = 0; i < program->getNumShaders(); ++i)
+        if (program->getShader(i)->getType() == osg::Shader::FRAGMENT)
+            return program->getShader(i)->getShaderSource();
+    return "";
+}
+
 }  // namespace
+
+// The colour and view models are compiled into the material's program (shaderDefines), not
+// uniform branches that a software rasterizer runs both sides of (README.md, "Pass cost"): each
+// shape its own program, shared by materials of that shape, holding only its defines.
+TEST(PtmGpu, EachShapeHasItsOwnProgramWithItsDefines) {
+    SampleOptions sample;
+    sample.width = sample.height = 4;
+    const auto btf = makeSampleBtf(sample);
+    const osg::ref_ptr<PtmMaterial> rgb = PtmMaterial::fit(btf, FitOptions::parse(""));
+    const osg::ref_ptr<PtmMaterial> rgb2 = PtmMaterial::fit(btf, FitOptions::parse(""));
+    const osg::ref_ptr<PtmMaterial> lumAll =
+        PtmMaterial::fit(btf, FitOptions::parse("colour=luminance views=all"));
+    EXPECT_EQ(rgb->shaderDefines(), std::vector<std::string>{"OSGBTF_PTM_FILTERED"});
+    // Luminance blends texel values (not linear in its parameters): not filtered.
+    EXPECT_EQ(lumAll->shaderDefines(),
+              (std::vector<std::string>{"OSGBTF_PTM_LUMINANCE", "OSGBTF_PTM_PER_VIEW"}));
+    EXPECT_EQ(methodProgram(*rgb).get(), methodProgram(*rgb2).get());
+    EXPECT_NE(methodProgram(*rgb).get(), methodProgram(*lumAll).get());
+    EXPECT_NE(methodProgram(*rgb).get(), methodProgram("ptm").get());
+    EXPECT_NE(coordinateMapProgram(*rgb).get(), coordinateMapProgram(*lumAll).get());
+    EXPECT_NE(shadowMapProgram(*rgb, false).get(), shadowMapProgram(*lumAll, false).get());
+    const std::string plain = fragmentSourceOf(*rgb), luminance = fragmentSourceOf(*lumAll);
+    EXPECT_NE(plain.find("#define OSGBTF_PTM_FILTERED 1\n"), std::string::npos);
+    EXPECT_EQ(plain.find("#define OSGBTF_PTM_LUMINANCE"), std::string::npos);
+    EXPECT_EQ(plain.find("#define OSGBTF_PTM_PER_VIEW"), std::string::npos);
+    EXPECT_NE(luminance.find("#define OSGBTF_PTM_LUMINANCE 1\n"), std::string::npos);
+    EXPECT_NE(luminance.find("#define OSGBTF_PTM_PER_VIEW 1\n"), std::string::npos);
+    EXPECT_EQ(luminance.find("#define OSGBTF_PTM_FILTERED"), std::string::npos);
+    // No uniform selects the model any more.
+    EXPECT_EQ(plain.find("ptmPerView"), std::string::npos);
+    EXPECT_EQ(plain.find("ptmLuminance"), std::string::npos);
+}
 
 TEST(PtmGpu, RgbFrontViewMatchesCpu) {
     // The front model ignores the view: a few views, lights on every ring and between them.
