@@ -175,14 +175,14 @@ TEST(RelightFolderErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {
     EXPECT_EQ(problem(), info + ": materials[0].scale[0] is not a number");
     editInfo(f, "\"NaN\"", "1");
     // Another colorspace, another type.
-    editInfo(f, "\"lrgb\"", "\"mrgb\"");
+    editInfo(f, "\"lrgb\"", "\"ycc\"");
     EXPECT_EQ(problem(), info +
-                             ": colorspace 'mrgb' is not read (rgb and lrgb are; relight writes "
-                             "ycc, mrgb and mycc for other bases)");
-    editInfo(f, "\"mrgb\"", "\"lrgb\"");
-    editInfo(f, "\"ptm\"", "\"rbf\"");
-    EXPECT_EQ(problem(), info + ": type 'rbf' is not read (hsh, ptm are)");
-    editInfo(f, "\"rbf\"", "\"ptm\"");
+                             ": colorspace 'ycc' is not read (rgb, lrgb and mrgb are; relight "
+                             "writes ycc and mycc for other bases)");
+    editInfo(f, "\"ycc\"", "\"lrgb\"");
+    editInfo(f, "\"ptm\"", "\"sh\"");
+    EXPECT_EQ(problem(), info + ": type 'sh' is not read (bilinear, hsh, ptm, rbf are)");
+    editInfo(f, "\"sh\"", "\"ptm\"");
     // A plane of the wrong size.
     fs::copy_file(fixture("wrong-size-5x3.jpg"), f + "/plane_1.jpg",
                   fs::copy_options::overwrite_existing);
