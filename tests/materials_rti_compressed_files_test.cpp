@@ -151,8 +151,8 @@ TEST(RelightFolder, InfoAndPluginNamesAndTheReadOnlyFormat) {
     EXPECT_EQ(errorOf([&] { saveMaterial(*m, target); }),
               target +
                   ": osgBTF reads relight's web layout as OpenLIME loads it (info.json + "
-                  "plane_N.jpg; colorspaces rgb and lrgb) but does not write it; save as .btfmat "
-                  "or another tool's file");
+                  "plane_N.jpg; types ptm, hsh (colorspaces rgb, lrgb), rbf and bilinear (mrgb)) "
+                  "but does not write it; save as .btfmat or another tool's file");
 }
 
 TEST(RelightFolderErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {

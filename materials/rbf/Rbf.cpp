@@ -1,11 +1,13 @@
 #include "materials/rbf/Rbf.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
 #include "core/Error.h"
 #include "core/SizeGuard.h"
+#include "materials/CoordinateMapRendering.h"
 #include "materials/ForeignFiles.h"
 #include "materials/MaterialState.h"
 #include "materials/MethodPrograms.h"
@@ -15,6 +17,11 @@
 namespace osgBTF {
 
 // ---- shape -------------------------------------------------------------------------------------
+
+std::uint64_t RbfMaterial::newSerial() {
+    static std::atomic<std::uint64_t> next{1};
+    return next++;
+}
 
 void RbfMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
                            int planes, int nodeCount, float sigma, int resolution,
@@ -33,6 +40,7 @@ void RbfMaterial::setShape(int width, int height, DirectionSet views, DirectionS
     if (storage != MaterialTexture::Half && storage != MaterialTexture::Float)
         throw Error("rbf: coefficients are stored as half or float");
     setGeometry(width, height, std::move(views), std::move(lights));
+    _weightsSerial = newSerial();
     _planes = planes;
     _sigma = sigma;
     _resolution = resolution;
@@ -119,22 +127,27 @@ glm::vec3 RbfMaterial::combine(std::size_t texel,
 
 glm::vec3 RbfMaterial::evaluate(int x, int y, const glm::vec3&, const glm::vec3& light) const {
     // The weights depend on the light only: kept for the next texel under the same light.
-    thread_local const RbfMaterial* lastMaterial = nullptr;
+    thread_local std::uint64_t lastSerial = 0;
     thread_local glm::vec3 lastLight(std::numeric_limits<float>::quiet_NaN());
     thread_local std::vector<std::pair<int, float>> lastWeights;
-    if (lastMaterial != this || lastLight != light) {
+    if (lastSerial != _weightsSerial || lastLight != light) {
         lastWeights = lightWeights(light);
-        lastMaterial = this;
+        lastSerial = _weightsSerial;
         lastLight = light;
     }
     return combine(std::size_t(y) * std::size_t(_width) + std::size_t(x), lastWeights);
 }
 
 void RbfMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
-    std::vector<std::vector<std::pair<int, float>>> weights;
-    weights.reserve(_lights.size());
-    for (std::size_t l = 0; l < _lights.size(); ++l)
-        weights.push_back(lightWeights(_lights.vector(l)));
+    // The measured lights' weights, kept per thread for the next texel.
+    thread_local std::uint64_t lastSerial = 0;
+    thread_local std::vector<std::vector<std::pair<int, float>>> weights;
+    if (lastSerial != _weightsSerial || weights.size() != _lights.size()) {
+        weights.clear();
+        for (std::size_t l = 0; l < _lights.size(); ++l)
+            weights.push_back(lightWeights(_lights.vector(l)));
+        lastSerial = _weightsSerial;
+    }
     for (std::size_t v = 0; v < _views.size(); ++v)
         for (std::size_t l = 0; l < _lights.size(); ++l) {
             const glm::vec3 value = combine(texel, weights[l]);
@@ -209,6 +222,7 @@ osg::ref_ptr<RbfMaterial> RbfMaterial::fromFile(FittedMaterial file) {
     n.unpack();
     m->basis = std::move(b);
     m->nodes = std::move(n);
+    m->_weightsSerial = newSerial();
     if (!m->coefficients.allFinite() ||
         !std::all_of(m->basis.data.begin(), m->basis.data.end(),
                      [](float v) { return std::isfinite(v); }) ||
@@ -314,6 +328,10 @@ const bool rbfRegistered = registerMethodClass<RbfMaterial>([] {
     m.quickFitOptions = "planes=3";
     return m;
 }());
+
+// The basis and the nodes are shared by all texels: a coordinate map remaps only the
+// coefficients.
+const bool rbfSharedTextures = declareSharedTextures(RbfMaterial::kMethod, {"basis", "nodes"});
 
 const bool kRelightRbf = registerRelightType(
     "rbf",

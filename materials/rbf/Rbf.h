@@ -31,6 +31,7 @@
 // nodes x 1) shared by all texels. Units: display values 0..1 (relight's 0..255 / 255).
 #pragma once
 
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -71,9 +72,14 @@ public:
     /** relight's weight threshold: a normalised weight at or below it is dropped. */
     static constexpr float kThreshold = 0.001f;
 
-    RbfMaterial() = default;
+    RbfMaterial() : _weightsSerial(newSerial()) {}
     RbfMaterial(const RbfMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
-        : MethodMaterial(other, copyop) {}
+        : MethodMaterial(other, copyop), _weightsSerial(newSerial()) {}
+    /** MethodMaterial's, then a new weights serial (the nodes may have changed). */
+    void assignFrom(const Material& other) override {
+        MethodMaterial::assignFrom(other);
+        _weightsSerial = newSerial();
+    }
     META_Object(osgBTF, RbfMaterial)
 
         /** PCA of the front view's light profiles (see the file comment). Options: planes,
@@ -130,6 +136,7 @@ public:
     }
     void setNode(int i, const glm::vec3& direction) {
         for (int c = 0; c < 3; ++c) nodes.data[std::size_t(i) * 3 + std::size_t(c)] = direction[c];
+        _weightsSerial = newSerial();
     }
 
     /** The interpolation weights of a light direction: (node, weight) pairs, the weights summing
@@ -142,6 +149,12 @@ protected:
     ~RbfMaterial() override = default;
 
 private:
+    /** A number no material had before: evaluate() keeps the last light's weights per thread
+     *  under it, so a material freed and another made at the same address cannot reuse them.
+     *  Renewed whenever the weights' inputs (nodes, sigma, resolution) change. */
+    static std::uint64_t newSerial();
+    std::uint64_t _weightsSerial;
+
     void setShape(int width, int height, DirectionSet views, DirectionSet lights, int planes,
                   int nodes, float sigma, int resolution, MaterialTexture::PixelKind storage,
                   bool allocate);
