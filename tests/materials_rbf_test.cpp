@@ -307,6 +307,10 @@ TEST(RelightRbfErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {
     const auto problem = [&] { return errorOf([&] { loadMaterial(info); }); };
     editInfo(f, "\"sigma\": 0.2", "\"sigma\": 0");
     EXPECT_EQ(problem(), info + ": \"sigma\" 0 is not positive");
+    // A sigma whose 1 / sigma^2 is no finite float.
+    editInfo(f, "\"sigma\": 0", "\"sigma\": 1e-20");
+    EXPECT_EQ(problem(), info + ": rbf: sigma 1e-20 is not in 1e-06..1e+06");
+    editInfo(f, "\"sigma\": 1e-20", "\"sigma\": 0");
     editInfo(f, "\"sigma\": 0", "\"sigmaX\": 0.2");
     EXPECT_EQ(problem(), info + ": no \"sigma\" (type rbf)");
     editInfo(f, "\"sigmaX\": 0.2", "\"sigma\": 0.2");

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "core/Error.h"
 #include "core/SizeGuard.h"
@@ -36,7 +37,13 @@ void RbfMaterial::setShape(int width, int height, DirectionSet views, DirectionS
         (resolution < 2 || resolution > 64 || resolution * resolution != nodeCount))
         throw Error("rbf: a bilinear grid of resolution " + std::to_string(resolution) + " with " +
                     std::to_string(nodeCount) + " nodes (resolution 2..64, nodes its square)");
-    if (!(sigma > 0) || !std::isfinite(sigma)) throw Error("rbf: sigma must be a positive number");
+    // 1 / sigma^2 must stay a finite float: a narrower sigma would make the nearest node's
+    // exponent 0 x infinity.
+    if (!(sigma >= 1e-6f && sigma <= 1e6f)) {
+        std::ostringstream text;
+        text << "rbf: sigma " << sigma << " is not in 1e-06..1e+06";
+        throw Error(text.str());
+    }
     if (storage != MaterialTexture::Half && storage != MaterialTexture::Float)
         throw Error("rbf: coefficients are stored as half or float");
     setGeometry(width, height, std::move(views), std::move(lights));

@@ -91,7 +91,8 @@ public:
     /** A zero model: `planes` coefficients per texel, `nodes` basis rows (rbf: the lights' count,
      *  node directions set by the caller through setNode; bilinear: resolution^2), the
      *  coefficients stored as `storage`. Throws Error for planes outside 1..48, nodes outside
-     *  1..4096, a resolution that is neither 0 nor 2..64 or sigma not > 0. */
+     *  1..4096, a resolution that is neither 0 nor 2..64 or a sigma outside 1e-6..1e6 (1 /
+     *  sigma^2 a finite float). */
     static osg::ref_ptr<RbfMaterial> create(int width, int height, DirectionSet views,
                                             DirectionSet lights, int planes, int nodes, float sigma,
                                             int resolution, MaterialTexture::PixelKind storage);
