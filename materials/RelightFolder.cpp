@@ -131,7 +131,7 @@ RelightBasis basisOf(const std::string& type) {
     return it == registry().end() ? RelightBasis::Fixed : it->second.basis;
 }
 
-/** The registered PCA types (colorspace mrgb), for messages: "bilinear, rbf". */
+/** The registered PCA types (colorspaces mrgb, mycc), for messages: "bilinear, rbf". */
 std::string pcaTypes() {
     std::lock_guard<std::mutex> lock(registryMutex());
     std::string list;
@@ -141,7 +141,7 @@ std::string pcaTypes() {
     return list;
 }
 
-/** The basis of relight's PCA types (colorspace mrgb): "range" per plane, "sigma" (rbf) or
+/** The basis of relight's PCA types (colorspaces mrgb, mycc): "range" per plane, "sigma" (rbf) or
  *  "resolution" (bilinear), and "basis", (nplanes + 1) x nodes x 3 numbers. */
 void parsePcaBasis(const std::string& path, const nlohmann::json& info,
                    const nlohmann::json& material, RelightPlanes& p) {
@@ -163,7 +163,8 @@ void parsePcaBasis(const std::string& path, const nlohmann::json& info,
         nodes = std::size_t(resolution * resolution);
     }
     const auto range = material.find("range");
-    if (range == material.end()) fail(path, "no materials[0].range (colorspace mrgb)");
+    if (range == material.end())
+        fail(path, "no materials[0].range (colorspace " + p.colorspace + ")");
     if (!range->is_array() || range->size() != planes)
         fail(path, "materials[0].range has " +
                        (range->is_array() ? std::to_string(range->size()) : std::string("no")) +
@@ -175,7 +176,7 @@ void parsePcaBasis(const std::string& path, const nlohmann::json& info,
         p.range.push_back(r);
     }
     const auto basis = info.find("basis");
-    if (basis == info.end()) fail(path, "no \"basis\" (colorspace mrgb)");
+    if (basis == info.end()) fail(path, "no \"basis\" (colorspace " + p.colorspace + ")");
     const std::size_t expected = (planes + 1) * nodes * 3;
     if (!basis->is_array() || basis->size() != expected)
         fail(path, "\"basis\" has " +
@@ -213,20 +214,38 @@ RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
     if (info.contains("format") && info["format"] != "jpg")
         fail(path, "\"format\" is " + info["format"].dump().substr(0, 32) +
                        " (planes in \"jpg\" are read)");
-    if (p.colorspace != "rgb" && p.colorspace != "lrgb" && p.colorspace != "mrgb")
-        fail(path, "colorspace '" + p.colorspace +
-                       "' is not read (rgb, lrgb and mrgb are; relight writes ycc and mycc for "
-                       "other bases)");
-    // relight writes its PCA types in mrgb or mycc only, the others never in mrgb.
+    const bool mixed = p.colorspace == "mrgb" || p.colorspace == "mycc";
+    if (p.colorspace != "rgb" && p.colorspace != "lrgb" && !mixed)
+        fail(path, "colorspace '" + p.colorspace + "' is not read (rgb, lrgb, mrgb and mycc are)");
+    // relight writes its PCA types in mrgb or mycc only, the others never so.
     p.basisKind = basisOf(p.type);
     const bool pca = p.basisKind != RelightBasis::Fixed;
-    if (pca && p.colorspace != "mrgb")
+    if (pca && !mixed)
         fail(path, "type '" + p.type + "' with colorspace '" + p.colorspace +
-                       "' (relight writes its PCA types in mrgb or mycc; mrgb is read)");
-    if (!pca && p.colorspace == "mrgb")
-        fail(path, "colorspace mrgb with type '" + p.type +
-                       "' (relight writes mrgb for its PCA types: " + pcaTypes() + ")");
-    const long long planes = integer(path, info, "nplanes");
+                       "' (relight writes its PCA types in mrgb or mycc)");
+    if (!pca && mixed)
+        fail(path, "colorspace " + p.colorspace + " with type '" + p.type +
+                       "' (relight writes mrgb and mycc for its PCA types: " + pcaTypes() + ")");
+    long long planes = 0;
+    if (p.colorspace == "mycc") {
+        // mycc: "yccplanes" (luminance, then the two chroma counts) instead of "nplanes".
+        const auto ycc = info.find("yccplanes");
+        if (ycc == info.end()) fail(path, "no \"yccplanes\" (colorspace mycc)");
+        if (!ycc->is_array() || ycc->size() != 3) fail(path, "\"yccplanes\" is not 3 integers");
+        for (std::size_t k = 0; k < 3; ++k) {
+            if (!(*ycc)[k].is_number_integer() || (*ycc)[k].get<long long>() < 0 ||
+                (*ycc)[k].get<long long>() > 3 * 64)
+                fail(path, "\"yccplanes\" is not 3 integers in 0..192");
+            p.yccPlanes[k] = int((*ycc)[k].get<long long>());
+        }
+        if (p.yccPlanes[1] != p.yccPlanes[2] || p.yccPlanes[0] < p.yccPlanes[1])
+            fail(path, "\"yccplanes\" " + ycc->dump() +
+                           " (relight's renderer reads luminance planes >= chroma planes, the "
+                           "two chroma counts equal)");
+        planes = p.yccPlanes[0] + p.yccPlanes[1] + p.yccPlanes[2];
+    } else {
+        planes = integer(path, info, "nplanes");
+    }
     if (planes < 1 || planes > 3 * 64)
         fail(path, "\"nplanes\" " + std::to_string(planes) + " is not 1..192");
     p.planeCount = int(planes);

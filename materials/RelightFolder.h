@@ -34,7 +34,7 @@ enum class RelightBasis {
 /** A relight folder's info.json and its decoded planes. */
 struct RelightPlanes {
     std::string type;        ///< info.json "type" ("ptm", "hsh", ...)
-    std::string colorspace;  ///< "rgb", "lrgb" or "mrgb" (the others are refused)
+    std::string colorspace;  ///< "rgb", "lrgb", "mrgb" or "mycc" (ycc is refused)
     int width = 0, height = 0;
     int planeCount = 0;  ///< info.json "nplanes"
     /** Light-dependent terms: nplanes / 3 (rgb), nplanes - 3 (lrgb) or nplanes (mrgb). */
@@ -47,6 +47,9 @@ struct RelightPlanes {
     double sigma = 0;
     int resolution = 0;
     RelightBasis basisKind = RelightBasis::Fixed;  ///< the registered type's
+    /** mycc: info.json "yccplanes" (luminance planes, then the two chroma counts, equal); the
+     *  first 3 x yccPlanes[1] planes interleave Y, Co, Cg, the rest are Y. Zeros otherwise. */
+    int yccPlanes[3] = {0, 0, 0};
     /** The lights as written (not normalised: relight's rbf weights use them so). */
     std::vector<glm::vec3> rawLights;
     /** The capture's lights (info.json "lights", x right, y up, z towards the viewer); empty
@@ -70,12 +73,12 @@ struct RelightPlanes {
 };
 
 /** Parses DIR/info.json (`infoPath`) and checks the layout: Error "PATH: problem" for a file that
- *  is not JSON or lacks a key, another colorspace than rgb and lrgb, nplanes that the colorspace
- *  cannot hold, scale or bias arrays whose lengths differ from nplanes or which hold a value that
- *  is not a finite number, lights that are not triples of finite numbers, for colorspace mrgb
- *  (types rbf and bilinear) a missing or short "basis", "range", "sigma" or "resolution", and a
- *  tiled layout
- *  (named) or a missing plane_0.jpg. The planes are left empty. */
+ *  is not JSON or lacks a key, another colorspace than rgb, lrgb, mrgb and mycc, nplanes that
+ *  the colorspace cannot hold, scale or bias arrays whose lengths differ from nplanes or which
+ *  hold a value that is not a finite number, lights that are not triples of finite numbers, for
+ *  colorspaces mrgb and mycc (types rbf and bilinear) a missing or short "basis", "range",
+ *  "sigma", "resolution" or "yccplanes", and a tiled layout (named) or a missing plane_0.jpg.
+ *  The planes are left empty. */
 RelightPlanes readRelightHeader(const std::string& infoPath);
 /** readRelightHeader, then the planes: each plane_j.jpg must be a complete JPEG (Error "PATH:
  *  truncated JPEG (no end-of-image marker)") of the size info.json gives (width and height, or

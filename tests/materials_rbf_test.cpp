@@ -286,6 +286,22 @@ TEST(RelightRbf, BilinearReadsTheOctahedralGridWeights) {
                "light (0.6, 0, 0.8)");
 }
 
+TEST(RelightRbf, MyccReadsItsLuminanceAndChromaPlanesAsRelightRendersThem) {
+    // Only node 2 is non-zero (make_fixtures.py): at light 2 (sigma 0.2: node 2 alone), (Y, Co,
+    // Cg) = mean (0.6, 0.2, 0) + 0.3 E_1 + 0.1 E_2 - 0.1 E_3 + 0.1 E_4 = (1.0, 0.3, -0.1), the
+    // basis channels relight's renderer ignores left out; RGB: tmp = Y - Cg / 2 = 1.05, G = Cg +
+    // tmp = 0.95, B = tmp - Co / 2 = 0.9, R = B + Co = 1.2. JPEG bound: 2 bytes, 0.0078, on each
+    // coefficient; Y holds two: |dR| <= 0.0157 + 0.0039 + 0.0039 = 0.024.
+    const osg::ref_ptr<Material> m = loadMaterial(fixture("relight-rbf-mycc/info.json"));
+    ASSERT_EQ(m->methodName(), std::string("rbf"));
+    EXPECT_EQ(static_cast<const RbfMaterial&>(*m).planes(), 4);
+    expectNear(m->evaluate(2, 1, kView, kL2), glm::vec3(1.2f, 0.95f, 0.9f), 0.025f, "light 2");
+    expectNear(m->evaluate(2, 1, kView, kL0), glm::vec3(0.0f), 1e-6f, "light 0");
+    EXPECT_NE(relightInfo(fixture("relight-rbf-mycc/info.json"))
+                  .find("type rbf, colorspace mycc, 4 planes (4 terms) in 2 JPEGs"),
+              std::string::npos);
+}
+
 TEST(RelightRbf, InfoNamesTheBasis) {
     const std::string rbf = relightInfo(fixture("relight-rbf-mrgb/info.json"));
     EXPECT_NE(rbf.find("type rbf, colorspace mrgb, 3 planes (3 terms) in 1 JPEGs, 4x3"),
@@ -325,18 +341,25 @@ TEST(RelightRbfErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {
     EXPECT_EQ(problem(), info + ": \"basis\"[0] is not a number");
     editInfo(f, "\"51\",", "51,");
     editInfo(f, "\"mrgb\"", "\"rgb\"");
+    EXPECT_EQ(problem(),
+              info +
+                  ": type 'rbf' with colorspace 'rgb' (relight writes its PCA types in mrgb or "
+                  "mycc)");
+    editInfo(f, "\"rgb\"", "\"ycc\"");
+    EXPECT_EQ(problem(), info + ": colorspace 'ycc' is not read (rgb, lrgb, mrgb and mycc are)");
+    // mycc counts its planes in "yccplanes", which this file lacks.
+    editInfo(f, "\"ycc\"", "\"mycc\"");
+    EXPECT_EQ(problem(), info + ": no \"yccplanes\" (colorspace mycc)");
+    editInfo(f, "\"nplanes\": 3", "\"yccplanes\": [1, 1, 2]");
     EXPECT_EQ(problem(), info +
-                             ": type 'rbf' with colorspace 'rgb' (relight writes its PCA types "
-                             "in mrgb or mycc; mrgb is read)");
-    editInfo(f, "\"rgb\"", "\"mycc\"");
-    EXPECT_EQ(problem(), info +
-                             ": colorspace 'mycc' is not read (rgb, lrgb and mrgb are; relight "
-                             "writes ycc and mycc for other bases)");
+                             ": \"yccplanes\" [1,1,2] (relight's renderer reads luminance "
+                             "planes >= chroma planes, the two chroma counts equal)");
+    editInfo(f, "\"yccplanes\": [1, 1, 2]", "\"nplanes\": 3");
     editInfo(f, "\"mycc\"", "\"mrgb\"");
     editInfo(f, "\"rbf\"", "\"ptm\"");
     EXPECT_EQ(problem(), info +
-                             ": colorspace mrgb with type 'ptm' (relight writes mrgb for its "
-                             "PCA types: bilinear, rbf)");
+                             ": colorspace mrgb with type 'ptm' (relight writes mrgb and mycc "
+                             "for its PCA types: bilinear, rbf)");
     editInfo(f, "\"ptm\"", "\"rbf\"");
     // Without lights an rbf has no nodes.
     editInfo(f, "\"lights\"", "\"lightsX\"");

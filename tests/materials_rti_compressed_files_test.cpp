@@ -148,11 +148,12 @@ TEST(RelightFolder, InfoAndPluginNamesAndTheReadOnlyFormat) {
     TempDir dir;
     const osg::ref_ptr<Material> m = loadMaterial(fixture("relight-ptm-rgb/info.json"));
     const std::string target = dir.file("info.json");
-    EXPECT_EQ(errorOf([&] { saveMaterial(*m, target); }),
-              target +
-                  ": osgBTF reads relight's web layout as OpenLIME loads it (info.json + "
-                  "plane_N.jpg; types ptm, hsh (colorspaces rgb, lrgb), rbf and bilinear (mrgb)) "
-                  "but does not write it; save as .btfmat or another tool's file");
+    EXPECT_EQ(
+        errorOf([&] { saveMaterial(*m, target); }),
+        target +
+            ": osgBTF reads relight's web layout as OpenLIME loads it (info.json + "
+            "plane_N.jpg; types ptm, hsh (colorspaces rgb, lrgb), rbf and bilinear (mrgb, mycc)) "
+            "but does not write it; save as .btfmat or another tool's file");
 }
 
 TEST(RelightFolderErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {
@@ -176,9 +177,7 @@ TEST(RelightFolderErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {
     editInfo(f, "\"NaN\"", "1");
     // Another colorspace, another type.
     editInfo(f, "\"lrgb\"", "\"ycc\"");
-    EXPECT_EQ(problem(), info +
-                             ": colorspace 'ycc' is not read (rgb, lrgb and mrgb are; relight "
-                             "writes ycc and mycc for other bases)");
+    EXPECT_EQ(problem(), info + ": colorspace 'ycc' is not read (rgb, lrgb, mrgb and mycc are)");
     editInfo(f, "\"ycc\"", "\"lrgb\"");
     editInfo(f, "\"ptm\"", "\"sh\"");
     EXPECT_EQ(problem(), info + ": type 'sh' is not read (bilinear, hsh, ptm, rbf are)");

@@ -256,6 +256,18 @@ osg::ref_ptr<RbfMaterial> rbfMaterialFromRelight(const std::string& infoPath,
         fail(infoPath, e.what());
     }
     // relight's basis: for p = 0 the mean profile (0..255), for the planes 127 + range_p E_p.
+    // mycc: the profiles are (Y, Co, Cg); relight's renderer reads plane q's channel q % 3 for
+    // the first 3 x yccplanes[1] planes (interleaved Y, Co, Cg) and channel 0 (Y) for the rest,
+    // adds the mean's three channels and converts the sum to RGB with YCoCg's inverse (linear,
+    // relight's Color3::toRgb): tmp = Y - Cg / 2, G = Cg + tmp, B = tmp - Co / 2, R = B + Co.
+    // The weights sum to 1, so converting every basis value gives the same sum.
+    const bool ycc = planes.colorspace == "mycc";
+    const int interleaved = 3 * planes.yccPlanes[1];
+    const auto toRgb = [](const glm::vec3& v) {
+        const float tmp = v[0] - v[2] / 2;
+        const float g = v[2] + tmp, b = tmp - v[1] / 2;
+        return glm::vec3(b + v[1], g, b);
+    };
     const std::size_t n = std::size_t(nodes);
     for (int p = 0; p <= planes.planeCount; ++p)
         for (int i = 0; i < nodes; ++i) {
@@ -264,8 +276,10 @@ osg::ref_ptr<RbfMaterial> rbfMaterialFromRelight(const std::string& infoPath,
                 const double b =
                     planes.basis[(std::size_t(p) * n + std::size_t(i)) * 3 + std::size_t(c)];
                 e[c] = float(p == 0 ? b / 255.0 : (b - 127.0) / planes.range[std::size_t(p - 1)]);
+                const int q = p - 1;
+                if (ycc && p > 0 && c != (q < interleaved ? q % 3 : 0)) e[c] = 0;
             }
-            m->setBasisValue(p, i, e);
+            m->setBasisValue(p, i, ycc ? toRgb(e) : e);
         }
     if (!bilinear)
         for (int i = 0; i < nodes; ++i) m->setNode(i, planes.rawLights[std::size_t(i)]);

@@ -1,6 +1,7 @@
 // Method "rbf": the fragment shader (materials/rbf/rbf.frag) equals RbfMaterial::evaluate for a
 // fitted material (Gaussian weights over the measured lights, at measured lights and between
-// them) and for relight's two PCA types read from the fixtures (rbf and bilinear).
+// them) and for relight's two PCA types read from the fixtures (rbf and bilinear, mrgb; rbf,
+// mycc).
 #include <gtest/gtest.h>
 
 #include "harness/sample/SampleBtf.h"
@@ -39,7 +40,7 @@ TEST(RbfGpu, FittedMaterialMatchesCpu) {
 }
 
 TEST(RbfGpu, RelightRbfAndBilinearMatchCpu) {
-    for (const char* folder : {"relight-rbf-mrgb", "relight-bilinear-mrgb"}) {
+    for (const char* folder : {"relight-rbf-mrgb", "relight-bilinear-mrgb", "relight-rbf-mycc"}) {
         const osg::ref_ptr<Material> m =
             loadMaterial(test::sourceDir() + "/tests/data/rti-files/" + folder + "/info.json");
         test::expectGpuEqualsCpuAtPairs(*m, 2e-3, kPairs, folder);

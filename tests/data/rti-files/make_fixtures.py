@@ -141,6 +141,26 @@ def relight_fixtures():
          "materials": [{"range": [127, 127, 127], "scale": [1, 1, 1],
                         "bias": [0.5, 0.5, 0.5]}]},
         [uniform((204, 128, 128))])
+    # rbf, mycc (relight's luminance + chroma variant): "yccplanes" [2, 1, 1] instead of
+    # "nplanes" (4 planes, 2 JPEGs). The profiles are (Y, Co, Cg); planes 0..2 interleave Y, Co,
+    # Cg (relight's renderer reads channel q % 3 of plane q's basis), plane 3 is Y (channel 0
+    # only): the other channels of those basis entries hold values the renderer ignores. Only
+    # node 2 is non-zero: mean (153, 51, 0) = (0.6, 0.2, 0); E_1 = (1, ignored, ignored), E_2 =
+    # (ignored, 1, 0), E_3 = (0, 0, 1), E_4 = (1, ignored, ignored) (range 127). Coefficients
+    # (scale 1, bias 0.5): plane_0 (204, 153, 102) -> (0.3, 0.1, -0.1), plane_1 153 -> 0.1.
+    # At node 2: (Y, Co, Cg) = (1.0, 0.3, -0.1) -> RGB (1.2, 0.95, 0.9) (YCoCg's inverse).
+    z = [127, 127, 127] * 2
+    relight(
+        "relight-rbf-mycc",
+        {"width": W, "height": H, "format": "jpg", "type": "rbf", "colorspace": "mycc",
+         "sigma": 0.2, "lights": LIGHTS, "yccplanes": [2, 1, 1], "quality": 100,
+         "basis": [0, 0, 0, 0, 0, 0, 153, 51, 0]
+                  + z + [254, 200, 10]
+                  + z + [50, 254, 127]
+                  + z + [127, 127, 254]
+                  + z + [254, 254, 254],
+         "materials": [{"range": [127] * 4, "scale": [1] * 4, "bias": [0.5] * 4}]},
+        [uniform((204, 153, 102)), uniform((153, 128, 128))])
     # A plane of the wrong size, for the hostile tests.
     with open(os.path.join(HERE, "wrong-size-5x3.jpg"), "wb") as f:
         f.write(jpeg_bytes(np.full((3, 5, 3), 128, dtype=np.uint8)))
