@@ -191,7 +191,8 @@ int main(int argc, char** argv) {
             fs::copy_file(rtiData / name, out / "rti_files" / (std::string("seed-") + name),
                           fs::copy_options::overwrite_existing);
         for (const char* folder :
-             {"relight-ptm-lrgb", "relight-ptm-rgb", "relight-hsh-rgb", "relight-hsh-lrgb"}) {
+             {"relight-ptm-lrgb", "relight-ptm-rgb", "relight-hsh-rgb", "relight-hsh-lrgb",
+              "relight-rbf-mrgb", "relight-bilinear-mrgb", "relight-rbf-mycc"}) {
             std::string packed = readWholeFile((rtiData / folder / "info.json").string());
             for (int j = 0; fs::exists(rtiData / folder / ("plane_" + std::to_string(j) + ".jpg"));
                  ++j)

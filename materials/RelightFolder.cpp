@@ -16,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <sstream>
 
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
@@ -116,6 +117,78 @@ std::string text(const std::string& path, const nlohmann::json& info, const char
     return it->get<std::string>().substr(0, 32);
 }
 
+struct RelightType {
+    RelightBuilder builder;
+    RelightBasis basis = RelightBasis::Fixed;
+};
+std::map<std::string, RelightType>& relightTypes();
+std::mutex& registryMutex();
+
+/** The registered basis of a type (Fixed for a type no method reads: refused later by name). */
+RelightBasis basisOf(const std::string& type) {
+    std::lock_guard<std::mutex> lock(registryMutex());
+    const auto it = relightTypes().find(type);
+    return it == relightTypes().end() ? RelightBasis::Fixed : it->second.basis;
+}
+
+/** The registered PCA types (colorspaces mrgb, mycc), for messages: "bilinear, rbf". */
+std::string pcaTypes() {
+    std::lock_guard<std::mutex> lock(registryMutex());
+    std::string list;
+    for (const auto& entry : relightTypes())
+        if (entry.second.basis != RelightBasis::Fixed)
+            list += (list.empty() ? "" : ", ") + entry.first;
+    return list;
+}
+
+/** The basis of relight's PCA types (colorspaces mrgb, mycc): "range" per plane, "sigma" (rbf) or
+ *  "resolution" (bilinear), and "basis", (nplanes + 1) x nodes x 3 numbers. */
+void parsePcaBasis(const std::string& path, const nlohmann::json& info,
+                   const nlohmann::json& material, RelightPlanes& p) {
+    const std::size_t planes = std::size_t(p.planeCount);
+    std::size_t nodes = 0;
+    if (p.basisKind == RelightBasis::GaussianNodes) {
+        const auto sigma = info.find("sigma");
+        if (sigma == info.end()) fail(path, "no \"sigma\" (type " + p.type + ")");
+        p.sigma = finiteNumber(path, *sigma, "\"sigma\"");
+        if (!(p.sigma > 0)) fail(path, "\"sigma\" " + sigma->dump() + " is not positive");
+        if (p.rawLights.empty())
+            fail(path, "no \"lights\" (type " + p.type + " interpolates between them)");
+        nodes = p.rawLights.size();
+    } else {
+        const long long resolution = integer(path, info, "resolution");
+        if (resolution < 2 || resolution > 64)
+            fail(path, "\"resolution\" " + std::to_string(resolution) + " is not 2..64");
+        p.resolution = int(resolution);
+        nodes = std::size_t(resolution * resolution);
+    }
+    const auto range = material.find("range");
+    if (range == material.end())
+        fail(path, "no materials[0].range (colorspace " + p.colorspace + ")");
+    if (!range->is_array() || range->size() != planes)
+        fail(path, "materials[0].range has " +
+                       (range->is_array() ? std::to_string(range->size()) : std::string("no")) +
+                       " values, \"nplanes\" is " + std::to_string(planes));
+    for (std::size_t m = 0; m < planes; ++m) {
+        const double r =
+            finiteNumber(path, (*range)[m], "materials[0].range[" + std::to_string(m) + "]");
+        if (r == 0) fail(path, "materials[0].range[" + std::to_string(m) + "] is 0");
+        p.range.push_back(r);
+    }
+    const auto basis = info.find("basis");
+    if (basis == info.end()) fail(path, "no \"basis\" (colorspace " + p.colorspace + ")");
+    const std::size_t expected = (planes + 1) * nodes * 3;
+    if (!basis->is_array() || basis->size() != expected)
+        fail(path, "\"basis\" has " +
+                       (basis->is_array() ? std::to_string(basis->size()) : std::string("no")) +
+                       " values, (nplanes + 1) x " + std::to_string(nodes) +
+                       (p.basisKind == RelightBasis::GaussianNodes ? " lights" : " grid nodes") +
+                       " x 3 is " + std::to_string(expected));
+    p.basis.reserve(expected);
+    for (std::size_t i = 0; i < expected; ++i)
+        p.basis.push_back(finiteNumber(path, (*basis)[i], "\"basis\"[" + std::to_string(i) + "]"));
+}
+
 struct Quantisation {
     std::vector<double> scale, bias;
 };
@@ -141,15 +214,44 @@ RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
     if (info.contains("format") && info["format"] != "jpg")
         fail(path, "\"format\" is " + info["format"].dump().substr(0, 32) +
                        " (planes in \"jpg\" are read)");
-    if (p.colorspace != "rgb" && p.colorspace != "lrgb")
-        fail(path, "colorspace '" + p.colorspace +
-                       "' is not read (rgb and lrgb are; relight writes ycc, mrgb and mycc for "
-                       "other bases)");
-    const long long planes = integer(path, info, "nplanes");
+    const bool mixed = p.colorspace == "mrgb" || p.colorspace == "mycc";
+    if (p.colorspace != "rgb" && p.colorspace != "lrgb" && !mixed)
+        fail(path, "colorspace '" + p.colorspace + "' is not read (rgb, lrgb, mrgb and mycc are)");
+    // relight writes its PCA types in mrgb or mycc only, the others never so.
+    p.basisKind = basisOf(p.type);
+    const bool pca = p.basisKind != RelightBasis::Fixed;
+    if (pca && !mixed)
+        fail(path, "type '" + p.type + "' with colorspace '" + p.colorspace +
+                       "' (relight writes its PCA types in mrgb or mycc)");
+    if (!pca && mixed)
+        fail(path, "colorspace " + p.colorspace + " with type '" + p.type +
+                       "' (relight writes mrgb and mycc for its PCA types: " + pcaTypes() + ")");
+    long long planes = 0;
+    if (p.colorspace == "mycc") {
+        // mycc: "yccplanes" (luminance, then the two chroma counts) instead of "nplanes".
+        const auto ycc = info.find("yccplanes");
+        if (ycc == info.end()) fail(path, "no \"yccplanes\" (colorspace mycc)");
+        if (!ycc->is_array() || ycc->size() != 3) fail(path, "\"yccplanes\" is not 3 integers");
+        for (std::size_t k = 0; k < 3; ++k) {
+            if (!(*ycc)[k].is_number_integer() || (*ycc)[k].get<long long>() < 0 ||
+                (*ycc)[k].get<long long>() > 3 * 64)
+                fail(path, "\"yccplanes\" is not 3 integers in 0..192");
+            p.yccPlanes[k] = int((*ycc)[k].get<long long>());
+        }
+        if (p.yccPlanes[1] != p.yccPlanes[2] || p.yccPlanes[0] < p.yccPlanes[1])
+            fail(path, "\"yccplanes\" " + ycc->dump() +
+                           " (relight's renderer reads luminance planes >= chroma planes, the "
+                           "two chroma counts equal)");
+        planes = p.yccPlanes[0] + p.yccPlanes[1] + p.yccPlanes[2];
+    } else {
+        planes = integer(path, info, "nplanes");
+    }
     if (planes < 1 || planes > 3 * 64)
         fail(path, "\"nplanes\" " + std::to_string(planes) + " is not 1..192");
     p.planeCount = int(planes);
-    if (p.luminance()) {
+    if (pca) {
+        p.terms = int(planes);
+    } else if (p.luminance()) {
         if (planes < 4)
             fail(path,
                  "colorspace lrgb needs 3 colour planes and at least one luminance plane, "
@@ -198,9 +300,11 @@ RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
                     float(finiteNumber(path, (*lights)[i + std::size_t(a)],
                                        "\"lights\"[" + std::to_string(i + std::size_t(a)) + "]"));
             if (glm::length(l) <= 0) fail(path, "light " + std::to_string(i / 3) + " is zero");
+            p.rawLights.push_back(l);
             p.lights.push_back(glm::normalize(l));
         }
     }
+    if (pca) parsePcaBasis(path, info, material, p);
     const std::string folder = folderOf(path);
     if (!fs::exists(planeName(path, 0), ec)) {
         const std::string layout = tiledLayout(folder);
@@ -214,9 +318,9 @@ RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
 
 // ---- the registry ------------------------------------------------------------------------------
 
-std::map<std::string, RelightBuilder>& relightBuilders() {
-    static std::map<std::string, RelightBuilder> builders;
-    return builders;
+std::map<std::string, RelightType>& relightTypes() {
+    static std::map<std::string, RelightType> types;
+    return types;
 }
 
 std::mutex& registryMutex() {
@@ -288,16 +392,16 @@ RelightPlanes readRelightPlanes(const std::string& infoPath) {
     return p;
 }
 
-bool registerRelightType(const std::string& type, RelightBuilder builder) {
+bool registerRelightType(const std::string& type, RelightBuilder builder, RelightBasis basis) {
     std::lock_guard<std::mutex> lock(registryMutex());
-    relightBuilders()[type] = std::move(builder);
+    relightTypes()[type] = RelightType{std::move(builder), basis};
     return true;
 }
 
 std::vector<std::string> relightTypes() {
     std::lock_guard<std::mutex> lock(registryMutex());
     std::vector<std::string> types;
-    for (const auto& entry : relightBuilders()) types.push_back(entry.first);
+    for (const auto& entry : relightTypes()) types.push_back(entry.first);
     return types;
 }
 
@@ -305,11 +409,18 @@ namespace {
 
 RelightBuilder builderFor(const std::string& infoPath, const std::string& type) {
     std::lock_guard<std::mutex> lock(registryMutex());
-    const auto it = relightBuilders().find(type);
-    if (it != relightBuilders().end()) return it->second;
+    const auto it = relightTypes().find(type);
+    if (it != relightTypes().end()) return it->second.builder;
     std::string known;
-    for (const auto& entry : relightBuilders()) known += (known.empty() ? "" : ", ") + entry.first;
+    for (const auto& entry : relightTypes()) known += (known.empty() ? "" : ", ") + entry.first;
     fail(infoPath, "type '" + type + "' is not read (" + known + " are)");
+}
+
+/** A number as info.json would write it (6 significant digits). */
+std::string shortNumber(double value) {
+    std::ostringstream text;
+    text << value;
+    return text.str();
 }
 
 }  // namespace
@@ -334,7 +445,14 @@ std::string relightInfo(const std::string& infoPath) {
            (p.width ? ", " + std::to_string(p.width) + "x" + std::to_string(p.height) : "") +
            "\nlights: " +
            (p.lights.empty() ? std::string("none recorded")
-                             : std::to_string(p.lights.size()) + " recorded");
+                             : std::to_string(p.lights.size()) + " recorded") +
+           (p.basisKind == RelightBasis::GaussianNodes
+                ? "\nbasis: the lights' PCA profiles, Gaussian weights, sigma " +
+                      shortNumber(p.sigma)
+            : p.resolution > 0
+                ? "\nbasis: PCA profiles on a " + std::to_string(p.resolution) + "x" +
+                      std::to_string(p.resolution) + " octahedral grid, bilinear weights"
+                : std::string());
 }
 
 DirectionSet relightLights(const std::string& infoPath, const RelightPlanes& planes) {

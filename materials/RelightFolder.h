@@ -24,14 +24,34 @@ namespace osgBTF {
 
 class Material;
 
+/** What a relight type's basis is, which says what info.json holds besides the planes. */
+enum class RelightBasis {
+    Fixed,           ///< a fixed function of the light (ptm, hsh): colorspace rgb or lrgb
+    GaussianNodes,   ///< a PCA basis over the lights, Gaussian weights: mrgb, sigma, basis, range
+    OctahedralGrid,  ///< a PCA basis over an octahedral grid: mrgb, resolution, basis, range
+};
+
 /** A relight folder's info.json and its decoded planes. */
 struct RelightPlanes {
     std::string type;        ///< info.json "type" ("ptm", "hsh", ...)
-    std::string colorspace;  ///< "rgb" or "lrgb" (the others are refused)
+    std::string colorspace;  ///< "rgb", "lrgb", "mrgb" or "mycc" (ycc is refused)
     int width = 0, height = 0;
     int planeCount = 0;  ///< info.json "nplanes"
-    /** Light-dependent terms: nplanes / 3 (rgb) or nplanes - 3 (lrgb). */
+    /** Light-dependent terms: nplanes / 3 (rgb), nplanes - 3 (lrgb) or nplanes (mrgb). */
     int terms = 0;
+    /** mrgb (types rbf and bilinear): info.json "basis", (nplanes + 1) x nodes x 3 numbers as
+     *  written (p-major: the mean profile 0..255, then 127 + range_p E_p per plane), "range"
+     *  (nplanes numbers), the rbf's "sigma" and the bilinear's "resolution" (0 for rbf); the
+     *  nodes are the lights (rbf) or resolution^2 grid points (bilinear). */
+    std::vector<double> basis, range;
+    double sigma = 0;
+    int resolution = 0;
+    RelightBasis basisKind = RelightBasis::Fixed;  ///< the registered type's
+    /** mycc: info.json "yccplanes" (luminance planes, then the two chroma counts, equal); the
+     *  first 3 x yccPlanes[1] planes interleave Y, Co, Cg, the rest are Y. Zeros otherwise. */
+    int yccPlanes[3] = {0, 0, 0};
+    /** The lights as written (not normalised: relight's rbf weights use them so). */
+    std::vector<glm::vec3> rawLights;
     /** The capture's lights (info.json "lights", x right, y up, z towards the viewer); empty
      *  when the file has none. */
     std::vector<glm::vec3> lights;
@@ -53,10 +73,12 @@ struct RelightPlanes {
 };
 
 /** Parses DIR/info.json (`infoPath`) and checks the layout: Error "PATH: problem" for a file that
- *  is not JSON or lacks a key, another colorspace than rgb and lrgb, nplanes that the colorspace
- *  cannot hold, scale or bias arrays whose lengths differ from nplanes or which hold a value that
- *  is not a finite number, lights that are not triples of finite numbers, and a tiled layout
- *  (named) or a missing plane_0.jpg. The planes are left empty. */
+ *  is not JSON or lacks a key, another colorspace than rgb, lrgb, mrgb and mycc, nplanes that
+ *  the colorspace cannot hold, scale or bias arrays whose lengths differ from nplanes or which
+ *  hold a value that is not a finite number, lights that are not triples of finite numbers, for
+ *  colorspaces mrgb and mycc (types rbf and bilinear) a missing or short "basis", "range",
+ *  "sigma", "resolution" or "yccplanes", and a tiled layout (named) or a missing plane_0.jpg.
+ *  The planes are left empty. */
 RelightPlanes readRelightHeader(const std::string& infoPath);
 /** readRelightHeader, then the planes: each plane_j.jpg must be a complete JPEG (Error "PATH:
  *  truncated JPEG (no end-of-image marker)") of the size info.json gives (width and height, or
@@ -69,11 +91,12 @@ using RelightBuilder =
     std::function<osg::ref_ptr<Material>(const std::string& infoPath, const RelightPlanes& planes)>;
 /** Registers the method that reads relight type `type`; each method's .cpp calls it from a static
  *  initialiser. Returns true. */
-bool registerRelightType(const std::string& type, RelightBuilder builder);
+bool registerRelightType(const std::string& type, RelightBuilder builder,
+                         RelightBasis basis = RelightBasis::Fixed);
 /** The registered relight types, alphabetically. */
 std::vector<std::string> relightTypes();
-/** The folder as the material of the method that registered its type; Error "PATH: type 'rbf' is
- *  not read (hsh, ptm are)" for others. */
+/** The folder as the material of the method that registered its type; Error "PATH: type 'sh' is
+ *  not read (bilinear, hsh, ptm, rbf are)" for others. */
 osg::ref_ptr<Material> readRelightMaterial(const std::string& infoPath);
 /** What `btf info` prints of info.json (lines). */
 std::string relightInfo(const std::string& infoPath);

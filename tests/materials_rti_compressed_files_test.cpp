@@ -148,11 +148,12 @@ TEST(RelightFolder, InfoAndPluginNamesAndTheReadOnlyFormat) {
     TempDir dir;
     const osg::ref_ptr<Material> m = loadMaterial(fixture("relight-ptm-rgb/info.json"));
     const std::string target = dir.file("info.json");
-    EXPECT_EQ(errorOf([&] { saveMaterial(*m, target); }),
-              target +
-                  ": osgBTF reads relight's web layout as OpenLIME loads it (info.json + "
-                  "plane_N.jpg; colorspaces rgb and lrgb) but does not write it; save as .btfmat "
-                  "or another tool's file");
+    EXPECT_EQ(
+        errorOf([&] { saveMaterial(*m, target); }),
+        target +
+            ": osgBTF reads relight's web layout as OpenLIME loads it (info.json + "
+            "plane_N.jpg; types ptm, hsh (colorspaces rgb, lrgb), rbf and bilinear (mrgb, mycc)) "
+            "but does not write it; save as .btfmat or another tool's file");
 }
 
 TEST(RelightFolderErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {
@@ -175,14 +176,12 @@ TEST(RelightFolderErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {
     EXPECT_EQ(problem(), info + ": materials[0].scale[0] is not a number");
     editInfo(f, "\"NaN\"", "1");
     // Another colorspace, another type.
-    editInfo(f, "\"lrgb\"", "\"mrgb\"");
-    EXPECT_EQ(problem(), info +
-                             ": colorspace 'mrgb' is not read (rgb and lrgb are; relight writes "
-                             "ycc, mrgb and mycc for other bases)");
-    editInfo(f, "\"mrgb\"", "\"lrgb\"");
-    editInfo(f, "\"ptm\"", "\"rbf\"");
-    EXPECT_EQ(problem(), info + ": type 'rbf' is not read (hsh, ptm are)");
-    editInfo(f, "\"rbf\"", "\"ptm\"");
+    editInfo(f, "\"lrgb\"", "\"ycc\"");
+    EXPECT_EQ(problem(), info + ": colorspace 'ycc' is not read (rgb, lrgb, mrgb and mycc are)");
+    editInfo(f, "\"ycc\"", "\"lrgb\"");
+    editInfo(f, "\"ptm\"", "\"sh\"");
+    EXPECT_EQ(problem(), info + ": type 'sh' is not read (bilinear, hsh, ptm, rbf are)");
+    editInfo(f, "\"sh\"", "\"ptm\"");
     // A plane of the wrong size.
     fs::copy_file(fixture("wrong-size-5x3.jpg"), f + "/plane_1.jpg",
                   fs::copy_options::overwrite_existing);

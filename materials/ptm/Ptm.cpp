@@ -332,8 +332,8 @@ const bool ptmRegistered = registerMethodClass<PtmMaterial>([] {
     ForeignFileFormat relightFolder;
     relightFolder.extension = "info.json";
     relightFolder.description =
-        "relight's web layout as OpenLIME loads it (info.json + plane_N.jpg; colorspaces rgb and "
-        "lrgb)";
+        "relight's web layout as OpenLIME loads it (info.json + plane_N.jpg; types ptm, hsh "
+        "(colorspaces rgb, lrgb), rbf and bilinear (mrgb, mycc))";
     relightFolder.read = [](const std::string& path) { return readRelightMaterial(path); };
     relightFolder.info = [](const std::string& path) { return relightInfo(path); };
     // No write: osgBTF reads the layout, and writes .ptm, .rti and its own files.

@@ -110,6 +110,57 @@ def relight_fixtures():
          uniform((204, 153, 153)),
          uniform((153, 153, 153)),
          uniform((102, 153, 153))])
+    # rbf, mrgb, 3 planes (relight's PCA type; docs/formats.md 8.4): one JPEG, coefficient
+    # a_p = (byte / 255 - 0.5) * 1: top row (204, 153, 51) -> (0.3, 0.1, -0.3), the rows below
+    # (255, 102, 153) -> (0.5, -0.1, 0.1). Three lights (nodes). Basis, p-major, per node RGB:
+    # p = 0 the mean profile in 0..255 (node 0 (51, 102, 153) = (0.2, 0.4, 0.6), node 1 0.4 grey,
+    # node 2 (204, 153, 0) = (0.8, 0.6, 0)); p >= 1: 127 + range_p E_p, ranges 127, 63.5, 254:
+    # E_1 = (1, 0, 0), (0, 1, 0), (0, 0, -1); E_2 = 0, 0, (2, 0, 0); E_3 = (-0.5, 0, 0), 0,
+    # (0, 0.5, 0). sigma 0.2: at a node the others weigh exp(-0.4 / 0.04) / (1 + ...) = 4.5e-5
+    # < 0.001 and are dropped, so the value there is the node's profile.
+    relight(
+        "relight-rbf-mrgb",
+        {"width": W, "height": H, "format": "jpg", "type": "rbf", "colorspace": "mrgb",
+         "sigma": 0.2, "lights": LIGHTS, "nplanes": 3, "quality": 100,
+         "basis": [51, 102, 153, 102, 102, 102, 204, 153, 0,
+                   254, 127, 127, 127, 254, 127, 127, 127, 0,
+                   127, 127, 127, 127, 127, 127, 254, 127, 127,
+                   0, 127, 127, 127, 127, 127, 127, 254, 127],
+         "materials": [{"range": [127, 63.5, 254], "scale": [1, 1, 1],
+                        "bias": [0.5, 0.5, 0.5]}]},
+        [rows((204, 153, 51), (255, 102, 153))])
+    # bilinear, mrgb, 3 planes on a 2 x 2 octahedral grid (nodes (0, 0), (1, 0), (0, 1), (1, 1)):
+    # mean profile red, green, blue, black; E_1 = (1, 1, 1) at every node (range 127), E_2 = E_3
+    # = 0. Uniform plane: a = (0.3, 0, 0) (bytes 204, 127.5 -> 128 and 128: scale 1, bias 0.5
+    # gives a_2 = a_3 = 0.002, times E = 0).
+    relight(
+        "relight-bilinear-mrgb",
+        {"width": W, "height": H, "format": "jpg", "type": "bilinear", "resolution": 2,
+         "colorspace": "mrgb", "lights": LIGHTS, "nplanes": 3, "quality": 100,
+         "basis": [255, 0, 0, 0, 255, 0, 0, 0, 255, 0, 0, 0] + [254] * 12 + [127] * 24,
+         "materials": [{"range": [127, 127, 127], "scale": [1, 1, 1],
+                        "bias": [0.5, 0.5, 0.5]}]},
+        [uniform((204, 128, 128))])
+    # rbf, mycc (relight's luminance + chroma variant): "yccplanes" [2, 1, 1] instead of
+    # "nplanes" (4 planes, 2 JPEGs). The profiles are (Y, Co, Cg); planes 0..2 interleave Y, Co,
+    # Cg (relight's renderer reads channel q % 3 of plane q's basis), plane 3 is Y (channel 0
+    # only): the other channels of those basis entries hold values the renderer ignores. Only
+    # node 2 is non-zero: mean (153, 51, 0) = (0.6, 0.2, 0); E_1 = (1, ignored, ignored), E_2 =
+    # (ignored, 1, 0), E_3 = (0, 0, 1), E_4 = (1, ignored, ignored) (range 127). Coefficients
+    # (scale 1, bias 0.5): plane_0 (204, 153, 102) -> (0.3, 0.1, -0.1), plane_1 153 -> 0.1.
+    # At node 2: (Y, Co, Cg) = (1.0, 0.3, -0.1) -> RGB (1.2, 0.95, 0.9) (YCoCg's inverse).
+    z = [127, 127, 127] * 2
+    relight(
+        "relight-rbf-mycc",
+        {"width": W, "height": H, "format": "jpg", "type": "rbf", "colorspace": "mycc",
+         "sigma": 0.2, "lights": LIGHTS, "yccplanes": [2, 1, 1], "quality": 100,
+         "basis": [0, 0, 0, 0, 0, 0, 153, 51, 0]
+                  + z + [254, 200, 10]
+                  + z + [50, 254, 127]
+                  + z + [127, 127, 254]
+                  + z + [254, 254, 254],
+         "materials": [{"range": [127] * 4, "scale": [1] * 4, "bias": [0.5] * 4}]},
+        [uniform((204, 153, 102)), uniform((153, 128, 128))])
     # A plane of the wrong size, for the hostile tests.
     with open(os.path.join(HERE, "wrong-size-5x3.jpg"), "wb") as f:
         f.write(jpeg_bytes(np.full((3, 5, 3), 128, dtype=np.uint8)))
