@@ -121,21 +121,21 @@ struct RelightType {
     RelightBuilder builder;
     RelightBasis basis = RelightBasis::Fixed;
 };
-std::map<std::string, RelightType>& relightTypes();
+std::map<std::string, RelightType>& relightTypeTable();
 std::mutex& registryMutex();
 
 /** The registered basis of a type (Fixed for a type no method reads: refused later by name). */
 RelightBasis basisOf(const std::string& type) {
     std::lock_guard<std::mutex> lock(registryMutex());
-    const auto it = relightTypes().find(type);
-    return it == relightTypes().end() ? RelightBasis::Fixed : it->second.basis;
+    const auto it = relightTypeTable().find(type);
+    return it == relightTypeTable().end() ? RelightBasis::Fixed : it->second.basis;
 }
 
 /** The registered PCA types (colorspaces mrgb, mycc), for messages: "bilinear, rbf". */
 std::string pcaTypes() {
     std::lock_guard<std::mutex> lock(registryMutex());
     std::string list;
-    for (const auto& entry : relightTypes())
+    for (const auto& entry : relightTypeTable())
         if (entry.second.basis != RelightBasis::Fixed)
             list += (list.empty() ? "" : ", ") + entry.first;
     return list;
@@ -318,7 +318,7 @@ RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
 
 // ---- the registry ------------------------------------------------------------------------------
 
-std::map<std::string, RelightType>& relightTypes() {
+std::map<std::string, RelightType>& relightTypeTable() {
     static std::map<std::string, RelightType> types;
     return types;
 }
@@ -394,14 +394,14 @@ RelightPlanes readRelightPlanes(const std::string& infoPath) {
 
 bool registerRelightType(const std::string& type, RelightBuilder builder, RelightBasis basis) {
     std::lock_guard<std::mutex> lock(registryMutex());
-    relightTypes()[type] = RelightType{std::move(builder), basis};
+    relightTypeTable()[type] = RelightType{std::move(builder), basis};
     return true;
 }
 
 std::vector<std::string> relightTypes() {
     std::lock_guard<std::mutex> lock(registryMutex());
     std::vector<std::string> types;
-    for (const auto& entry : relightTypes()) types.push_back(entry.first);
+    for (const auto& entry : relightTypeTable()) types.push_back(entry.first);
     return types;
 }
 
@@ -409,10 +409,10 @@ namespace {
 
 RelightBuilder builderFor(const std::string& infoPath, const std::string& type) {
     std::lock_guard<std::mutex> lock(registryMutex());
-    const auto it = relightTypes().find(type);
-    if (it != relightTypes().end()) return it->second.builder;
+    const auto it = relightTypeTable().find(type);
+    if (it != relightTypeTable().end()) return it->second.builder;
     std::string known;
-    for (const auto& entry : relightTypes()) known += (known.empty() ? "" : ", ") + entry.first;
+    for (const auto& entry : relightTypeTable()) known += (known.empty() ? "" : ", ") + entry.first;
     fail(infoPath, "type '" + type + "' is not read (" + known + " are)");
 }
 
