@@ -168,6 +168,17 @@ nlohmann::json directionJson(const DirectionSet& set) {
     return {{"name", set.name()}, {"count", set.size()}, {"theta_min", lo}, {"theta_max", hi}};
 }
 
+/** The views: and lights: lines of `out`'s direction sets. */
+void printDirections(const nlohmann::json& out) {
+    for (const char* key : {"views", "lights"}) {
+        const auto& d = out[key];
+        std::cout << (std::string(key) + ":").append(10 - std::string(key).size() - 1, ' ')
+                  << d["count"] << " (" << d["name"].get<std::string>() << ", theta "
+                  << d["theta_min"].get<float>() << " to " << d["theta_max"].get<float>()
+                  << " deg)\n";
+    }
+}
+
 void printStats(const nlohmann::json& out) {
     for (const char* name : {"R", "G", "B"}) {
         const auto& r = out["range"][name];
@@ -247,13 +258,7 @@ void infoFactored(const std::string& input, bool json, bool stats, LoadOptions l
               << "format:   " << out["format"].get<std::string>() << " (signature " << f.signature
               << ", " << scalarName(f.scalarSize) << " scalars)\n"
               << "texels:   " << f.width << " x " << f.height << "\n";
-    for (const char* key : {"views", "lights"}) {
-        const auto& d = out[key];
-        std::cout << (std::string(key) + ":").append(10 - std::string(key).size() - 1, ' ')
-                  << d["count"] << " (" << d["name"].get<std::string>() << ", theta "
-                  << d["theta_min"].get<float>() << " to " << d["theta_max"].get<float>()
-                  << " deg)\n";
-    }
+    printDirections(out);
     std::cout << "images:   " << f.imageCount() << " (view, light) pairs\n";
     if (fmf)
         std::cout << "factors:  FMF, rank " << f.components(0)
@@ -320,13 +325,7 @@ void infoLargeCapture(const std::string& input, const RtiCaptureHeader& h, bool 
               << "texels:   " << h.width << " x " << h.height << " (" << std::setprecision(1)
               << double(h.width) * h.height / 1e6 << " megapixels)\n"
               << std::setprecision(4);
-    for (const char* key : {"views", "lights"}) {
-        const auto& d = out[key];
-        std::cout << (std::string(key) + ":").append(10 - std::string(key).size() - 1, ' ')
-                  << d["count"] << " (" << d["name"].get<std::string>() << ", theta "
-                  << d["theta_min"].get<float>() << " to " << d["theta_max"].get<float>()
-                  << " deg)\n";
-    }
+    printDirections(out);
     std::cout << "images:   " << lights << " photos (from the light file; the first one's header "
               << "read, no pixel decoded)\n"
               << "storage:  disk: " << formatBytes(disk) << " decoded into " << outOfCoreFolder()
@@ -429,13 +428,7 @@ Runner addInfoCommand(CLI::App& app, CommonOptions& common) {
         std::cout << std::fixed << std::setprecision(4);
         std::cout << "file:     " << input << "\n"
                   << "texels:   " << btf.width() << " x " << btf.height() << "\n";
-        for (const char* key : {"views", "lights"}) {
-            const auto& d = out[key];
-            std::cout << (std::string(key) + ":").append(10 - std::string(key).size() - 1, ' ')
-                      << d["count"] << " (" << d["name"].get<std::string>() << ", theta "
-                      << d["theta_min"].get<float>() << " to " << d["theta_max"].get<float>()
-                      << " deg)\n";
-        }
+        printDirections(out);
         std::cout << "images:   " << btf.viewCount() * btf.lightCount() << " (view, light) pairs\n"
                   << "storage:  " << out["storage"].get<std::string>() << ", "
                   << formatBytes(btf.memoryBytes()) << " in memory (" << formatBytes(raw8bit)
