@@ -76,11 +76,14 @@ public:
                                   const std::string& temporaryPath, bool half) const = 0;
 
     /** The bytes of an image file of the format `extension` names (RGB, 3 channels): from
-     *  `bytes` (8-bit) when non-null, else from `floats`; `jpegQuality` 1..100 for JPEG.
-     *  Returns false and sets `error` on failure. */
+     *  `bytes` (8-bit) when non-null, else from `floats`; `jpegQuality` 1..100 for JPEG, and
+     *  `fullChroma` for JPEG chroma at full resolution (4:4:4: three unrelated planes in one
+     *  image keep their own detail) instead of libjpeg's 4:2:0. Returns false and sets `error`
+     *  on failure. */
     virtual bool encode(int width, int height, const unsigned char* bytes, const float* floats,
                         const std::string& extension, int jpegQuality,
-                        std::vector<unsigned char>& encoded, std::string& error) const = 0;
+                        std::vector<unsigned char>& encoded, std::string& error,
+                        bool fullChroma = false) const = 0;
 
     /** Draws `text` with its baseline's left end at (x, y), `size` pixels high, every channel set
      *  to `value`, with the DejaVu Sans font or the decoder library's default. False when no

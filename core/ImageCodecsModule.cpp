@@ -243,12 +243,14 @@ public:
 
     bool encode(int width, int height, const unsigned char* bytes, const float* floats,
                 const std::string& extension, int jpegQuality, std::vector<unsigned char>& encoded,
-                std::string& error) const override {
+                std::string& error, bool fullChroma) const override {
         OIIO::ImageSpec spec(width, height, 3,
                              bytes ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
-        if (pluginName(extension) == "jpeg")
+        if (pluginName(extension) == "jpeg") {
             spec.attribute("Compression",
                            "jpeg:" + std::to_string(std::clamp(jpegQuality, 1, 100)));
+            if (fullChroma) spec.attribute("jpeg:subsampling", "4:4:4");
+        }
         const void* pixels = bytes ? static_cast<const void*>(bytes) : floats;
         encoded.clear();
         std::string file;

@@ -1,11 +1,12 @@
 // osgBTF: files of other tools that a method reads and writes as its materials (the RTI field's
-// .ptm for `ptm`, .rti for `hsh`, relight's info.json folder, read only), registered with the
-// method (MethodInfo::foreignFiles) so that loadMaterial, saveMaterial, `btf info`, `btf fit -o`
-// and the osgDB plugins find them by extension.
+// .ptm for `ptm`, .rti for `hsh`, relight's info.json folder for ptm, hsh and rbf), registered with
+// the method (MethodInfo::foreignFiles) so that loadMaterial, saveMaterial, `btf info`, `btf fit
+// -o` and the osgDB plugins find them by extension.
 #pragma once
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <osg/ref_ptr>
 
@@ -26,6 +27,11 @@ struct ForeignFileFormat {
      *  lost. Throws Error "PATH: problem" for a material the format cannot hold. Empty for a
      *  format osgBTF only reads (saveMaterial and `btf fit -o` refuse it). */
     std::function<std::string(const Material&, const std::string& path)> write;
+    /** For a format that holds materials of several methods (relight's layout): those methods
+     *  (saveMaterial and `btf fit -o` accept them). Empty: only the method that registered it. */
+    std::function<std::vector<std::string>()> methods;
+    /** Whether `write` takes a material of `method`. */
+    bool writes(const std::string& owner, const std::string& method) const;
     /** The file's header as `btf info` prints it (lines). */
     std::function<std::string(const std::string& path)> info;
 };

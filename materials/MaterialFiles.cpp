@@ -1,5 +1,6 @@
 #include "materials/MaterialFiles.h"
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 
@@ -28,14 +29,30 @@ const ForeignFileFormat* findForeignFile(const std::string& path, std::string* m
     return nullptr;
 }
 
+bool ForeignFileFormat::writes(const std::string& owner, const std::string& method) const {
+    if (!methods) return method == owner;
+    const std::vector<std::string> list = methods();
+    return std::find(list.begin(), list.end(), method) != list.end();
+}
+
+std::string writtenMethodsText(const ForeignFileFormat& format, const std::string& owner) {
+    if (!format.methods) return "a " + owner;
+    std::string text;
+    const std::vector<std::string> list = format.methods();
+    for (std::size_t i = 0; i < list.size(); ++i)
+        text += (i == 0 ? "" : i + 1 == list.size() ? " or " : ", ") + list[i];
+    return "a " + text;
+}
+
 std::string saveMaterial(const Material& material, const std::string& path) {
     std::string owner;
     if (const ForeignFileFormat* format = findForeignFile(path, &owner)) {
         if (!format->write)
             fail(path, "osgBTF reads " + format->description +
                            " but does not write it; save as .btfmat or another tool's file");
-        if (material.methodName() != owner)
-            fail(path, "a " + format->extension + " file holds a " + owner + " material, not " +
+        if (!format->writes(owner, material.methodName()))
+            fail(path, "a " + format->extension + " file holds " +
+                           writtenMethodsText(*format, owner) + " material, not " +
                            material.methodName());
         return format->write(material, path);
     }

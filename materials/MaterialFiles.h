@@ -14,8 +14,8 @@
 namespace osgBTF {
 
 /** Saves through the fitted-material container (atomic), or as another tool's file where a method
- *  registered the extension (MethodInfo::foreignFiles; the material must be of that method, else
- *  Error "PATH: a .ptm file holds a ptm material, not hsh"). Returns what the foreign format's
+ *  registered the extension (MethodInfo::foreignFiles; the material must be of a method it holds,
+ *  else Error "PATH: a .ptm file holds a ptm material, not hsh"). Returns what the foreign format's
  *  quantisation lost (one line), empty for the container. */
 std::string saveMaterial(const Material& material, const std::string& path);
 /** Loads any registered method's file, or another tool's file by its registered extension;
@@ -24,6 +24,9 @@ osg::ref_ptr<Material> loadMaterial(const std::string& path);
 /** The foreign file format registered for `path`'s extension (any case), with the name of the
  *  method that registered it; null when none. */
 const ForeignFileFormat* findForeignFile(const std::string& path, std::string* method = nullptr);
+/** "a ptm" or, for a format of several methods, "a hsh, ptm or rbf": what `format` holds, for
+ *  messages. */
+std::string writtenMethodsText(const ForeignFileFormat& format, const std::string& owner);
 /** Any registered method's material from its file, which the method may take apart. */
 osg::ref_ptr<Material> materialFromFile(FittedMaterial file);
 

@@ -11,6 +11,7 @@
 #include "materials/RelightFolder.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -28,6 +29,7 @@
 #include "core/SizeGuard.h"
 #include "materials/ForeignFiles.h"
 #include "materials/Material.h"
+#include "materials/RelightLayoutWriter.h"
 
 namespace osgBTF {
 
@@ -308,6 +310,10 @@ RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
     const std::string folder = folderOf(path);
     if (!fs::exists(planeName(path, 0), ec)) {
         const std::string layout = tiledLayout(folder);
+        if (layout.rfind("deepzoom", 0) == 0) {
+            p.deepZoom = true;
+            return p;
+        }
         if (!layout.empty())
             fail(path, "relight's tiled layout " + layout +
                            " is not read; the single-image layout (plane_0.jpg ...) is");
@@ -330,6 +336,124 @@ std::mutex& registryMutex() {
 
 }  // namespace
 
+// ---- the deep-zoom layout ----------------------------------------------------------------------
+
+namespace {
+
+/** An attribute's integer value in a .dzi (Microsoft's Deep Zoom XML: one Image element with
+ *  Format, Overlap and TileSize, one Size element with Width and Height); -1 when absent. */
+long long dziAttribute(const std::string& xml, const std::string& name) {
+    const std::string key = name + "=\"";
+    const std::size_t at = xml.find(key);
+    if (at == std::string::npos) return -1;
+    std::size_t end = at + key.size();
+    long long value = 0;
+    for (; end < xml.size() && std::isdigit(static_cast<unsigned char>(xml[end])); ++end) {
+        value = value * 10 + (xml[end] - '0');
+        if (value > (1LL << 31)) return -1;
+    }
+    return end < xml.size() && xml[end] == '"' && end > at + key.size() ? value : -1;
+}
+
+struct DziHeader {
+    std::string path;
+    int tileSize = 0, overlap = 0, width = 0, height = 0;
+};
+
+DziHeader readDzi(const std::string& infoPath, int j) {
+    DziHeader d;
+    d.path = (fs::path(folderOf(infoPath)) / ("plane_" + std::to_string(j) + ".dzi")).string();
+    std::error_code ec;
+    if (!fs::is_regular_file(d.path, ec))
+        fail(d.path, "no such file (the deep-zoom layout of " + infoPath + ")");
+    if (fs::file_size(d.path, ec) > 65536) fail(d.path, "is too large for a .dzi (at most 64 KiB)");
+    const std::string xml = readWholeFile(d.path);
+    if (xml.find("<Image") == std::string::npos) fail(d.path, "not a Deep Zoom .dzi (no <Image>)");
+    const long long tile = dziAttribute(xml, "TileSize"), overlap = dziAttribute(xml, "Overlap");
+    const long long w = dziAttribute(xml, "Width"), h = dziAttribute(xml, "Height");
+    if (tile < 1 || tile > 8192 || overlap < 0 || overlap >= tile)
+        fail(d.path,
+             "TileSize and Overlap are not integers with 1 <= TileSize <= 8192 and 0 <= "
+             "Overlap < TileSize");
+    if (xml.find("Format=\"jpg\"") == std::string::npos &&
+        xml.find("Format=\"jpeg\"") == std::string::npos)
+        fail(d.path, "Format is not \"jpg\" (tiles in JPEG are read)");
+    if (w < 1 || h < 1 || w > (1 << 20) || h > (1 << 20))
+        fail(d.path, "Size Width and Height are not 1..1048576");
+    d.tileSize = int(tile);
+    d.overlap = int(overlap);
+    d.width = int(w);
+    d.height = int(h);
+    return d;
+}
+
+/** The full-size level of plane_j.dzi's pyramid (relight's deep-zoom numbering,
+ *  RelightLayoutWriter.h deepZoomLevels), its tiles put together: width x height x 3 bytes,
+ *  rows top down. */
+std::vector<unsigned char> readDeepZoomPlane(const std::string& infoPath, int j, int width,
+                                             int height) {
+    const DziHeader d = readDzi(infoPath, j);
+    if (d.width != width || d.height != height)
+        fail(d.path, "Size is " + std::to_string(d.width) + "x" + std::to_string(d.height) +
+                         ", info.json gives " + std::to_string(width) + "x" +
+                         std::to_string(height));
+    const int ts = d.tileSize, ov = d.overlap;
+    const int level = int(deepZoomLevels(width, height, ts).size()) - 1;
+    const fs::path levelFolder = fs::path(folderOf(infoPath)) /
+                                 ("plane_" + std::to_string(j) + "_files") / std::to_string(level);
+    std::vector<unsigned char> pixels(std::size_t(width) * std::size_t(height) * 3);
+    const int cols = (width + ts - 1) / ts, rows = (height + ts - 1) / ts;
+    std::error_code ec;
+    for (int row = 0; row < rows; ++row)
+        for (int col = 0; col < cols; ++col) {
+            const int x0 = std::max(0, col * ts - ov), y0 = std::max(0, row * ts - ov);
+            const int x1 = std::min(width, (col + 1) * ts + ov);
+            const int y1 = std::min(height, (row + 1) * ts + ov);
+            const std::string name =
+                (levelFolder / (std::to_string(col) + "_" + std::to_string(row) + ".jpg")).string();
+            if (!fs::is_regular_file(name, ec))
+                fail(name, "no such file (tile " + std::to_string(col) + "," + std::to_string(row) +
+                               " of level " + std::to_string(level) + ", the full size of " +
+                               d.path + ")");
+            const std::string bytes = readWholeFile(name);
+            const std::vector<unsigned char> tile =
+                decodeJpeg(name, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(),
+                           x1 - x0, y1 - y0, 3,
+                           "its place in " + d.path + " gives " + std::to_string(x1 - x0) + "x" +
+                               std::to_string(y1 - y0) + " with 3 channels");
+            // The tile's own pixels, without the overlap it shares with its neighbours.
+            const int ix = col * ts, iy = row * ts;
+            const int iw = std::min(width, ix + ts) - ix, ih = std::min(height, iy + ts) - iy;
+            for (int y = 0; y < ih; ++y)
+                std::copy_n(tile.data() + (std::size_t(y + iy - y0) * std::size_t(x1 - x0) +
+                                           std::size_t(ix - x0)) *
+                                              3,
+                            std::size_t(iw) * 3,
+                            pixels.data() +
+                                (std::size_t(y + iy) * std::size_t(width) + std::size_t(ix)) * 3);
+        }
+    return pixels;
+}
+
+/** plane_j.jpg, decoded: width x height x 3 bytes, rows top down. */
+std::vector<unsigned char> readPlaneJpeg(const std::string& infoPath, int j, const RelightPlanes& p,
+                                         const std::string& expected) {
+    const int jpegs = (p.planeCount + 2) / 3;
+    const std::string name = planeName(infoPath, j);
+    std::error_code ec;
+    if (!fs::is_regular_file(name, ec))
+        fail(name, "no such file (" + infoPath + " has " + std::to_string(p.planeCount) +
+                       " planes: plane_0.jpg .. plane_" + std::to_string(jpegs - 1) + ".jpg)");
+    const std::uintmax_t size = fs::file_size(name, ec);
+    if (ec) fail(name, "cannot be read: " + ec.message());
+    checkMemory(size, name);
+    const std::string bytes = readWholeFile(name);
+    return decodeJpeg(name, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(),
+                      p.width, p.height, 3, expected);
+}
+
+}  // namespace
+
 RelightPlanes readRelightHeader(const std::string& infoPath) {
     Quantisation q;
     return parseInfo(infoPath, q);
@@ -339,7 +463,11 @@ RelightPlanes readRelightPlanes(const std::string& infoPath) {
     Quantisation q;
     RelightPlanes p = parseInfo(infoPath, q);
     const int jpegs = (p.planeCount + 2) / 3;
-    if (p.width == 0 || p.height == 0) {
+    if (p.deepZoom && (p.width == 0 || p.height == 0)) {
+        const DziHeader d = readDzi(infoPath, 0);
+        p.width = d.width;
+        p.height = d.height;
+    } else if (p.width == 0 || p.height == 0) {
         // Without width and height in info.json (OpenLIME does not need them): plane_0's size.
         std::string error;
         const std::string first = planeName(infoPath, 0);
@@ -361,18 +489,9 @@ RelightPlanes readRelightPlanes(const std::string& infoPath) {
     const std::string expected = "info.json gives " + std::to_string(p.width) + "x" +
                                  std::to_string(p.height) + " with 3 channels";
     for (int j = 0; j < jpegs; ++j) {
-        const std::string name = planeName(infoPath, j);
-        std::error_code ec;
-        if (!fs::is_regular_file(name, ec))
-            fail(name, "no such file (" + infoPath + " has " + std::to_string(p.planeCount) +
-                           " planes: plane_0.jpg .. plane_" + std::to_string(jpegs - 1) + ".jpg)");
-        const std::uintmax_t size = fs::file_size(name, ec);
-        if (ec) fail(name, "cannot be read: " + ec.message());
-        checkMemory(size, name);
-        const std::string bytes = readWholeFile(name);
         const std::vector<unsigned char> pixels =
-            decodeJpeg(name, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(),
-                       p.width, p.height, 3, expected);
+            p.deepZoom ? readDeepZoomPlane(infoPath, j, p.width, p.height)
+                       : readPlaneJpeg(infoPath, j, p, expected);
         for (int c = 0; c < 3; ++c) {
             const int m = 3 * j + c;
             if (m >= p.planeCount) break;  // the unused channels of the last JPEG
@@ -439,9 +558,11 @@ osg::ref_ptr<Material> readRelightMaterial(const std::string& infoPath) {
 std::string relightInfo(const std::string& infoPath) {
     const RelightPlanes p = readRelightHeader(infoPath);
     builderFor(infoPath, p.type);
-    return "relight web layout (single images), type " + p.type + ", colorspace " + p.colorspace +
-           ", " + std::to_string(p.planeCount) + " planes (" + std::to_string(p.terms) +
-           " terms) in " + std::to_string((p.planeCount + 2) / 3) + " JPEGs" +
+    return std::string("relight web layout (") +
+           (p.deepZoom ? "deep-zoom pyramids" : "single images") + "), type " + p.type +
+           ", colorspace " + p.colorspace + ", " + std::to_string(p.planeCount) + " planes (" +
+           std::to_string(p.terms) + " terms) in " + std::to_string((p.planeCount + 2) / 3) +
+           (p.deepZoom ? " pyramids" : " JPEGs") +
            (p.width ? ", " + std::to_string(p.width) + "x" + std::to_string(p.height) : "") +
            "\nlights: " +
            (p.lights.empty() ? std::string("none recorded")

@@ -47,6 +47,9 @@ struct RelightPlanes {
     double sigma = 0;
     int resolution = 0;
     RelightBasis basisKind = RelightBasis::Fixed;  ///< the registered type's
+    /** The planes are relight's deep-zoom pyramids (plane_j.dzi + plane_j_files/), not
+     *  plane_j.jpg; the full-size level is read. */
+    bool deepZoom = false;
     /** mycc: info.json "yccplanes" (luminance planes, then the two chroma counts, equal); the
      *  first 3 x yccPlanes[1] planes interleave Y, Co, Cg, the rest are Y. Zeros otherwise. */
     int yccPlanes[3] = {0, 0, 0};

@@ -334,6 +334,10 @@ const bool hshRegistered = registerMethodClass<HshMaterial>([] {
     m.foreignFiles.push_back(std::move(rtiFile));
     return m;
 }());
+const bool kRelightHshWriter =
+    registerRelightWriter("hsh", [](const Material& material, const std::string& path) {
+        return relightModelOfHsh(static_cast<const HshMaterial&>(material), path);
+    });
 const bool kRelightHsh = registerRelightType(
     "hsh", [](const std::string& path, const RelightPlanes& planes) -> osg::ref_ptr<Material> {
         return hshMaterialFromRelight(path, planes);

@@ -169,6 +169,22 @@ osg::ref_ptr<HshMaterial> hshMaterialFromRelight(const std::string& infoPath,
     return m;
 }
 
+RelightModel relightModelOfHsh(const HshMaterial& material, const std::string& infoPath) {
+    if (material.shape().perView)
+        fail(infoPath,
+             "relight's web layout holds one view; this hsh material has one per view "
+             "(views=all): fit with views=front");
+    const int terms = material.terms();
+    RelightModel model = relightModelFrame(material, infoPath, "hsh", "rgb", 3 * terms);
+    const std::size_t texels = material.texelCount();
+    for (int k = 0; k < terms; ++k)
+        for (int c = 0; c < 3; ++c) {
+            float* plane = model.planes.data() + std::size_t(3 * k + c) * texels;
+            for (std::size_t t = 0; t < texels; ++t) plane[t] = material.coefficient(t, 0, k, c);
+        }
+    return model;
+}
+
 // ---- writing -----------------------------------------------------------------------------------
 
 std::pair<double, double> writeRtiFile(const HshMaterial& material, const std::string& path) {

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "materials/RelightLayoutWriter.h"
 #include "materials/hsh/Hsh.h"
 
 namespace osgBTF {
@@ -48,6 +49,11 @@ struct RelightPlanes;
  *  else the nominal ones. Error "PATH: problem" for a term count other than 4, 9 or 16. */
 osg::ref_ptr<HshMaterial> hshMaterialFromRelight(const std::string& infoPath,
                                                  const RelightPlanes& planes);
+
+/** A front-view hsh material as relight's layout holds it (materials/RelightLayoutWriter.h): type
+ *  hsh, colorspace rgb, plane 3 k + c term k (Hsh.h's order) of colour c. Error "PATH: problem"
+ *  for a per-view material. */
+RelightModel relightModelOfHsh(const HshMaterial& material, const std::string& infoPath);
 
 /** Writes a front-view hsh material as 8-bit terms: per term the range of its values over the
  *  image and channels, each byte the nearest step. Written to PATH.tmp<pid> and renamed. Returns

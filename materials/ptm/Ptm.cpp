@@ -15,6 +15,7 @@
 #include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
 #include "materials/RelightFolder.h"
+#include "materials/RelightLayoutWriter.h"
 #include "materials/ptm/PtmFile.h"
 
 namespace osgBTF {
@@ -332,14 +333,22 @@ const bool ptmRegistered = registerMethodClass<PtmMaterial>([] {
     ForeignFileFormat relightFolder;
     relightFolder.extension = "info.json";
     relightFolder.description =
-        "relight's web layout as OpenLIME loads it (info.json + plane_N.jpg; types ptm, hsh "
-        "(colorspaces rgb, lrgb), rbf and bilinear (mrgb, mycc))";
+        "relight's web layout as OpenLIME loads it (info.json + plane_N.jpg or deep-zoom "
+        "pyramids; types ptm, hsh (colorspaces rgb, lrgb), rbf and bilinear (mrgb, mycc))";
     relightFolder.read = [](const std::string& path) { return readRelightMaterial(path); };
     relightFolder.info = [](const std::string& path) { return relightInfo(path); };
-    // No write: osgBTF reads the layout, and writes .ptm, .rti and its own files.
+    // Written for every method that registered a relight writer (RelightLayoutWriter.h).
+    relightFolder.methods = [] { return relightWriterMethods(); };
+    relightFolder.write = [](const Material& material, const std::string& path) {
+        return writeRelightLayout(material, path);
+    };
     m.foreignFiles.push_back(std::move(relightFolder));
     return m;
 }());
+const bool kRelightPtmWriter =
+    registerRelightWriter("ptm", [](const Material& material, const std::string& path) {
+        return relightModelOfPtm(static_cast<const PtmMaterial&>(material), path);
+    });
 const bool kRelightPtm = registerRelightType(
     "ptm", [](const std::string& path, const RelightPlanes& planes) -> osg::ref_ptr<Material> {
         return ptmMaterialFromRelight(path, planes);

@@ -318,6 +318,36 @@ osg::ref_ptr<PtmMaterial> ptmMaterialFromRelight(const std::string& infoPath,
     return m;
 }
 
+RelightModel relightModelOfPtm(const PtmMaterial& material, const std::string& infoPath) {
+    if (material.shape().perView)
+        fail(infoPath,
+             "relight's web layout holds one view; this ptm material has one per view "
+             "(views=all): fit with views=front");
+    const bool luminance = material.shape().luminance;
+    RelightModel model = relightModelFrame(material, infoPath, "ptm", luminance ? "lrgb" : "rgb",
+                                           luminance ? 3 + 6 : 18);
+    model.baseColourPlanes = luminance;
+    constexpr int kWeb[6] = {5, 3, 4, 0, 2, 1};  // as ptmMaterialFromRelight
+    const std::size_t texels = material.texelCount();
+    const auto plane = [&](int m) { return model.planes.data() + std::size_t(m) * texels; };
+    for (std::size_t t = 0; t < texels; ++t) {
+        if (luminance) {
+            // colour x P = (colour / s) x (s P): the colour fits relight's 0..1 base colour.
+            float s = 0;
+            for (int c = 0; c < 3; ++c) s = std::max(s, material.colour[t * 3 + std::size_t(c)]);
+            if (!(s > 0)) s = 1;
+            for (int c = 0; c < 3; ++c) plane(c)[t] = material.colour[t * 3 + std::size_t(c)] / s;
+            for (int k = 0; k < 6; ++k)
+                plane(3 + k)[t] = s * material.coefficient(t, 0, kWeb[k], 0);
+        } else {
+            for (int k = 0; k < 6; ++k)
+                for (int c = 0; c < 3; ++c)
+                    plane(3 * k + c)[t] = material.coefficient(t, 0, kWeb[k], c);
+        }
+    }
+    return model;
+}
+
 // ---- writing -----------------------------------------------------------------------------------
 
 PtmQuantisation writePtmFile(const PtmMaterial& material, const std::string& path) {

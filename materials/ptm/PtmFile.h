@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "materials/RelightLayoutWriter.h"
 #include "materials/ptm/Ptm.h"
 
 namespace osgBTF {
@@ -79,6 +80,13 @@ osg::ref_ptr<PtmMaterial> ptmMaterialFromBytes(const std::string& name, const st
 osg::ref_ptr<PtmMaterial> readPtmFile(const std::string& path);
 
 struct RelightPlanes;
+/** A front-view ptm material as relight's layout holds it (materials/RelightLayoutWriter.h):
+ *  type ptm; colour rgb as colorspace rgb (plane 3 k + c: term k of relight's order 1, x, y,
+ *  x^2, xy, y^2, colour c), luminance as lrgb (planes 0..2 the base colour scaled per texel so
+ *  that its largest channel is 1, the polynomial scaled by the inverse: the same product).
+ *  Error "PATH: problem" for a per-view material. */
+RelightModel relightModelOfPtm(const PtmMaterial& material, const std::string& infoPath);
+
 /** A relight folder of type ptm (materials/RelightFolder.h) as a front-view `ptm` material: rgb
  *  as colour rgb, lrgb as colour luminance (the base colour plane_0 and the luminance planes as
  *  they are); the web order of the terms (1, x, y, x^2, xy, y^2; 3 terms: first degree) mapped

@@ -290,6 +290,29 @@ osg::ref_ptr<RbfMaterial> rbfMaterialFromRelight(const std::string& infoPath,
     return m;
 }
 
+RelightModel relightModelOfRbf(const RbfMaterial& material, const std::string& infoPath) {
+    const bool bilinear = material.resolution() > 0;
+    RelightModel model = relightModelFrame(material, infoPath, bilinear ? "bilinear" : "rbf",
+                                           "mrgb", material.planes());
+    const std::size_t texels = material.texelCount();
+    for (int p = 0; p < material.planes(); ++p) {
+        float* plane = model.planes.data() + std::size_t(p) * texels;
+        for (std::size_t t = 0; t < texels; ++t) plane[t] = material.coefficient(t, p);
+    }
+    const int nodes = material.nodeCount();
+    for (int p = 0; p <= material.planes(); ++p)
+        for (int i = 0; i < nodes; ++i) model.basis.push_back(material.basisValue(p, i));
+    if (bilinear) {
+        model.resolution = material.resolution();
+    } else {
+        // The weights interpolate between the nodes: they are the layout's lights.
+        model.lights.clear();
+        for (int i = 0; i < nodes; ++i) model.lights.push_back(material.node(i));
+        model.sigma = material.sigma();
+    }
+    return model;
+}
+
 // ---- StateSet ----------------------------------------------------------------------------------
 
 osg::ref_ptr<osg::StateSet> RbfMaterial::createStateSet() const {
@@ -354,6 +377,10 @@ const bool rbfRegistered = registerMethodClass<RbfMaterial>([] {
 // coefficients.
 const bool rbfSharedTextures = declareSharedTextures(RbfMaterial::kMethod, {"basis", "nodes"});
 
+const bool kRelightRbfWriter =
+    registerRelightWriter("rbf", [](const Material& material, const std::string& path) {
+        return relightModelOfRbf(static_cast<const RbfMaterial&>(material), path);
+    });
 const bool kRelightRbf = registerRelightType(
     "rbf",
     [](const std::string& path, const RelightPlanes& planes) -> osg::ref_ptr<Material> {

@@ -37,6 +37,7 @@
 
 #include "materials/MethodMaterial.h"
 #include "materials/MethodOptions.h"
+#include "materials/RelightLayoutWriter.h"
 #include "materials/StoredValues.h"
 
 namespace osgBTF {
@@ -166,5 +167,10 @@ private:
  *  the mean / 255), the planes' coefficients as RelightFolder dequantises them. */
 osg::ref_ptr<RbfMaterial> rbfMaterialFromRelight(const std::string& infoPath,
                                                  const RelightPlanes& planes);
+
+/** An rbf material as relight's layout holds it (materials/RelightLayoutWriter.h): type rbf
+ *  (the nodes written as info.json's lights, sigma) or bilinear (resolution), colorspace mrgb,
+ *  the coefficients as planes, the basis unquantised (the writer quantises it as relight does). */
+RelightModel relightModelOfRbf(const RbfMaterial& material, const std::string& infoPath);
 
 }  // namespace osgBTF

@@ -32,6 +32,7 @@ Runner addSynthesizeCommand(CLI::App& app, CommonOptions& common);
 Runner addMakeTileableCommand(CLI::App& app, CommonOptions& common);
 Runner addTilesCommand(CLI::App& app, CommonOptions& common);
 Runner addBatchCommand(CLI::App& app, CommonOptions& common);
+Runner addExportCommand(CLI::App& app, CommonOptions& common);
 
 /** "laf, slaf, rf": the registered methods that have fit option `key` (for help texts). */
 std::string methodsWithOption(const std::string& key);

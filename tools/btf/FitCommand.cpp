@@ -118,9 +118,11 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             fail(options->output, "osgBTF reads " + foreign->description +
                                       " but does not write it; save as .btfmat or another "
                                       "tool's file");
-        if (foreign && foreignOwner != method.name)
-            fail(options->output, "a " + foreign->extension + " file holds a " + foreignOwner +
-                                      " material; fit it with -m " + foreignOwner);
+        if (foreign && !foreign->writes(foreignOwner, method.name))
+            fail(options->output,
+                 "a " + foreign->extension + " file holds " +
+                     writtenMethodsText(*foreign, foreignOwner) + " material; fit it with " +
+                     (foreign->methods ? "one of those methods" : "-m " + foreignOwner));
         if (foreign && options->mipmap)
             fail(options->output, "a " + foreign->extension + " file has no mip levels");
         // Mip-mapped unless asked otherwise (every method's file grows by at most

@@ -83,7 +83,8 @@ int main(int argc, char** argv) {
         tool::addContactSheetCommand(app, common), tool::addFitCommand(app, common),
         tool::addEvalCommand(app, common),         tool::addCompareCommand(app, common),
         tool::addSynthesizeCommand(app, common),   tool::addMakeTileableCommand(app, common),
-        tool::addTilesCommand(app, common),        tool::addBatchCommand(app, common)};
+        tool::addTilesCommand(app, common),        tool::addBatchCommand(app, common),
+        tool::addExportCommand(app, common)};
     try {
         app.parse(argc, argv);
         Progress::setEnabled(progress);
