@@ -316,7 +316,8 @@ RelightPlanes parseInfo(const std::string& path, Quantisation& quantisation) {
         }
         if (!layout.empty())
             fail(path, "relight's tiled layout " + layout +
-                           " is not read; the single-image layout (plane_0.jpg ...) is");
+                           " is not read; the single-image (plane_0.jpg ...) and deep-zoom "
+                           "(plane_0.dzi ...) layouts are");
         fail(planeName(path, 0), "no such file (the first plane of " + path + ")");
     }
     return p;

@@ -96,8 +96,9 @@ RelightQuantisation relightRange(std::vector<float>& values, double quantile) {
     std::nth_element(values.begin() + std::ptrdiff_t(low), values.begin() + std::ptrdiff_t(high),
                      values.end());
     float max = values[high];
-    // relight's 1e-6 is in its 0..255 units.
-    if (max <= min) max = min + 1e-6f / 255.0f;
+    // relight adds 1e-6 in its 0..255 units; a float min much above 1e-6 swallows that (scale 0,
+    // then a division by 0), so the step is also at least min's own precision.
+    if (max <= min) max = min + std::max(1e-6f / 255.0f, std::fabs(min) * 1e-5f);
     q.scale = max - min;
     q.bias = -min / q.scale;
     return q;

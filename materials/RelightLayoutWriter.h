@@ -87,7 +87,8 @@ struct RelightQuantisation {
 
 /** A plane's range as relight's RtiBuilder::minmaxMaterial takes it: the values at the quantiles
  *  (1 - q) / 2 and (1 + q) / 2 (indices truncated) of `values` (reordered), max raised to min +
- * 1e-6 / 255 when equal; scale = max - min, bias = -min / (max - min). */
+ *  1e-6 / 255 (or 1e-5 |min|, where float precision needs it) when equal; scale = max - min,
+ *  bias = -min / (max - min). */
 RelightQuantisation relightRange(std::vector<float>& values, double quantile);
 
 /** The bytes of relight's basis for an mrgb model: the mean truncated to 0..255, then per plane

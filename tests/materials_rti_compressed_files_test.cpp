@@ -20,9 +20,11 @@
 #include "core/FloatImage.h"
 #include "core/MeasuredBtf.h"
 #include "materials/MaterialFiles.h"
+#include "materials/MethodRegistry.h"
 #include "materials/RelightFolder.h"
 #include "materials/hsh/Hsh.h"
 #include "materials/ptm/PtmFile.h"
+#include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 
 namespace OSGBTF_TEST_FILE {
@@ -148,12 +150,14 @@ TEST(RelightFolder, InfoAndPluginNamesAndTheReadOnlyFormat) {
     TempDir dir;
     const osg::ref_ptr<Material> m = loadMaterial(fixture("relight-ptm-rgb/info.json"));
     const std::string target = dir.file("info.json");
-    EXPECT_EQ(
-        errorOf([&] { saveMaterial(*m, target); }),
-        target +
-            ": osgBTF reads relight's web layout as OpenLIME loads it (info.json + "
-            "plane_N.jpg; types ptm, hsh (colorspaces rgb, lrgb), rbf and bilinear (mrgb, mycc)) "
-            "but does not write it; save as .btfmat or another tool's file");
+    // Written too (tests/materials_relight_writer_test.cpp): here only that saveMaterial goes
+    // there, and that a material of another method is refused with the methods it holds.
+    EXPECT_EQ(saveMaterial(*m, target).rfind("18 planes in 6 JPEGs (quality 95)", 0), 0u);
+    EXPECT_TRUE(fs::exists(dir.file("plane_5.jpg")));
+    const osg::ref_ptr<Material> pca =
+        findMethod("pca").fit(osgBTF::test::smallSampleBtf(4), FitOptions::parse("components=2"));
+    EXPECT_EQ(errorOf([&] { saveMaterial(*pca, target); }),
+              target + ": a info.json file holds a hsh, ptm or rbf material, not pca");
 }
 
 TEST(RelightFolderErrors, HostileFoldersAreRefusedWithOneLineNamingTheFile) {
@@ -212,12 +216,12 @@ TEST(RelightFolderErrors, TiledLayoutsAreNamed) {
     EXPECT_EQ(errorOf([&] { loadMaterial(info); }),
               info +
                   ": relight's tiled layout tarzoom (plane_0.tzi) is not read; the "
-                  "single-image layout (plane_0.jpg ...) is");
+                  "single-image (plane_0.jpg ...) and deep-zoom (plane_0.dzi ...) layouts are");
+    // The deep-zoom layout is read (tests/materials_relight_writer_test.cpp): a broken .dzi.
     osgBTF::test::writeTextFile(f + "/plane_0.dzi", "<Image/>");
     EXPECT_EQ(errorOf([&] { loadMaterial(info); }),
-              info +
-                  ": relight's tiled layout deepzoom (plane_0.dzi) is not read; the "
-                  "single-image layout (plane_0.jpg ...) is");
+              f + "/plane_0.dzi: TileSize and Overlap are not integers with 1 <= TileSize <= "
+                  "8192 and 0 <= Overlap < TileSize");
     fs::remove(f + "/plane_0.dzi");
     fs::remove(f + "/plane_0.tzi");
     EXPECT_EQ(errorOf([&] { loadMaterial(info); }),

@@ -25,7 +25,8 @@ bool haveChromium() {
     return runCommand("command -v chromium >/dev/null").exitCode == 0;
 }
 
-BrowserView openInChromium(const std::string& page, const fs::path& scratch) {
+BrowserView openInChromium(const std::string& page, const fs::path& scratch,
+                           const std::string& flags) {
     // --no-sandbox: CI runs as root, where Chromium's sandbox refuses to start. The virtual time
     // budget lets the page load (pictures decoded, load event run) before the DOM is dumped. A
     // fresh profile per run: nothing cached from the previous one. In braces: runCommand adds
@@ -40,8 +41,8 @@ BrowserView openInChromium(const std::string& page, const fs::path& scratch) {
         shellQuote(profile) +
         " --no-first-run --disable-background-networking --disable-component-update "
         "--disable-sync --enable-logging=stderr --v=0 --virtual-time-budget=10000 --dump-dom " +
-        shellQuote("file://" + fs::absolute(page).string()) + " >" + shellQuote(dom) + " 2>" +
-        shellQuote(log) + "; }";
+        flags + " " + shellQuote("file://" + fs::absolute(page).string()) + " >" + shellQuote(dom) +
+        " 2>" + shellQuote(log) + "; }";
     BrowserView view;
     view.exitCode = runCommand(command).exitCode;
     view.dom = readTextFile(dom);

@@ -25,7 +25,9 @@ struct BrowserView {
 
 bool haveChromium();
 
-/** Opens `page` (a file) in a fresh profile under `scratch` and waits for its load event. */
-BrowserView openInChromium(const std::string& page, const std::filesystem::path& scratch);
+/** Opens `page` (a file) in a fresh profile under `scratch` and waits for its load event;
+ *  `flags` are added to Chromium's command line. */
+BrowserView openInChromium(const std::string& page, const std::filesystem::path& scratch,
+                           const std::string& flags = "");
 
 }  // namespace osgBTF::test
