@@ -8,8 +8,9 @@
 // its own folder), and readRelightMaterial dispatches on info.json's "type". The file format
 // itself is registered by the ptm method as the foreign file "info.json" (materials/
 // ForeignFiles.h), so loadMaterial("DIR/info.json"), `btf info DIR/info.json` and the plugins
-// read it; relight's tiled layouts (deepzoom, tarzoom, itarzoom, google, zoomify) are refused
-// with their name.
+// read it. relight's deep-zoom layout (plane_j.dzi + a tile pyramid) is read from its full-size
+// level; its other tiled layouts (tarzoom, itarzoom, google, zoomify) are refused with their name.
+// Writing the layout: materials/RelightLayoutWriter.h.
 #pragma once
 
 #include <functional>

@@ -39,6 +39,18 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"
 fi
 
+# OpenSeadragon, the deep-zoom client the web-layout test opens the written pyramids with
+# (tests/viewer/deepzoom_test.cpp): from the npm registry, not vendored; npm from Debian where the
+# machine has none (a Node.js from elsewhere brings its own).
+if [ "${OSGBTF_TEST_PACKAGES:-1}" != 0 ] && [ ! -f build/web/node_modules/openseadragon/package.json ]; then
+  if ! command -v npm >/dev/null; then
+    $SUDO apt-get update
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends npm
+  fi
+  mkdir -p build/web
+  npm install --no-audit --no-fund --prefix build/web openseadragon@6.1.1
+fi
+
 # $PWD, not ".": the path the script was started by, a link included (CMake would resolve "."),
 # so that .ci/run can build every clone at one path and ccache reuses the last run's objects.
 cmake -S "$PWD" -B "$PWD/build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@"
