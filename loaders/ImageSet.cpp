@@ -325,6 +325,20 @@ std::vector<float> upright(const std::vector<float>& stored, int sw, int sh, int
     return out;
 }
 
+/** A JPEG cut short (a download or copy that stopped) ends inside its entropy-coded data, and
+ *  libjpeg decodes it anyway, filling the rest with grey and only warning: such a photo would
+ *  enter a fit as if measured. A complete one ends with the end-of-image marker FF D9, possibly
+ *  followed by zero padding (some cameras and copies pad); anything else is refused. */
+void requireJpegEnd(const std::string& archive, const std::string& where,
+                    const std::vector<unsigned char>& bytes) {
+    std::size_t end = bytes.size();
+    while (end > 0 && bytes[end - 1] == 0) --end;
+    if (end < 4 || bytes[0] != 0xFF || bytes[1] != 0xD8)
+        fail(archive, where + ": not a JPEG (no start-of-image marker)");
+    if (bytes[end - 2] != 0xFF || bytes[end - 1] != 0xD9)
+        fail(archive, where + ": truncated JPEG (no end-of-image marker)");
+}
+
 /** Decodes an image (the bytes of a file) into `scratch`, top-down as stored: 8-bit images
  *  without an EXIF rotation as their raw values (bytes8), others as floats through the curve,
  *  turned upright (floats). `checkSize` receives the upright size and throws when it is wrong,
@@ -337,6 +351,8 @@ DecodedImage decodePixels(const std::string& archive, const ImageSetEntry& membe
     // it opens a file; the headers are checked against the member's size first.
     if (member.extension == "exr")
         readExrPartSizes(archive + ": " + where, bytes.data(), bytes.size());
+    if (member.extension == "jpg" || member.extension == "jpeg")
+        requireJpegEnd(archive, where, bytes);
     std::string error;
     const std::unique_ptr<ImageReader> input = imageCodecs().openBytes(
         bytes.data(), bytes.size(), member.extension, imageSetBasename(member.name), error);

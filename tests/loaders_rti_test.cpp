@@ -156,6 +156,22 @@ TEST(RtiCapture, BadSetsAreRefusedWithTheFileAndLine) {
                   dir.path().string() +
                       ": member 'image02.jpg' is 32x32 pixels but 'image01.jpg' is 64x64");
     }
+    {
+        // A photo cut short (libjpeg would decode it, the rest grey, with a warning only), read in
+        // memory and out of core alike; a complete one with zero padding after its end is read.
+        test::TempDir dir;
+        copyFixture(dir, lp);
+        std::string bytes = test::readTextFile(dir.file("image07.jpg"));
+        test::writeTextFile(dir.file("image07.jpg"), bytes + std::string(16, '\0'));
+        EXPECT_EQ(loadMeasuredBtf(dir.path().string()).lightCount(), 72u);
+        test::writeTextFile(dir.file("image07.jpg"), bytes.substr(0, bytes.size() / 2));
+        const std::string message =
+            dir.path().string() + ": member 'image07.jpg': truncated JPEG (no end-of-image marker)";
+        EXPECT_EQ(errorOf([&] { loadMeasuredBtf(dir.path().string()); }), message);
+        LoadOptions disk;
+        disk.placement = LoadOptions::Placement::Disk;
+        EXPECT_EQ(errorOf([&] { openBtfSource(dir.path().string(), disk); }), message);
+    }
 }
 
 }  // namespace OSGBTF_TEST_FILE
