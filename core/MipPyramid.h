@@ -8,10 +8,12 @@
 #pragma once
 
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "core/BtfSource.h"
+#include "core/ScratchFile.h"
 
 namespace osgBTF {
 
@@ -56,12 +58,19 @@ private:
 };
 
 /** The atlas of `base` as a BtfSource: each atlas texel's values are the mean of its footprint's
- *  measured values (a box filter, exactly what a pixel covering those texels should show). Reads
- *  decode `base` on demand: ABRDF reads cost one base read per base texel and level, image reads
- *  one base read per image. `base` must outlive it. */
+ *  measured values (a box filter, exactly what a pixel covering those texels should show). The
+ *  sums run as a quadtree: a level-l texel sums its four level-(l-1) children in the order (2x,
+ *  2y), (2x+1, 2y), (2x, 2y+1), (2x+1, 2y+1), in double, so that every way of reading gives the
+ *  same floats. Image reads build each image's levels from the level below (1.33 reads of the
+ *  base). ABRDF reads of base texels read the base; of coarser texels, for a one-view base not in
+ *  memory (an RTI capture out of core), a scratch file of every coarse level built on the first
+ *  such read in one pass over the base (a third of the base's values; ScratchFile), else the
+ *  texel's footprint from the base (one base read per base texel and level). `base` must outlive
+ *  it. */
 class MipAtlasSource : public BtfSource {
 public:
     explicit MipAtlasSource(const BtfSource& base);
+    ~MipAtlasSource() override;
 
     const MipLayout& layout() const { return _layout; }
 
@@ -73,8 +82,19 @@ public:
     std::uint64_t residentBytes() const override { return _base.residentBytes(); }
 
 private:
+    /** The quadtree sum of level-l texel (x, y) (level coordinates) into `sum` (values
+     *  doubles), from the base. */
+    void sumFootprint(int level, int x, int y, double* sum) const;
+    /** Builds the scratch file of the coarse levels (once). */
+    void buildCoarseLevels() const;
+
     const BtfSource& _base;
     MipLayout _layout;
+    bool _cacheCoarseLevels = false;
+    mutable std::once_flag _coarseBuilt;
+    mutable std::unique_ptr<ScratchFile> _coarse;
+    /** Offsets of each level's values in _coarse, in texels (level 0: unused). */
+    std::vector<std::uint64_t> _coarseStart;
 };
 
 }  // namespace osgBTF

@@ -14,33 +14,6 @@
 
 namespace osgBTF {
 
-namespace {
-
-namespace fs = std::filesystem;
-
-/** An unnamed file in `folder`: nothing is left behind when the process ends, killed or not. */
-int openUnnamedFile(const std::string& folder) {
-#ifdef O_TMPFILE
-    const int fd = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
-    if (fd >= 0) return fd;
-#endif
-    // File systems without O_TMPFILE: a named file, unlinked at once.
-    std::string name = (fs::path(folder) / "osgbtf-capture-XXXXXX").string();
-    const int named = ::mkstemp(name.data());
-    if (named < 0)
-        fail(folder, std::string("cannot create a temporary file: ") + std::strerror(errno));
-    ::unlink(name.c_str());
-    return named;
-}
-
-}  // namespace
-
-std::string outOfCoreFolder() {
-    for (const char* variable : {"OSGBTF_CACHE_DIR", "TMPDIR"})
-        if (const char* value = std::getenv(variable); value && *value) return value;
-    return "/tmp";
-}
-
 std::uint64_t OutOfCoreImageSet::diskBytesNeeded(int width, int height, std::size_t images,
                                                  bool rawBytes) {
     return saturatedProduct(
@@ -63,20 +36,6 @@ std::uint64_t OutOfCoreImageSet::offsetOf(std::size_t image, int y) const {
     return bandStart +
            (std::uint64_t(image) * std::uint64_t(rowsInBand(band)) + std::uint64_t(y % _bandRows)) *
                rowBytes();
-}
-
-void OutOfCoreImageSet::readAt(void* to, std::uint64_t bytes, std::uint64_t offset) const {
-    auto* at = static_cast<unsigned char*>(to);
-    while (bytes > 0) {
-        const ssize_t n = ::pread(_fd, at, bytes, off_t(offset));
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0)
-            fail(source, "cannot read the decoded photos back from " + _folder + ": " +
-                             (n < 0 ? std::strerror(errno) : "unexpected end of file"));
-        at += n;
-        bytes -= std::uint64_t(n);
-        offset += std::uint64_t(n);
-    }
 }
 
 void OutOfCoreImageSet::toFloats(const unsigned char* from, std::size_t count, float* out) const {
@@ -111,24 +70,7 @@ OutOfCoreImageSet::OutOfCoreImageSet(const ImageSetSource& images,
             std::max<std::uint64_t>(1, std::uint64_t(_width) * imageTotal * 3 * sizeof(float)),
         1, std::uint64_t(_height)));
 
-    _folder = outOfCoreFolder();
-    const std::uint64_t needed = diskBytes();
-    std::error_code ec;
-    const fs::space_info space = fs::space(_folder, ec);
-    if (ec) fail(_folder, "cannot use it for the decoded photos of " + path + ": " + ec.message());
-    if (space.available < needed + (std::uint64_t(256) << 20))
-        fail(path, "needs " + formatBytes(needed) + " of disk for its decoded photos in " +
-                       _folder + ", " + formatBytes(space.available) +
-                       " free there (set OSGBTF_CACHE_DIR or TMPDIR to a folder with room)");
-    _fd = openUnnamedFile(_folder);
-    // Allocated up front: running out of disk fails here, not half-way through the decoding.
-    if (const int error = ::posix_fallocate(_fd, 0, off_t(needed));
-        error != 0 && error != EOPNOTSUPP) {
-        ::close(_fd);
-        _fd = -1;
-        fail(path, "cannot reserve " + formatBytes(needed) + " in " + _folder + ": " +
-                       std::strerror(error));
-    }
+    _file = std::make_unique<ScratchFile>(diskBytes(), path, "decoded photos");
     source = path;
     decoding = decodeCurveLabel(decode);
 
@@ -173,31 +115,17 @@ OutOfCoreImageSet::OutOfCoreImageSet(const ImageSetSource& images,
                                 }
                             }
                     }
-                    std::uint64_t offset = offsetOf(index, bandFirst);
-                    const unsigned char* at = band.data();
-                    for (std::uint64_t left = band.size(); left > 0;) {
-                        const ssize_t n = ::pwrite(_fd, at, left, off_t(offset));
-                        if (n < 0 && errno == EINTR) continue;
-                        if (n <= 0)
-                            fail(path, "cannot write its decoded photos to " + _folder + ": " +
-                                           std::strerror(errno));
-                        at += n;
-                        left -= std::uint64_t(n);
-                        offset += std::uint64_t(n);
-                    }
+                    _file->write(band.data(), band.size(), offsetOf(index, bandFirst));
                     top += rows;
                 }
             });
     } catch (...) {
-        ::close(_fd);
-        _fd = -1;
+        _file.reset();
         throw;
     }
 }
 
-OutOfCoreImageSet::~OutOfCoreImageSet() {
-    if (_fd >= 0) ::close(_fd);
-}
+OutOfCoreImageSet::~OutOfCoreImageSet() = default;
 
 void OutOfCoreImageSet::readImages(std::size_t first, std::size_t count, float* out) const {
     const std::size_t imageValues = texelCount() * 3;

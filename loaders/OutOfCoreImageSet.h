@@ -8,10 +8,12 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/BtfSource.h"
+#include "core/ScratchFile.h"
 #include "loaders/ImageSet.h"
 
 namespace osgBTF {
@@ -51,19 +53,21 @@ private:
     int rowsInBand(int band) const;
     /** Where row y (bottom-up) of image i starts in the file. */
     std::uint64_t offsetOf(std::size_t image, int y) const;
-    void readAt(void* to, std::uint64_t bytes, std::uint64_t offset) const;
+    void readAt(void* to, std::uint64_t bytes, std::uint64_t offset) const {
+        _file->read(to, bytes, offset);
+    }
     /** `count` stored values at `from` as floats. */
     void toFloats(const unsigned char* from, std::size_t count, float* out) const;
 
-    int _fd = -1;
-    std::string _folder;
+    std::unique_ptr<ScratchFile> _file;
     int _bandRows = 1;
     int _valueBytes = 1;  ///< 1: raw 8-bit values through _table; 4: floats
     std::array<float, 256> _table{};
 };
 
-/** Where out-of-core captures keep their decoded values: $OSGBTF_CACHE_DIR, else $TMPDIR, else
- *  /tmp. */
-std::string outOfCoreFolder();
+/** Where out-of-core captures keep their decoded values: scratchFolder() (core/ScratchFile.h). */
+inline std::string outOfCoreFolder() {
+    return scratchFolder();
+}
 
 }  // namespace osgBTF

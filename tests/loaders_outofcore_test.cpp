@@ -15,6 +15,7 @@
 
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
+#include "core/MipPyramid.h"
 #include "fit/MipMapping.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/OutOfCoreImageSet.h"
@@ -111,6 +112,46 @@ TEST(OutOfCore, ReadsGiveExactlyTheInMemoryValues) {
         disk->readAbrdfs(few.data(), few.size(), y.data());
         EXPECT_EQ(x, y);
     }
+}
+
+// The mip-map atlas of a capture on disk keeps its coarse levels in a scratch file built in one
+// pass; what it reads equals the atlas of the capture in memory (levels summed from the base) and
+// the atlas's images, bit for bit, in order and scattered.
+TEST(OutOfCore, TheMipAtlasOfACaptureOnDiskReadsAsInMemory) {
+    const test::TempDir dir;
+    writeCapture(dir, false);
+    const std::string lp = dir.file("capture.lp");
+    const MeasuredBtf memory = loadMeasuredBtf(lp);
+    const std::unique_ptr<BtfSource> disk = openBtfSource(lp, placed(LoadOptions::Placement::Disk));
+    const MipAtlasSource a(memory), b(*disk);
+    const std::size_t texels = a.texelCount(), perTexel = a.imageCount() * 3;
+    std::vector<float> fromMemory(texels * perTexel), fromDisk(texels * perTexel);
+    a.readAbrdfRange(0, texels, fromMemory.data());
+    b.readAbrdfRange(0, texels, fromDisk.data());
+    EXPECT_EQ(fromMemory, fromDisk);
+    std::vector<float> images(a.imageCount() * texels * 3);
+    b.readImages(0, a.imageCount(), images.data());
+    for (std::size_t t = 0; t < texels; ++t)
+        for (std::size_t i = 0; i < a.imageCount(); ++i)
+            for (std::size_t c = 0; c < 3; ++c)
+                ASSERT_EQ(images[(i * texels + t) * 3 + c], fromDisk[t * perTexel + i * 3 + c])
+                    << "texel " << t;
+    // Scattered, unsorted, across levels: the top level's one texel, a level-1 texel, a base one.
+    const MipLayout& layout = a.layout();
+    const MipLevel& top = layout.levels().back();
+    const MipLevel& one = layout.levels()[1];
+    const std::vector<std::size_t> few = {
+        std::size_t(top.y) * std::size_t(a.width()) + std::size_t(top.x),
+        std::size_t(one.y + 3) * std::size_t(a.width()) + std::size_t(one.x + 2), 7};
+    std::vector<float> x(few.size() * perTexel), y(few.size() * perTexel);
+    a.readAbrdfs(few.data(), few.size(), x.data());
+    b.readAbrdfs(few.data(), few.size(), y.data());
+    EXPECT_EQ(x, y);
+    for (std::size_t k = 0; k < few.size(); ++k)
+        EXPECT_EQ(std::vector<float>(y.begin() + std::ptrdiff_t(k * perTexel),
+                                     y.begin() + std::ptrdiff_t((k + 1) * perTexel)),
+                  std::vector<float>(fromDisk.begin() + std::ptrdiff_t(few[k] * perTexel),
+                                     fromDisk.begin() + std::ptrdiff_t((few[k] + 1) * perTexel)));
 }
 
 // Every registered method fits the same model from the photos on disk as from memory: compared
