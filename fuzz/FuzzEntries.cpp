@@ -218,10 +218,24 @@ void rtiFiles(const std::uint8_t* data, std::size_t size) {
         std::size_t at = 0;
         for (int part = 0; part <= 16; ++part) {
             const std::size_t end = bytes.find(separator, at);
-            const std::string piece = bytes.substr(at, end == std::string::npos ? end : end - at);
-            writeInput(reinterpret_cast<const std::uint8_t*>(piece.data()), piece.size(),
-                       part == 0 ? "relight/info.json"
-                                 : "relight/plane_" + std::to_string(part - 1) + ".jpg");
+            std::string piece = bytes.substr(at, end == std::string::npos ? end : end - at);
+            std::string name = part == 0 ? "relight/info.json"
+                                         : "relight/plane_" + std::to_string(part - 1) + ".jpg";
+            // A piece "@NAME\n..." is the file NAME of the folder instead (the deep-zoom layout:
+            // plane_0.dzi, plane_0_files/0/0_0.jpg), NAME of [a-z0-9_./] without "..".
+            if (part > 0 && !piece.empty() && piece[0] == '@') {
+                const std::size_t line = piece.find('\n');
+                const std::string file = piece.substr(1, line == std::string::npos ? 0 : line - 1);
+                if (!file.empty() && file.size() < 64 && file.find("..") == std::string::npos &&
+                    file[0] != '/' &&
+                    file.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_./") ==
+                        std::string::npos) {
+                    name = "relight/" + file;
+                    fs::create_directories((folder / file).parent_path(), ignored);
+                    piece = piece.substr(line + 1);
+                }
+            }
+            writeInput(reinterpret_cast<const std::uint8_t*>(piece.data()), piece.size(), name);
             if (end == std::string::npos) break;
             at = end + separator.size();
         }
