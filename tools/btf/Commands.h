@@ -1,4 +1,5 @@
-// The `btf` tool: one file per subcommand, registered from main.cpp.
+// The `btf` tool: one file per subcommand (`make-tileable` shares SynthesizeCommand.cpp with
+// `synthesize`: both drive synthesis/), registered from main.cpp.
 #pragma once
 
 #include <functional>
