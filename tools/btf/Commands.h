@@ -35,7 +35,7 @@ Runner addTilesCommand(CLI::App& app, CommonOptions& common);
 Runner addBatchCommand(CLI::App& app, CommonOptions& common);
 
 /** "laf, slaf, rf": the registered methods that have fit option `key` (for help texts). */
-std::string methodsWithOption(const std::string& key);
+std::string methodListWithOption(const std::string& key);
 
 /** "a,b,,c" -> {a, b, c}. */
 std::vector<std::string> splitList(const std::string& text);

@@ -22,10 +22,10 @@
 
 namespace osgBTF::tool {
 
-std::string methodsWithOption(const std::string& key) {
+std::string methodListWithOption(const std::string& key) {
     std::string list;
-    for (const std::string& name : methodNamesInOrder())
-        if (findOption(findMethod(name), key)) list += (list.empty() ? "" : ", ") + name;
+    for (const std::string& name : methodsWithOption(key))
+        list += (list.empty() ? "" : ", ") + name;
     return list;
 }
 
@@ -58,12 +58,12 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         ->required();
     command->add_option("-m,--method", options->method, methodsHelp())->required();
     command->add_option("--lobes", options->lobes,
-                        "Shortcut for --set lobes=N (" + methodsWithOption("lobes") + ")");
+                        "Shortcut for --set lobes=N (" + methodListWithOption("lobes") + ")");
     command->add_option(
         "--components", options->components,
-        "Shortcut for --set components=C (" + methodsWithOption("components") + ")");
+        "Shortcut for --set components=C (" + methodListWithOption("components") + ")");
     command->add_option("--clusters", options->clusters,
-                        "Shortcut for --set clusters=K (" + methodsWithOption("clusters") + ")");
+                        "Shortcut for --set clusters=K (" + methodListWithOption("clusters") + ")");
     command->add_option("--set", options->settings,
                         "Method option KEY=VALUE (repeatable; see --method above)");
     command
