@@ -30,6 +30,7 @@
 #include "materials/MethodRegistry.h"
 #include "materials/RelightFolder.h"
 #include "scene/MaterialNode.h"
+#include "scene/OpenMaterial.h"
 // The modules that fit on load (all but osgdb_btfmat) link libosgBTFFit for the fit and its
 // cache; osgdb_btfmat renders fitted files only and is built without them (CMakeLists.txt).
 #if OSGBTF_READERS_FIT
