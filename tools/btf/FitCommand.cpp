@@ -12,6 +12,7 @@
 #include "core/FloatImage.h"
 #include "core/Progress.h"
 #include "fit/MipMapping.h"
+#include "harness/FitScore.h"
 #include "harness/HeldOut.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
@@ -166,12 +167,8 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - loaded).count();
         material->fitInfo["seconds"] = std::to_string(fitSeconds);
         material->fitInfo["source"] = options->input;
-        const std::size_t errorTexels = errorTexelCount(btf, options->errorTexels);
-        std::vector<std::size_t> subsample;
-        if (errorTexels < btf.texelCount()) subsample = randomTexels(btf, errorTexels);
-        const ErrorSummary error = computeError(
-            btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); },
-            subsample.empty() ? nullptr : &subsample);
+        const std::vector<std::size_t> subsample = errorSubsample(btf, options->errorTexels);
+        const ErrorSummary error = fitError(btf, *material, subsample);
         const MemoryFootprint memory = material->memory();
         std::function<void()> foreignReport;
         // Saved last, releasing the material's arrays into the file's (no second copy of a PCA
