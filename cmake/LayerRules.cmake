@@ -5,10 +5,10 @@
 #   libosgBTFFit       fit/ (and every method's FIT sources, materials/<m>/CMakeLists.txt)
 #   libosgBTFStreaming streaming/        libosgBTFEnvironment environment/
 #   libosgBTFHarness   harness/ (static: the tools, examples, tests and benchmarks)
-# A header belongs to its folder's layer; a library's source to the library that compiles it,
-# checked when CMake configures (osgbtf_library_include_violations, top CMakeLists.txt): a
-# method's *Fit.cpp in materials/<m>/ is libosgBTFFit's and may include fit/, its render sources
-# may not. tests/, fuzz/ and bench/ may include everything below them (fuzz/ holds the fuzz
+# A header belongs to its folder's layer; a source to its folder's layer and to the library that
+# compiles it, checked when CMake configures (osgbtf_layer_violations and
+# osgbtf_library_include_violations, top CMakeLists.txt): a method's FIT sources in
+# materials/<m>/ are libosgBTFFit's and may include fit/, its render and OWN sources may not. tests/, fuzz/ and bench/ may include everything below them (fuzz/ holds the fuzz
 # targets' bodies, which the regression test in tests/ calls, and their seed generator). Used by
 # the configure step and cmake/CheckLayers.cmake (the layers.include_graph test), and tested on
 # fake trees by tests/layers/CheckLayersTest.cmake.
@@ -33,8 +33,6 @@ set(OSGBTF_LAYER_ALLOWED_tests ${osgbtf_libraries} harness plugins fuzz tests)
 set(OSGBTF_LAYER_ALLOWED_bench ${osgbtf_libraries} harness bench)
 set(OSGBTF_LAYERS core loaders materials synthesis scene fit streaming environment harness tools
                   python examples plugins fuzz tests bench)
-# The layers whose sources a library compiles: their .cpp files are checked per library.
-set(OSGBTF_LIBRARY_LAYERS ${osgbtf_libraries} harness)
 # What each library's sources may include: its own folders and its links'.
 set(OSGBTF_LIBRARY_ALLOWED_osgBTF ${osgbtf_runtime})
 set(OSGBTF_LIBRARY_ALLOWED_osgBTFFit ${osgbtf_runtime} fit)
@@ -77,24 +75,53 @@ function(osgbtf_library_include_violations ROOT LIBRARY FILES OUT_VAR)
   set(${OUT_VAR} "${violations}" PARENT_SCOPE)
 endfunction()
 
+# Sets OUT_VAR to the FIT sources of every method folder (materials/<m>/CMakeLists.txt's
+# osgbtf_method(... FIT <sources> ...), cmake/Methods.cmake), relative to ROOT: libosgBTFFit's
+# sources that live in materials/.
+function(osgbtf_method_fit_sources ROOT OUT_VAR)
+  set(fit_sources)
+  file(GLOB entries RELATIVE ${ROOT} ${ROOT}/materials/*/CMakeLists.txt)
+  foreach(entry IN LISTS entries)
+    get_filename_component(folder ${entry} DIRECTORY)
+    file(READ ${ROOT}/${entry} text)
+    string(REGEX MATCH "osgbtf_method\\(([^)]*)\\)" call "${text}")
+    string(REGEX REPLACE "[ \t\r\n]+" ";" words "${CMAKE_MATCH_1}")
+    set(section)
+    foreach(word IN LISTS words)
+      if(word MATCHES "^[A-Z_]+$")  # a keyword: RENDER, FIT, OWN, ...
+        set(section ${word})
+      elseif(word AND section STREQUAL "FIT")
+        list(APPEND fit_sources ${folder}/${word})
+      endif()
+    endforeach()
+  endforeach()
+  set(${OUT_VAR} "${fit_sources}" PARENT_SCOPE)
+endfunction()
+
 # Sets OUT_VAR to one message per include of a layer the including file's layer may not use:
 #   <file>: includes "<path>", but <layer>/ may include only <allowed>/
-# (files relative to ROOT, sorted). Quoted includes whose first folder is not a layer (same-folder
-# headers such as "Commands.h") are not part of the graph.
+# (files relative to ROOT, sorted). Every header and source is checked by its folder: inside
+# libosgBTF a loaders/ source may not include materials/, although the library holds both, and a
+# source no library compiles (neural's training module, an OWN source) is checked too. Except a
+# method's FIT sources, which libosgBTFFit compiles: they are checked as that library's,
+#   <file> (osgBTFFit): includes "<path>", but osgBTFFit may include only <allowed>/
+# (at configure time also with the library's other sources, osgbtf_library_include_violations).
+# Quoted includes whose first folder is not a layer (same-folder headers such as "Commands.h")
+# are not part of the graph.
 function(osgbtf_layer_violations ROOT OUT_VAR)
   set(violations)
+  osgbtf_method_fit_sources(${ROOT} fit_sources)
   foreach(layer IN LISTS OSGBTF_LAYERS)
-    # A library's sources are checked with the library they build (above); its headers here.
-    if(layer IN_LIST OSGBTF_LIBRARY_LAYERS)
-      file(GLOB_RECURSE files RELATIVE ${ROOT} ${ROOT}/${layer}/*.h ${ROOT}/${layer}/*.hpp
-           ${ROOT}/${layer}/*.inc)
-    else()
-      file(GLOB_RECURSE files RELATIVE ${ROOT} ${ROOT}/${layer}/*.h ${ROOT}/${layer}/*.hpp
-           ${ROOT}/${layer}/*.cpp ${ROOT}/${layer}/*.inc)
+    file(GLOB_RECURSE files RELATIVE ${ROOT} ${ROOT}/${layer}/*.h ${ROOT}/${layer}/*.hpp
+         ${ROOT}/${layer}/*.cpp ${ROOT}/${layer}/*.inc)
+    if(fit_sources)
+      list(REMOVE_ITEM files ${fit_sources})
     endif()
     osgbtf_forbidden_includes(${ROOT} "${files}" "${OSGBTF_LAYER_ALLOWED_${layer}}" ""
                               ${layer}/ violations)
   endforeach()
+  osgbtf_library_include_violations(${ROOT} osgBTFFit "${fit_sources}" fit_violations)
+  list(APPEND violations ${fit_violations})
   set(${OUT_VAR} "${violations}" PARENT_SCOPE)
 endfunction()
 

@@ -35,7 +35,7 @@ endforeach()
 list(SORT OSGBTF_SDK_HEADERS)
 # <osgBTF/Name> -> the header it stands for: the entry points of the runtime.
 set(OSGBTF_SDK_UMBRELLAS
-  MaterialNode=scene/MaterialNode.h
+  MaterialNode=scene/MaterialNode.h+scene/OpenMaterial.h
   EnvironmentLight=scene/EnvironmentLight.h
   EnvironmentLitGroup=environment/EnvironmentLitGroup.h
   Material=materials/Material.h+materials/MethodRegistry.h+materials/MaterialFiles.h

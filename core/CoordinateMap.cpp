@@ -19,7 +19,7 @@ namespace osgBTF {
 
 namespace {
 
-const char* const kVersionAttribute = "osgBTF.coordinateMap";
+const char* const kMapVersionAttribute = "osgBTF.coordinateMap";
 const char* const kSampleWidthAttribute = "osgBTF.sampleWidth";
 const char* const kSampleHeightAttribute = "osgBTF.sampleHeight";
 
@@ -79,7 +79,7 @@ void writeCoordinateMap(const CoordinateMap& map, const std::string& path) {
             header.compression() = Imf::ZIP_COMPRESSION;
             header.channels().insert("R", Imf::Channel(Imf::FLOAT));
             header.channels().insert("G", Imf::Channel(Imf::FLOAT));
-            header.insert(kVersionAttribute, Imf::IntAttribute(kCoordinateMapVersion));
+            header.insert(kMapVersionAttribute, Imf::IntAttribute(kCoordinateMapVersion));
             header.insert(kSampleWidthAttribute, Imf::IntAttribute(map.sampleWidth));
             header.insert(kSampleHeightAttribute, Imf::IntAttribute(map.sampleHeight));
             Imf::OutputFile file(temporary.c_str(), header);
@@ -107,9 +107,9 @@ CoordinateMap readCoordinateMap(const std::string& path) {
     try {
         Imf::InputFile file(path.c_str());
         const Imf::Header& header = file.header();
-        if (!header.findTypedAttribute<Imf::IntAttribute>(kVersionAttribute))
+        if (!header.findTypedAttribute<Imf::IntAttribute>(kMapVersionAttribute))
             fail(path, "not an osgBTF coordinate map (no osgBTF.coordinateMap attribute)");
-        version = intAttribute(header, kVersionAttribute, path);
+        version = intAttribute(header, kMapVersionAttribute, path);
         sampleWidth = intAttribute(header, kSampleWidthAttribute, path);
         sampleHeight = intAttribute(header, kSampleHeightAttribute, path);
     } catch (const Error&) {

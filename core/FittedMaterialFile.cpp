@@ -309,8 +309,8 @@ MaterialTexture readTexture(Imf::MultiPartInputFile& file, int part, const std::
     return t;
 }
 
-DirectionSet readDirections(const Imf::Header& header, const char* attribute,
-                            const std::string& path) {
+DirectionSet readDirectionAttribute(const Imf::Header& header, const char* attribute,
+                                    const std::string& path) {
     const auto* text = header.findTypedAttribute<Imf::StringAttribute>(attribute);
     if (!text) return {};
     try {
@@ -365,8 +365,8 @@ FittedMaterial readMaterial(
         if (!value) fail(path, "attribute " + name + " is not a string");
         material.parameters[name.substr(kParamPrefix.size())] = value->value();
     }
-    material.views = readDirections(header, kViewsAttribute, path);
-    material.lights = readDirections(header, kLightsAttribute, path);
+    material.views = readDirectionAttribute(header, kViewsAttribute, path);
+    material.lights = readDirectionAttribute(header, kLightsAttribute, path);
     const CompactTextures compact = compactFor(material.method);
     for (int part = 0; part < file.parts(); ++part)
         material.textures.push_back(readTexture(file, part, path, compact));

@@ -14,7 +14,7 @@
 #include "loaders/LoadBtf.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
-#include "scene/MaterialNode.h"
+#include "scene/OpenMaterial.h"
 
 namespace fs = std::filesystem;
 

@@ -14,6 +14,7 @@
 #include "core/FloatImage.h"
 #include "core/Progress.h"
 #include "core/PublishFolder.h"
+#include "harness/FitScore.h"
 #include "harness/MaterialImage.h"
 #include "harness/Pictures.h"
 #include "harness/Report.h"
@@ -175,8 +176,8 @@ void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& resul
                 std::vector<osg::ref_ptr<Material>>& materials) {
     Progress progress("error and memory tables (CPU)", result.methods.size());
     // The same texels for every method, so that their errors compare.
-    std::vector<std::size_t> subsample;
-    if (result.errorTexels < btf.texelCount()) subsample = randomTexels(btf, result.errorTexels);
+    const std::vector<std::size_t> subsample =
+        errorSubsample(btf, static_cast<long long>(result.errorTexels));
     const batch::HoldoutSplit split =
         result.holdoutFraction > 0
             ? batch::holdoutSplit(btf.viewCount(), btf.lightCount(), result.holdoutFraction)
@@ -214,13 +215,10 @@ void errorStage(const BtfSource& btf, const fs::path& work, CompareResult& resul
                 osg::ref_ptr<Material> material = loadMaterial((work / m.fittedFile).string());
                 if (material->width() != btf.width() || material->height() != btf.height())
                     throw Error(m.fittedFile + ": fitted to a different size");
-                m.error = computeError(
-                    btf,
-                    [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); },
-                    subsample.empty() ? nullptr : &subsample);
-                m.memory = material->memory();
-                if (m.memory.bytesPerTexel > 0)
-                    m.compressionRatio = result.rawBytesPerTexel / m.memory.bytesPerTexel;
+                const FitScore score = scoreFit(btf, *material, subsample);
+                m.error = score.error;
+                m.memory = score.memory;
+                if (m.memory.bytesPerTexel > 0) m.compressionRatio = score.compressionRatio;
                 m.cost = shaderCost(*material);
                 const auto seconds = material->fitInfo.find("seconds");
                 if (seconds != material->fitInfo.end()) m.fitSeconds = std::stod(seconds->second);

@@ -16,25 +16,12 @@ namespace osgBTF {
 
 namespace {
 
-/** The read-back RGBA float image (rows bottom-up) as a top-down RGB FloatImage. */
-
 /** One pixel per base texel: a mip-mapped material's texels also hold its coarser levels, which
  *  a rectified image at the base's size never shows (its level of detail is 0). */
 void rectifiedSize(const Material& material, int& w, int& h) {
     const bool mip = material.mipLayout().mipMapped();
     w = mip ? material.mipLayout().baseWidth() : material.width();
     h = mip ? material.mipLayout().baseHeight() : material.height();
-}
-
-FloatImage toFloatImage(const osg::Image& image, int w, int h) {
-    FloatImage out(w, h, 3);
-    out.channelNames = {"R", "G", "B"};
-    const float* rgba = reinterpret_cast<const float*>(image.data());
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            for (int c = 0; c < 3; ++c)
-                out.at(x, h - 1 - y, c) = rgba[(std::size_t(y) * w + x) * 4 + c];
-    return out;
 }
 
 /** One pixel per texel of a w x h grid: `stateSet` (the material's) over `mapState` (none or the
@@ -58,10 +45,21 @@ FloatImage renderImage(HeadlessRenderer& renderer, osg::StateSet* stateSet, osg:
     }
 
     osg::ref_ptr<osg::Image> image = renderer.render(root.get(), orthoUnitSquare(w, h));
-    return toFloatImage(*image, w, h);
+    return rgbTopDown(*image, w, h);
 }
 
 }  // namespace
+
+FloatImage rgbTopDown(const osg::Image& image, int w, int h) {
+    FloatImage out(w, h, 3);
+    out.channelNames = {"R", "G", "B"};
+    const float* rgba = reinterpret_cast<const float*>(image.data());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                out.at(x, h - 1 - y, c) = rgba[(std::size_t(y) * w + x) * 4 + c];
+    return out;
+}
 
 void addRectifiedLighting(osg::StateSet& stateSet, const glm::vec3& view, const glm::vec3& light) {
     // OVERRIDE: on a parent of materials' StateSets (bench/bsvtf.cpp's grid) the fixed view must
@@ -138,7 +136,7 @@ FloatImage renderEnvironmentImage(HeadlessRenderer& renderer, const Material& ma
     root->setStateSet(material.createStateSet().get());
     root->addChild(geode.get());
     osg::ref_ptr<osg::Image> image = renderer.render(root.get(), orthoUnitSquare(w, h));
-    return toFloatImage(*image, w, h);
+    return rgbTopDown(*image, w, h);
 }
 
 FloatImage renderMaterialImage(HeadlessRenderer& renderer, const Material& material,

@@ -25,6 +25,10 @@ osg::ref_ptr<osg::Geode> rectifiedPatch();
  *  it also holds for materials' StateSets below `stateSet`, which set the real eye direction. */
 void addRectifiedLighting(osg::StateSet& stateSet, const glm::vec3& view, const glm::vec3& light);
 
+/** A w x h RGBA float image as HeadlessRenderer::render reads it back (rows bottom-up) as an RGB
+ *  FloatImage with rows top-down (as image files). */
+FloatImage rgbTopDown(const osg::Image& image, int w, int h);
+
 /** GPU path: renders the material's StateSet on a unit patch (tangent +X, normal +Z) with an
  *  orthographic camera from above, the view direction fixed to `view` (uniform
  *  osgBTF_fixedView) and one white directional light from `light`. Returns an RGB image with

@@ -17,6 +17,7 @@
 #include "core/Error.h"
 #include "harness/SoakSampling.h"
 #include "scene/MaterialNode.h"
+#include "scene/OpenMaterial.h"
 
 namespace fs = std::filesystem;
 

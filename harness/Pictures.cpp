@@ -10,6 +10,7 @@
 
 #include "core/Error.h"
 #include "core/ImageCodecs.h"
+#include "harness/MaterialImage.h"
 #include "harness/PassCost.h"
 
 namespace osgBTF {
@@ -85,14 +86,7 @@ FloatImage renderSphere(HeadlessRenderer& renderer, const Material& material,
 
     osg::ref_ptr<osg::Image> image = renderer.render(geode.get(), sphereCamera(setting, size));
     renderer.setScene(nullptr);
-    FloatImage out(size, size, 3);
-    out.channelNames = {"R", "G", "B"};
-    const float* rgba = reinterpret_cast<const float*>(image->data());
-    for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x)
-            for (int c = 0; c < 3; ++c)
-                out.at(x, size - 1 - y, c) = rgba[(std::size_t(y) * size + x) * 4 + c];
-    return out;
+    return rgbTopDown(*image, size, size);
 }
 
 FloatImage enlarge(const FloatImage& image, int factor) {

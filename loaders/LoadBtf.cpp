@@ -14,7 +14,7 @@
 namespace osgBTF {
 
 namespace {
-std::string lowerExtension(const std::string& path) {
+std::string dottedLowerExtension(const std::string& path) {
     std::string extension = std::filesystem::path(path).extension().string();
     for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
     return extension;
@@ -24,7 +24,7 @@ std::string lowerExtension(const std::string& path) {
 bool isUbo2014File(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) return false;
-    const std::string extension = lowerExtension(path);
+    const std::string extension = dottedLowerExtension(path);
     if (extension == ".btf") return true;
     if (extension == ".zip") return false;
     std::ifstream in(path, std::ios::binary);
@@ -38,7 +38,7 @@ MeasuredBtf loadMeasuredBtf(const std::string& path, const LoadOptions& options)
     const fs::file_status status = fs::status(path, ec);
     if (status.type() == fs::file_type::not_found) fail(path, "no such file");
     if (ec) fail(path, "cannot open: " + ec.message());
-    const std::string extension = lowerExtension(path);
+    const std::string extension = dottedLowerExtension(path);
 
     MeasuredBtf btf;
     if (isRtiCapture(path)) {

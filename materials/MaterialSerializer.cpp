@@ -11,6 +11,7 @@
 #include "core/Error.h"
 #include "core/Notify.h"
 #include "materials/Material.h"
+#include "materials/MaterialFiles.h"
 
 namespace osgBTF {
 

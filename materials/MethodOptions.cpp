@@ -110,11 +110,22 @@ OptionSpec OptionSpec::flag(std::string name, bool defaultValue, std::string doc
     return o;
 }
 
+OptionSpec OptionSpec::multipleOf(int multiple) const {
+    if (type != Type::Int || multiple < 1)
+        throw std::logic_error(name + ": only an integer option has a step, and it is >= 1");
+    OptionSpec o = *this;
+    o.step = multiple;
+    return o;
+}
+
 std::string OptionSpec::allowed() const {
     switch (type) {
-        case Type::Int:
-            if (max == kNoLimit) return "an integer >= " + numberText(min);
-            return "an integer in " + numberText(min) + ".." + numberText(max);
+        case Type::Int: {
+            const std::string what =
+                step > 1 ? "a multiple of " + std::to_string(step) : std::string("an integer");
+            if (max == kNoLimit) return what + " >= " + numberText(min);
+            return what + " in " + numberText(min) + ".." + numberText(max);
+        }
         case Type::Float:
             return "a number in " + numberText(min) + ".." + numberText(max);
         case Type::Enum:
@@ -199,7 +210,8 @@ OptionValues validateOptions(const MethodInfo& method, const FitOptions& options
             case OptionSpec::Type::Int:
             case OptionSpec::Type::Bool: {
                 int parsed = 0;
-                ok = parseInt(value.text, parsed) && parsed >= option.min && parsed <= option.max;
+                ok = parseInt(value.text, parsed) && parsed >= option.min && parsed <= option.max &&
+                     parsed % option.step == 0;
                 value.number = parsed;
                 break;
             }

@@ -46,6 +46,7 @@ struct OptionSpec {
     Type type = Type::Int;
     std::string defaultValue;          ///< as text, as a user would type it
     double min = 0, max = 0;           ///< Int and Float: inclusive range
+    int step = 1;                      ///< Int: the value is a multiple of it (multipleOf)
     std::vector<std::string> choices;  ///< Enum: allowed values
     std::string doc;                   ///< one line, without default or range
 
@@ -62,9 +63,13 @@ struct OptionSpec {
                              std::vector<std::string> choices, std::string doc);
     /** 0 or 1. */
     static OptionSpec flag(std::string name, bool defaultValue, std::string doc);
+    /** This integer option, allowing only multiples of `step`:
+     *  OptionSpec::integer("units", 32, 4, 64, "units").multipleOf(4). */
+    OptionSpec multipleOf(int step) const;
 
     /** What the value must be, as the error message and the help say it: "an integer in 1..8",
-     *  "an integer >= 1", "a number in 1..256", "one of unorm8, half, float", "0 or 1". */
+     *  "an integer >= 1", "a multiple of 4 in 4..32", "a number in 1..256", "one of unorm8, half,
+     *  float", "0 or 1". */
     std::string allowed() const;
     /** "integer", "number", "enum", "bool". */
     std::string typeName() const;

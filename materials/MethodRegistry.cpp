@@ -8,6 +8,7 @@
 #include "core/Error.h"
 #include "core/ShaderSource.h"
 #include "materials/MaterialSerializer.h"
+#include "materials/MethodOptions.h"
 
 namespace osgBTF {
 
@@ -62,6 +63,13 @@ std::vector<std::string> methodNamesInOrder() {
     std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
         return registry().at(a).order < registry().at(b).order;
     });
+    return names;
+}
+
+std::vector<std::string> methodsWithOption(const std::string& option) {
+    std::vector<std::string> names;
+    for (const std::string& name : methodNamesInOrder())
+        if (findOption(registry().at(name), option)) names.push_back(name);
     return names;
 }
 

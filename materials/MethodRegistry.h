@@ -111,6 +111,10 @@ const MethodInfo& pluginDefaultMethod();
 std::vector<std::string> methodNames();
 /** Registered method names by MethodInfo::order (then name). */
 std::vector<std::string> methodNamesInOrder();
+/** The registered methods that have fit option `option` in their table (MethodInfo::options), by
+ *  MethodInfo::order; empty when none has it. Which method an option word belongs to: the
+ *  plugins' -O string and the command lines ask here instead of reading every table. */
+std::vector<std::string> methodsWithOption(const std::string& option);
 /** The methods with folded environment lighting (MethodInfo::environment), in order, as prose:
  *  "pca, fmf and lpca" (help texts and captions name them from here). */
 std::string environmentMethodsText();

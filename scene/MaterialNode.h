@@ -242,26 +242,6 @@ protected:
     mutable std::map<const osg::Camera*, CameraLights> _lightsPerCamera;
 };
 
-/** Opens a material file (openMaterial, scene/OpenMaterial.h: a fitted-material file, or a
- *  UBO2014 .btf as the `fmf` material of its stored factors, textures in `factorStorage`),
- *  sharing the Material with every earlier open of the same file (same path, size and
- *  modification time, same storage) that is still alive. Throws Error like loadMaterial. */
-osg::ref_ptr<Material> loadSharedMaterial(
-    const std::string& path, MaterialTexture::PixelKind factorStorage = MaterialTexture::Half);
-
-/** Deletes the shared objects nothing outside their caches holds any more: materials
- *  (loadSharedMaterial), coordinate-map textures and terminator textures; returns how many. Each
- *  cache drops its unused objects whenever it is asked for one, and MaterialNode's destructor and
- *  setMaterial call this, so a material goes with the last node drawing it; an application that
- *  holds materials itself and drops them can call it to free their memory at once.
- *  Thread-safe. */
-std::size_t releaseUnusedSharedObjects();
-
-/** Reads a coordinate map file (readCoordinateMap), sharing it with every earlier read of the
- *  same file (same path, size and modification time) that is still alive. Throws Error "FILE:
- *  problem". */
-std::shared_ptr<const CoordinateMap> loadSharedCoordinateMap(const std::string& path);
-
 /** Adds tangents below `node` (see MaterialNode::generateTangents); returns how many geometries
  *  got one. */
 unsigned generateTangents(osg::Node& node);

@@ -33,6 +33,7 @@
 #include "materials/MethodRegistry.h"
 #include "materials/fmf/Fmf.h"
 #include "scene/MaterialNode.h"
+#include "scene/OpenMaterial.h"
 #include "streaming/TileFetcher.h"
 #include "tests/PluginTestUtil.h"
 #include "tests/SmallSample.h"

@@ -73,11 +73,11 @@ osg::ref_ptr<NeuralMaterial> handMadeNetwork(int width = 1) {
 TEST(Neural, OptionErrorsHaveTheRegistryFormat) {
     const MeasuredBtf btf = test::sampleBtf(2, 2);
     EXPECT_EQ(errorOf([&] { fit(btf, "latent=6"); }),
-              "neural: option latent must be a multiple of 4, got 6");
+              "neural: option latent must be a multiple of 4 in 4..32, got 6");
     EXPECT_EQ(errorOf([&] { fit(btf, "units=30"); }),
-              "neural: option units must be a multiple of 4, got 30");
+              "neural: option units must be a multiple of 4 in 4..64, got 30");
     EXPECT_EQ(errorOf([&] { fit(btf, "latent=36"); }),
-              "neural: option latent must be an integer in 4..32, got 36");
+              "neural: option latent must be a multiple of 4 in 4..32, got 36");
     EXPECT_EQ(errorOf([&] { fit(btf, "layers=0"); }),
               "neural: option layers must be an integer in 1..4, got 0");
     EXPECT_EQ(errorOf([&] { fit(btf, "width=8"); }),

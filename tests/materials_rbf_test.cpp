@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include <glm/geometric.hpp>
+
 #include "core/Error.h"
 #include "core/MeasuredBtf.h"
 #include "harness/sample/SampleBtf.h"

@@ -19,6 +19,7 @@
 #include "materials/MethodRegistry.h"
 #include "materials/lambert/Lambert.h"
 #include "scene/MaterialNode.h"
+#include "scene/OpenMaterial.h"
 #include "scene/ShadowTerminator.h"
 #include "tests/NotifyCapture.h"
 #include "tests/TestUtil.h"

@@ -14,12 +14,10 @@
 #include <limits>
 
 #include "core/Error.h"
-#include "core/ErrorMetrics.h"
 #include "core/FittedMaterialFile.h"
 #include "core/FloatImage.h"
-#include "harness/HeldOut.h"
+#include "harness/FitScore.h"
 #include "harness/batch/BatchFiles.h"
-#include "harness/batch/Holdout.h"
 #include "loaders/LoadBtf.h"
 #include "materials/MethodRegistry.h"
 
@@ -155,43 +153,28 @@ JobResult runJob(const Manifest& manifest, const std::string& resultsDir, const 
             source->viewCount() != material.views || source->lightCount() != material.lights)
             fail(material.input, "is not the size the plan recorded (plan the batch again)");
         const MethodInfo& method = findMethod(job.method);
-        const FitOptions options(job.options);
-
-        const auto fitStart = std::chrono::steady_clock::now();
-        osg::ref_ptr<Material> fitted = method.fit(*source, options);
-        result.fitSeconds = secondsSince(fitStart);
-        // The same texels for every method of a material (randomTexels' fixed seed).
-        const std::size_t errorTexels = errorTexelCount(*source, manifest.errorTexels);
-        std::vector<std::size_t> subsample;
-        if (errorTexels < source->texelCount()) subsample = randomTexels(*source, errorTexels);
-        const std::vector<std::size_t>* texels = subsample.empty() ? nullptr : &subsample;
-        const ErrorSummary error = computeError(
-            *source, [&](std::size_t t, float* out) { fitted->evaluateMeasured(t, out); }, texels);
-        result.average = error.average;
-        result.rmse = error.rmse;
-        result.psnr = error.psnr;
-        result.errorTexels = error.texelsCompared;
-        const MemoryFootprint memory = fitted->memory();
-        result.bytesPerTexel = memory.bytesPerTexel;
-        // Against the measured data as the Bonn files store them: 8-bit RGB per pair.
-        result.compressionRatio =
-            double(material.views * material.lights * 3) / memory.bytesPerTexel;
-        saveFittedMaterial(fitted->releaseFittedMaterial(), (folder / "fit.btfmat").string());
-        fitted = nullptr;
-
-        if (manifest.holdoutFraction > 0) {
-            const HoldoutSplit split =
-                holdoutSplit(source->viewCount(), source->lightCount(), manifest.holdoutFraction);
-            const DirectionSubsetSource kept(*source, split);
-            const auto heldOutStart = std::chrono::steady_clock::now();
-            const osg::ref_ptr<Material> withoutThem = method.fit(kept, options);
-            result.heldOutFitSeconds = secondsSince(heldOutStart);
-            const HeldOutScores heldOut = scoreHeldOut(*source, *withoutThem, split, texels);
-            result.heldOutAverage = heldOut.error.average;
-            result.heldOutRmse = heldOut.error.rmse;
-            result.heldOutPsnr = heldOut.error.psnr;
-            result.heldOutSsim = heldOut.ssim;
-            result.heldOutPairs = heldOut.pairs;
+        const MethodScore score =
+            fitAndScore(*source, method, FitOptions(job.options), manifest.errorTexels,
+                        manifest.holdoutFraction, [&](Material& fitted) {
+                            // Released into the file's arrays (no second copy), before the held-out
+                            // fit.
+                            saveFittedMaterial(fitted.releaseFittedMaterial(),
+                                               (folder / "fit.btfmat").string());
+                        });
+        result.fitSeconds = score.fitSeconds;
+        result.average = score.fit.error.average;
+        result.rmse = score.fit.error.rmse;
+        result.psnr = score.fit.error.psnr;
+        result.errorTexels = score.fit.error.texelsCompared;
+        result.bytesPerTexel = score.fit.memory.bytesPerTexel;
+        result.compressionRatio = score.fit.compressionRatio;
+        if (score.heldOut) {
+            result.heldOutFitSeconds = score.heldOutFitSeconds;
+            result.heldOutAverage = score.heldOut->error.average;
+            result.heldOutRmse = score.heldOut->error.rmse;
+            result.heldOutPsnr = score.heldOut->error.psnr;
+            result.heldOutSsim = score.heldOut->ssim;
+            result.heldOutPairs = score.heldOut->pairs;
         }
         result.state = JobState::Done;
     } catch (const std::exception& e) {

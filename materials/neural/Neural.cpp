@@ -208,11 +208,12 @@ const bool neuralRegistered = registerMethodClass<NeuralMaterial>([] {
         "the light and view directions by one small MLP per material";
     m.options = {
         OptionSpec::integer("latent", 8, 4, NeuralMaterial::kMaxLatent,
-                            "latent values per texel (a multiple of 4; 2 bytes each)"),
+                            "latent values per texel (2 bytes each)")
+            .multipleOf(4),
         OptionSpec::integer("layers", 2, 1, NeuralMaterial::kMaxHiddenLayers,
                             "hidden layers of the decoder"),
-        OptionSpec::integer("units", 32, 4, NeuralMaterial::kMaxUnits,
-                            "units per hidden layer (a multiple of 4)"),
+        OptionSpec::integer("units", 32, 4, NeuralMaterial::kMaxUnits, "units per hidden layer")
+            .multipleOf(4),
         OptionSpec::integer("steps", 8000, 1, OptionSpec::kNoLimit,
                             "Adam steps (the last tenth trains the decoder on the latents as "
                             "stored)"),

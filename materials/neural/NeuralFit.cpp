@@ -34,20 +34,11 @@ TrainFunction trainer() {
     return function;
 }
 
-/** The registry's one format for an option error. */
-void requireMultipleOf4(const char* option, int value) {
-    if (value % 4 != 0)
-        throw Error(std::string("neural: option ") + option + " must be a multiple of 4, got " +
-                    std::to_string(value));
-}
-
 }  // namespace
 
 osg::ref_ptr<NeuralMaterial> NeuralMaterial::fit(const BtfSource& btf, const FitOptions& options) {
     const OptionValues o = validateOptions(kMethod, options);
     if (btf.empty()) throw Error("neural: the BTF is empty");
-    requireMultipleOf4("latent", o.integer("latent"));
-    requireMultipleOf4("units", o.integer("units"));
     const auto start = std::chrono::steady_clock::now();
     osg::ref_ptr<NeuralMaterial> m = new NeuralMaterial;
     m->setShape(btf.width(), btf.height(), btf.views(), btf.lights(), o.integer("latent"),

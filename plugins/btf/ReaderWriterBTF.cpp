@@ -30,6 +30,7 @@
 #include "materials/MethodRegistry.h"
 #include "materials/RelightFolder.h"
 #include "scene/MaterialNode.h"
+#include "scene/OpenMaterial.h"
 // The modules that fit on load (all but osgdb_btfmat) link libosgBTFFit for the fit and its
 // cache; osgdb_btfmat renders fitted files only and is built without them (CMakeLists.txt).
 #if OSGBTF_READERS_FIT
@@ -104,8 +105,7 @@ Settings parseSettings(const osgDB::Options* options, const std::string& extra =
 FitOptions fitOptionsFor(const MethodInfo& method, const Settings& settings) {
     FitOptions options;
     for (const auto& [key, value] : settings.values)
-        for (const std::string& name : methodNames())
-            if (findOption(findMethod(name), key)) options.set(key, value);
+        if (!methodsWithOption(key).empty()) options.set(key, value);
     validateOptions(method, options);
     return options;
 }
@@ -137,11 +137,7 @@ osg::ref_ptr<Material> openStored(const std::string& path, const Settings& setti
             storage = value == "float" ? MaterialTexture::Float : MaterialTexture::Half;
             continue;
         }
-        for (const std::string& name : methodNames())
-            if (findOption(findMethod(name), key)) {
-                ignored += " " + key + "=" + value;
-                break;
-            }
+        if (!methodsWithOption(key).empty()) ignored += " " + key + "=" + value;
     }
     if (settings.mipmap.value_or(false)) ignored += " mipmap=on";
     OSGBTF_NOTIFY(

@@ -1,7 +1,11 @@
 /* osgBTF's osgDB readers: BTF materials as scene-graph nodes (osgBTF::MaterialNode).
  *
- * One source, four plugin modules (osgDB loads osgdb_<ext>.so per extension); each module claims
- * only its own extension (osgdb_btfzip also ".zip", see there):
+ * One class, eight plugin modules (osgDB loads osgdb_<ext>.so per extension; plugins/README.md
+ * says why one class serves them, plugins/btf/CMakeLists.txt lists them); each module claims only
+ * its own extension (osgdb_btfzip also ".zip", see there). Besides the four below: osgdb_lp (an
+ * RTI capture by its .lp light file, fitted on load), osgdb_ptm and osgdb_rti (the RTI field's
+ * fitted files, materials/ForeignFiles.h) and osgdb_relight (relight's web layout,
+ * DIR/info.json.relight).
  *
  *   osgdb_btfmat       x.btfmat       a fitted-material file (`btf fit -o x.btfmat`; OpenEXR
  *                                     inside) -> MaterialNode. Files named otherwise
@@ -65,7 +69,7 @@ namespace osgBTF::plugin {
 
 class ReaderWriterBTF : public osgDB::ReaderWriter {
 public:
-    /** Claims `extension` (one of btfmat, btf, btfzip, btfmaterial; btfzip also claims zip). */
+    /** Claims `extension` (one of the eight above; btfzip also claims zip). */
     explicit ReaderWriterBTF(const std::string& extension);
 
     const char* className() const override { return "osgBTF material reader"; }

@@ -26,6 +26,7 @@
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "scene/MaterialNode.h"
+#include "scene/OpenMaterial.h"
 #include "tests/SmallSample.h"
 #include "tests/TestUtil.h"
 #include "tests/gl/GlErrorWatch.h"

@@ -28,6 +28,9 @@ write_tree(${WORK}/good
   core/B.h "#pragma once"
   loaders/L.cpp "#include \"core/A.h\""
   materials/pca/M.cpp "#include \"core/A.h\"\n#include \"Local.h\""
+  materials/pca/CMakeLists.txt "osgbtf_method(RENDER M.cpp\n              FIT MFit.cpp\n              OWN MOwn.cpp)"
+  materials/pca/MFit.cpp "#include \"fit/LightBasisFit.h\"\n#include \"materials/pca/M.h\""
+  materials/pca/MOwn.cpp "#include \"materials/pca/M.h\""
   synthesis/K.cpp "#include \"core/A.h\""
   scene/S.cpp "#include \"materials/pca/M.h\"\n#include \"loaders/L.h\"\n#include \"synthesis/K.h\""
   harness/headless/H.cpp "#include \"scene/S.h\""
@@ -37,13 +40,19 @@ write_tree(${WORK}/good
   tests/x_test.cpp "#include \"harness/H.h\"\n#include \"plugins/btf/P.h\"\n#include \"fuzz/F.h\"")
 expect(${WORK}/good)
 
-# Upward includes: each one reported once, with the file, the include and the rule. In the
-# libraries' folders the headers are checked here (their sources with their library, below).
+# Upward includes: each one reported once, with the file, the include and the rule. Sources are
+# checked by their folder too (loaders/L.cpp may not include materials/ although libosgBTF holds
+# both; an OWN source, which no library compiles, likewise), a method's FIT source as
+# libosgBTFFit's, which may include fit/ but not harness/.
 write_tree(${WORK}/bad
   core/A.h "#pragma once\n#include \"loaders/L.h\""
   loaders/L.h "#include \"materials/Material.h\""
   loaders/L.cpp "#include \"materials/Material.h\""
   materials/M.h "  #  include \"harness/headless/HeadlessRenderer.h\""
+  materials/n/CMakeLists.txt "osgbtf_method(RENDER N.cpp FIT NFit.cpp OWN NOwn.cpp)"
+  materials/n/N.cpp "#include \"scene/MaterialNode.h\""
+  materials/n/NFit.cpp "#include \"fit/FitCache.h\"\n#include \"harness/Compare.h\""
+  materials/n/NOwn.cpp "#include \"fit/FitCache.h\""
   synthesis/K.h "#include \"materials/Material.h\""
   scene/S.h "#include \"harness/MaterialImage.h\""
   scene/F.h "#include \"fit/FitCache.h\""
@@ -51,13 +60,17 @@ write_tree(${WORK}/bad
   fuzz/F.cpp "#include \"tools/btf/Commands.h\"")
 expect(${WORK}/bad
   "core/A.h: includes \"loaders/L.h\", but core/ may include only core/"
+  "loaders/L.cpp: includes \"materials/Material.h\", but loaders/ may include only core/, loaders/"
   "loaders/L.h: includes \"materials/Material.h\", but loaders/ may include only core/, loaders/"
   "materials/M.h: includes \"harness/headless/HeadlessRenderer.h\", but materials/ may include only core/, materials/"
+  "materials/n/N.cpp: includes \"scene/MaterialNode.h\", but materials/ may include only core/, materials/"
+  "materials/n/NOwn.cpp: includes \"fit/FitCache.h\", but materials/ may include only core/, materials/"
   "synthesis/K.h: includes \"materials/Material.h\", but synthesis/ may include only core/, synthesis/"
   "scene/F.h: includes \"fit/FitCache.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, scene/"
   "scene/S.h: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, scene/"
   "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, synthesis/, scene/, fit/, streaming/, environment/, plugins/"
-  "fuzz/F.cpp: includes \"tools/btf/Commands.h\", but fuzz/ may include only core/, loaders/, materials/, synthesis/, scene/, fit/, streaming/, environment/, harness/, plugins/, fuzz/")
+  "fuzz/F.cpp: includes \"tools/btf/Commands.h\", but fuzz/ may include only core/, loaders/, materials/, synthesis/, scene/, fit/, streaming/, environment/, harness/, plugins/, fuzz/"
+  "materials/n/NFit.cpp (osgBTFFit): includes \"harness/Compare.h\", but osgBTFFit may include only core/, loaders/, materials/, synthesis/, scene/, fit/")
 
 # Per library: a method's fit source (libosgBTFFit's) may include fit/, its render source
 # (libosgBTF's) may not, nor may the runtime include streaming/ or environment/.

@@ -1,4 +1,5 @@
-// The `btf` tool: one file per subcommand, registered from main.cpp.
+// The `btf` tool: one file per subcommand (`make-tileable` shares SynthesizeCommand.cpp with
+// `synthesize`: both drive synthesis/), registered from main.cpp.
 #pragma once
 
 #include <functional>
@@ -35,7 +36,7 @@ Runner addBatchCommand(CLI::App& app, CommonOptions& common);
 Runner addExportCommand(CLI::App& app, CommonOptions& common);
 
 /** "laf, slaf, rf": the registered methods that have fit option `key` (for help texts). */
-std::string methodsWithOption(const std::string& key);
+std::string methodListWithOption(const std::string& key);
 
 /** "a,b,,c" -> {a, b, c}. */
 std::vector<std::string> splitList(const std::string& text);

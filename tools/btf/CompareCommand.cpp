@@ -95,13 +95,13 @@ Runner addCompareCommand(CLI::App& app, CommonOptions& common) {
         ->capture_default_str();
     command->add_option(
         "--lobes", options->lobes,
-        "lobes=N for every compared method that has it (" + methodsWithOption("lobes") + ")");
+        "lobes=N for every compared method that has it (" + methodListWithOption("lobes") + ")");
     command->add_option("--components", options->components,
                         "components=C for every compared method that has it (" +
-                            methodsWithOption("components") + ")");
-    command->add_option(
-        "--clusters", options->clusters,
-        "clusters=K for every compared method that has it (" + methodsWithOption("clusters") + ")");
+                            methodListWithOption("components") + ")");
+    command->add_option("--clusters", options->clusters,
+                        "clusters=K for every compared method that has it (" +
+                            methodListWithOption("clusters") + ")");
     command->add_option("--set", options->settings,
                         "METHOD:KEY=VALUE, one method's option (repeatable; `btf fit --help` "
                         "lists them), e.g. --set pca:components=8. Invalid values make that "

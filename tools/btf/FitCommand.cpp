@@ -12,6 +12,7 @@
 #include "core/FloatImage.h"
 #include "core/Progress.h"
 #include "fit/MipMapping.h"
+#include "harness/FitScore.h"
 #include "harness/HeldOut.h"
 #include "loaders/LoadBtf.h"
 #include "loaders/Ubo2014.h"
@@ -22,10 +23,10 @@
 
 namespace osgBTF::tool {
 
-std::string methodsWithOption(const std::string& key) {
+std::string methodListWithOption(const std::string& key) {
     std::string list;
-    for (const std::string& name : methodNamesInOrder())
-        if (findOption(findMethod(name), key)) list += (list.empty() ? "" : ", ") + name;
+    for (const std::string& name : methodsWithOption(key))
+        list += (list.empty() ? "" : ", ") + name;
     return list;
 }
 
@@ -58,12 +59,12 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
         ->required();
     command->add_option("-m,--method", options->method, methodsHelp())->required();
     command->add_option("--lobes", options->lobes,
-                        "Shortcut for --set lobes=N (" + methodsWithOption("lobes") + ")");
+                        "Shortcut for --set lobes=N (" + methodListWithOption("lobes") + ")");
     command->add_option(
         "--components", options->components,
-        "Shortcut for --set components=C (" + methodsWithOption("components") + ")");
+        "Shortcut for --set components=C (" + methodListWithOption("components") + ")");
     command->add_option("--clusters", options->clusters,
-                        "Shortcut for --set clusters=K (" + methodsWithOption("clusters") + ")");
+                        "Shortcut for --set clusters=K (" + methodListWithOption("clusters") + ")");
     command->add_option("--set", options->settings,
                         "Method option KEY=VALUE (repeatable; see --method above)");
     command
@@ -168,12 +169,8 @@ Runner addFitCommand(CLI::App& app, CommonOptions& common) {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - loaded).count();
         material->fitInfo["seconds"] = std::to_string(fitSeconds);
         material->fitInfo["source"] = options->input;
-        const std::size_t errorTexels = errorTexelCount(btf, options->errorTexels);
-        std::vector<std::size_t> subsample;
-        if (errorTexels < btf.texelCount()) subsample = randomTexels(btf, errorTexels);
-        const ErrorSummary error = computeError(
-            btf, [&](std::size_t texel, float* out) { material->evaluateMeasured(texel, out); },
-            subsample.empty() ? nullptr : &subsample);
+        const std::vector<std::size_t> subsample = errorSubsample(btf, options->errorTexels);
+        const ErrorSummary error = fitError(btf, *material, subsample);
         const MemoryFootprint memory = material->memory();
         std::function<void()> foreignReport;
         // Saved last, releasing the material's arrays into the file's (no second copy of a PCA
