@@ -1,5 +1,5 @@
-// btf: inspect, generate, fit, evaluate, compare, synthesize, tile, export and batch-score measured BTFs.
-// `btf --help` and `btf <command> --help` document every option.
+// btf: inspect, generate, fit, evaluate, compare, synthesize, tile, export and batch-score measured
+// BTFs. `btf --help` and `btf <command> --help` document every option.
 #include <sys/prctl.h>
 #include <unistd.h>
 
