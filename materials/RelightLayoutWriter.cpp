@@ -260,10 +260,11 @@ std::string infoJson(const RelightModel& model, const std::vector<RelightQuantis
     info["height"] = model.height;
     info["format"] = "jpg";
     info["type"] = model.type;
-    if (model.type == "bilinear") info["resolution"] = model.resolution;
+    // The PCA types' interpolation: bilinear's grid resolution, rbf's sigma (with its lights).
+    if (model.resolution > 0) info["resolution"] = model.resolution;
     info["colorspace"] = model.colorspace;
     if (!model.lights.empty()) {
-        if (model.type == "rbf") info["sigma"] = jsonFloat(model.sigma);
+        if (model.sigma > 0) info["sigma"] = jsonFloat(model.sigma);
         nlohmann::json lights = nlohmann::json::array();
         for (const glm::vec3& l : model.lights)
             for (int a = 0; a < 3; ++a)

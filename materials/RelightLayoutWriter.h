@@ -38,8 +38,8 @@ struct RelightModel {
     /** mrgb: (planeCount + 1) x nodes RGB values, index p * nodes + i: p = 0 the mean profile
      *  (0..1), p >= 1 the principal profile E_{p-1}. */
     std::vector<glm::vec3> basis;
-    float sigma = 0;     ///< rbf
-    int resolution = 0;  ///< bilinear
+    float sigma = 0;     ///< rbf (written when positive)
+    int resolution = 0;  ///< bilinear (written when positive)
 };
 
 /** How a method's material becomes a RelightModel; Error "PATH: problem" for a material the
