@@ -17,12 +17,12 @@ cp "$work/gallery/pictures/pca-distance.png" docs/pictures/floor.png
 cp "$work/gallery/pictures/fmf-shadows.png" docs/pictures/shadows.png
 du -ch docs/pictures/*.png | tail -1
 
-# The real capture relit (docs/pictures/relit.png): the shared RTI capture (402 x 395, 72 photos;
-# ../shared/data/rti-icon, or CAPTURE=DIR) fitted with rbf (relight's default model) on its
+# The real capture relit (docs/pictures/relit.png), when CAPTURE=DIR names it (the NeuralRTI
+# example capture, 402 x 395, 72 photos and dirs.lp; not in this repository) fitted with rbf (relight's default model) on its
 # photos as they are encoded (--decode linear keeps the JPEGs' values), its photos 3 and 48 beside
 # osgBTF's image under the same two lights (btf eval, the GPU path).
-capture=${CAPTURE:-../shared/data/rti-icon}
-if [ -f "$capture/dirs.lp" ]; then
+capture=${CAPTURE:-}
+if [ -n "$capture" ] && [ -f "$capture/dirs.lp" ]; then
   "$build/bin/btf" --no-progress fit "$capture" --decode linear -m rbf --no-mipmap \
     -o "$work/relit.btfmat" >/dev/null
   row=()
