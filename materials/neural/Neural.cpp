@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include <string>
+#include <vector>
+
 #include <glm/geometric.hpp>
+#include <osg/Uniform>
 
 #include "core/Error.h"
 #include "materials/BilinearTaps.h"
@@ -189,14 +193,56 @@ MaterialTexture NeuralMaterial::gpuDecoder() const {
     return t;
 }
 
+int NeuralMaterial::gpuWeightVectors() const {
+    int count = 0;
+    for (int k = 0; k <= _hiddenLayers; ++k)
+        count += (layerOutputs(k) + 3) / 4 * (1 + layerInputs(k));
+    return count;
+}
+
+std::vector<float> NeuralMaterial::gpuWeights() const {
+    std::vector<float> weights(std::size_t(gpuWeightVectors()) * 4, 0.0f);
+    std::size_t start = 0;  // the group's first float
+    for (int k = 0; k <= _hiddenLayers; ++k) {
+        const int inputs = layerInputs(k);
+        for (int j = 0; j < layerOutputs(k); ++j) {
+            if (j > 0 && j % 4 == 0) start += std::size_t(1 + inputs) * 4;
+            const float* row = &decoder.data[std::size_t(decoderRow(k, j)) * decoder.width * 4];
+            weights[start + j % 4] = row[0];
+            for (int i = 0; i < inputs; ++i) weights[start + 4 * (1 + i) + j % 4] = row[4 + i];
+        }
+        start += std::size_t(1 + inputs) * 4;
+    }
+    return weights;
+}
+
+std::vector<std::string> NeuralMaterial::shaderDefines() const {
+    std::vector<std::string> defines = {
+        "OSGBTF_NEURAL_LATENT_GROUPS " + std::to_string(_latentSize / 4),
+        "OSGBTF_NEURAL_LAYERS " + std::to_string(_hiddenLayers),
+        "OSGBTF_NEURAL_UNITS " + std::to_string(_units)};
+    if (usesUniformWeights())
+        defines.push_back("OSGBTF_NEURAL_WEIGHTS " + std::to_string(gpuWeightVectors()));
+    return defines;
+}
+
 osg::ref_ptr<osg::StateSet> NeuralMaterial::createStateSet() const {
     osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
     addCommonState(*stateSet, *this);
     addTexture(*stateSet, createFloatTextureArray(latentTexture()).get(), "neuralLatent", 0);
-    addTexture(*stateSet, createFloatTexture(gpuDecoder()).get(), "neuralDecoder", 1);
-    stateSet->addUniform(new osg::Uniform("neuralLatentGroups", _latentSize / 4));
-    stateSet->addUniform(new osg::Uniform("neuralHiddenLayers", _hiddenLayers));
-    stateSet->addUniform(new osg::Uniform("neuralUnits", _units));
+    if (usesUniformWeights()) {
+        // Read once per draw, not fetched per fragment (shaderDefines).
+        const std::vector<float> weights = gpuWeights();
+        osg::ref_ptr<osg::Uniform> uniform =
+            new osg::Uniform(osg::Uniform::FLOAT_VEC4, "neuralWeights", gpuWeightVectors());
+        for (int i = 0; i < gpuWeightVectors(); ++i)
+            uniform->setElement(i, osg::Vec4f(weights[4 * i], weights[4 * i + 1],
+                                              weights[4 * i + 2], weights[4 * i + 3]));
+        stateSet->addUniform(uniform.get());
+    } else {
+        addTexture(*stateSet, createFloatTexture(gpuDecoder()).get(), "neuralDecoder", 1);
+    }
+    // The shape is the program's (shaderDefines), not uniforms.
     return stateSet;
 }
 
@@ -239,19 +285,25 @@ const bool neuralRegistered = registerMethodClass<NeuralMaterial>([] {
         const bool mip = n.mipLayout().mipMapped();
         const int taps = mip ? 8 : 4, groups = n.latentSize() / 4;
         int alu = 8 + taps * (4 + 2 * groups), tex = taps * groups;
+        const bool uniforms = n.usesUniformWeights();
         for (int k = 0; k <= n.hiddenLayers(); ++k) {
-            // Four neurons at a time (gpuDecoder): per input 4 weights in one fetch, per group of
-            // 4 inputs 4 multiplies and 4 adds; the bias fetch, the loop and the ReLU.
+            // Four neurons at a time: per input 4 weights in one vec4 (a uniform, or a fetch from
+            // gpuDecoder for a network too large for the uniforms), per group of 4 inputs 4
+            // multiplies and 4 adds; the bias, the loop and the ReLU.
             const int outputGroups = (n.layerOutputs(k) + 3) / 4, inputs = n.layerInputs(k);
             alu += outputGroups * (inputs / 4 * 8 + 2);
-            tex += outputGroups * (inputs + 1);
+            if (!uniforms) tex += outputGroups * (inputs + 1);
         }
         alu += 3;  // times l_z
+        const std::string shape = "one decode (L " + std::to_string(n.latentSize()) + ", " +
+                                  std::to_string(n.hiddenLayers()) + " x " +
+                                  std::to_string(n.units()) + " units)";
         ShaderCost cost = ShaderCost::ofEvaluate(
             alu, tex,
-            "ALU ~2 x weights / 4, TEX weights / 4 + neurons / 4 + " + std::to_string(taps) +
-                " taps x L/4, one decode (L " + std::to_string(n.latentSize()) + ", " +
-                std::to_string(n.hiddenLayers()) + " x " + std::to_string(n.units()) + " units)");
+            uniforms ? "ALU ~2 x weights / 4 (weights in uniforms), TEX " + std::to_string(taps) +
+                           " taps x L/4, " + shape
+                     : "ALU ~2 x weights / 4, TEX weights / 4 + neurons / 4 + " +
+                           std::to_string(taps) + " taps x L/4, " + shape);
         cost.fixedAlu += (mip ? 2 : 1) * ShaderCost::kBlendLevelAlu;
         return cost;
     };

@@ -99,6 +99,24 @@ public:
      *  their biases, texel 1 + i their weights of input i. One fetch gives an input's weights of
      *  four neurons, which the shader accumulates in one vec4. */
     MaterialTexture gpuDecoder() const;
+    /** The decoder as neural.frag's uniform array neuralWeights holds it: gpuDecoder's groups
+     *  without the padding, one after the other (each: 4 biases, then 4 weights per input of its
+     *  layer), 4 floats per vec4. */
+    std::vector<float> gpuWeights() const;
+    /** The most vec4 the decoder may take as uniforms (gpuWeights, usesUniformWeights): 1024 is
+     *  what GL 3.3 guarantees a fragment shader (GL_MAX_FRAGMENT_UNIFORM_COMPONENTS >= 1024
+     *  floats is the floor, real drivers give 4096 to 16384 floats); a margin is left for
+     *  btf_main.glsl's own uniforms. */
+    static constexpr int kMaxUniformWeights = 768;
+    /** Whether the shader reads the decoder from uniforms (gpuWeights; the network's default
+     *  shapes) or, for a network whose weights exceed kMaxUniformWeights vec4, from the texture
+     *  (gpuDecoder). */
+    bool usesUniformWeights() const { return gpuWeightVectors() <= kMaxUniformWeights; }
+    /** gpuWeights' size in vec4: per group of 4 neurons of layer k, 1 + layerInputs(k). */
+    int gpuWeightVectors() const;
+    /** The network's shape as neural.frag's defines (the loops' bounds are constants, so the
+     *  decoder unrolls and the weights' indices are constants), and the uniforms' size. */
+    std::vector<std::string> shaderDefines() const override;
 
     /** f(v, l) = (v.x, v.y, l.x, l.y, h.x, h.y, h.z, l.z), h = normalize(v + l): the projected
      *  directions (what Rainer et al. 2019 feed their decoder) plus the half vector and the
