@@ -35,7 +35,7 @@ void FactoredBtf::checkColorModel(const std::string& source, int model) {
     }
 }
 
-void FactoredBtf::validate() const {
+void FactoredBtf::validate(bool texelFactorsElsewhere) const {
     const bool fmf = model == FactorModel::Fmf;
     const std::size_t images = imageCount(), texels = texelCount();
     if (factors.size() != (fmf ? 1u : 3u) || images == 0 || texels == 0)
@@ -45,7 +45,8 @@ void FactoredBtf::validate() const {
                          " texels");
     for (const BtfFactor& factor : factors)
         if (std::size_t(factor.U.rows()) != images * (fmf ? 3 : 1) ||
-            std::size_t(factor.SxV.rows()) != texels || factor.U.cols() != factor.SxV.cols())
+            std::size_t(factor.SxV.rows()) != (texelFactorsElsewhere ? 0 : texels) ||
+            factor.U.cols() != factor.SxV.cols())
             fail(source,
                  "inconsistent factor matrix sizes: U is " + std::to_string(factor.U.rows()) + "x" +
                      std::to_string(factor.U.cols()) + ", SxV " +

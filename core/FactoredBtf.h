@@ -74,8 +74,9 @@ struct FactoredBtf {
     int components(int channel) const;
 
     /** Throws Error "<source>: ..." when the factor count, the matrix sizes or the colour model
-     *  do not fit the layout. */
-    void validate() const;
+     *  do not fit the layout. texelFactorsElsewhere: the SxV matrices have 0 rows (read into a
+     *  TexelFactorSink), only their columns are checked. */
+    void validate(bool texelFactorsElsewhere = false) const;
     /** Throws Error "<source>: DFMF colour model N is not supported (...)". */
     static void checkColorModel(const std::string& source, int model);
 
@@ -132,6 +133,26 @@ public:
 private:
     std::shared_ptr<const FactoredBtf> _owned;
     const FactoredBtf& _factors;
+};
+
+/** Takes a factorisation's texel factors (SxV) from a reader as it reads them, chunk by chunk and
+ *  in the file's own bytes, so that a material keeping them in a layout of its own (fmf's texture
+ *  of halves) never holds the reader's float matrices beside it: a full-size UBO2014 file's SxV
+ *  is 192 MB as floats and 96 MB as the halves it stores. readUbo2014 with
+ *  LoadOptions::texelFactors; the factors it returns have SxV matrices of 0 rows. */
+class TexelFactorSink {
+public:
+    virtual ~TexelFactorSink() = default;
+    /** Before factor `factor`'s rows: `described` has the header (size, directions, model and the
+     *  factors read so far), the factor keeps `components` values per texel, stored as scalars of
+     *  `scalarSize` bytes (2 half, 4 float, 8 double). */
+    virtual void beginFactor(const FactoredBtf& described, int factor, int components,
+                             int scalarSize) = 0;
+    /** Rows [first, first + count) of the factor in file order (FactoredBtf::factorRow): row r's
+     *  `components` scalars at bytes + r * rowBytes, little-endian. Throws Error to stop the
+     *  read. */
+    virtual void texelRows(int factor, int components, std::uint64_t first, std::uint64_t count,
+                           const unsigned char* bytes, std::uint64_t rowBytes, int scalarSize) = 0;
 };
 
 }  // namespace osgBTF

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 
@@ -184,10 +185,10 @@ FloatImage evaluateMaterialImage(const Material& material, const glm::vec3& view
     out.channelNames = {"R", "G", "B"};
     if (light.z <= 0.0f || view.z <= 0.0f) return out;  // as the shader: below the horizon is dark
     tbb::parallel_for(0, h, [&](int y) {
-        for (int x = 0; x < w; ++x) {
-            const glm::vec3 value = material.evaluate(x, y, view, light);
-            for (int c = 0; c < 3; ++c) out.at(x, h - 1 - y, c) = value[c];
-        }
+        std::vector<glm::vec3> row(static_cast<std::size_t>(w));
+        material.evaluateRow(0, y, w, view, light, row.data());
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) out.at(x, h - 1 - y, c) = row[std::size_t(x)][c];
     });
     return out;
 }

@@ -7,6 +7,8 @@
 
 namespace osgBTF {
 
+class TexelFactorSink;
+
 struct LoadOptions {
     /** Storage of the loaded MeasuredBtf; Half halves the memory at ~3 significant digits. */
     Storage storage = Storage::Float;
@@ -35,6 +37,11 @@ struct LoadOptions {
      *  (every size still checked against the file) and left with 0 rows and their component
      *  count as columns (S is read). For describing a file (`btf info`) in milliseconds. */
     bool headerOnly = false;
+
+    /** readUbo2014 only: where the texel factors (SxV) go as they are read, in the file's bytes,
+     *  instead of float matrices (which are then left with 0 rows): for a material that keeps
+     *  them in a layout of its own (core/FactoredBtf.h, TexelFactorSink). Not owned. */
+    TexelFactorSink* texelFactors = nullptr;
 };
 
 /** "auto", "linear", "srgb", "gamma22" (the tools' --decode values) to the curve; anything else

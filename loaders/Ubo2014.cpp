@@ -102,8 +102,28 @@ float toFloat(const unsigned char* p, int scalarSize) {
 
 /** Reads rows x stride scalars, keeping the first `use` of each row. With `skip` (a header-only
  *  read) it only moves past them and gives an empty matrix of `use` columns. */
+/** count scalars of scalarSize bytes at src as floats (the switch outside the loop: a full-size
+ *  UBO2014 file has 56 million of them). */
+void toFloats(const unsigned char* src, std::uint64_t count, int scalarSize, float* out) {
+    if (scalarSize == 2) {
+        for (std::uint64_t k = 0; k < count; ++k) {
+            std::uint16_t bits;
+            std::memcpy(&bits, src + 2 * k, 2);
+            out[k] = imath_half_to_float(bits);
+        }
+    } else if (scalarSize == 4) {
+        std::memcpy(out, src, count * 4);
+    } else {
+        for (std::uint64_t k = 0; k < count; ++k) out[k] = toFloat(src + 8 * k, 8);
+    }
+}
+
+/** Reads rows x stride scalars, keeping the first `use` of each row. With `sink`, the rows go to
+ *  it chunk by chunk as the file stores them (factor `factor` of the file) and the matrix
+ *  returned has 0 rows. */
 FactorMatrix readMatrix(Reader& in, std::uint64_t rows, std::uint64_t stride, std::uint64_t use,
-                        int scalarSize, const std::string& field, bool skip = false) {
+                        int scalarSize, const std::string& field, bool skip = false,
+                        TexelFactorSink* sink = nullptr, int factor = 0) {
     // Nothing to keep per row (rank 0 factors, an empty height map): the rows are skipped, not
     // walked; a header can claim billions of them (fuzz/regression/ubo2014/).
     if (skip || use == 0) {
@@ -112,7 +132,7 @@ FactorMatrix readMatrix(Reader& in, std::uint64_t rows, std::uint64_t stride, st
         return FactorMatrix(skip ? 0 : static_cast<Eigen::Index>(rows),
                             static_cast<Eigen::Index>(use));
     }
-    FactorMatrix m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(use));
+    FactorMatrix m(static_cast<Eigen::Index>(sink ? 0 : rows), static_cast<Eigen::Index>(use));
     const std::uint64_t rowBytes = stride * std::uint64_t(scalarSize);
     const std::uint64_t rowsPerChunk =
         std::max<std::uint64_t>(1, (4u << 20) / std::max<std::uint64_t>(rowBytes, 1));
@@ -121,12 +141,13 @@ FactorMatrix readMatrix(Reader& in, std::uint64_t rows, std::uint64_t stride, st
         const std::uint64_t n = std::min(rowsPerChunk, rows - r0);
         chunk.resize(n * rowBytes);
         in.read(chunk.data(), chunk.size(), field);
-        for (std::uint64_t r = 0; r < n; ++r) {
-            const unsigned char* src = chunk.data() + r * rowBytes;
-            for (std::uint64_t k = 0; k < use; ++k)
-                m(Eigen::Index(r0 + r), Eigen::Index(k)) =
-                    toFloat(src + k * scalarSize, scalarSize);
+        if (sink) {
+            sink->texelRows(factor, int(use), r0, n, chunk.data(), rowBytes, scalarSize);
+            continue;
         }
+        for (std::uint64_t r = 0; r < n; ++r)
+            toFloats(chunk.data() + r * rowBytes, use, scalarSize,
+                     m.data() + (r0 + r) * use);  // row-major
     }
     return m;
 }
@@ -316,7 +337,7 @@ void readDirections(Reader& in, Ubo2014Factors& f) {
     }
 }
 
-void readDfmf(Reader& in, Ubo2014Factors& f, bool headerOnly) {
+void readDfmf(Reader& in, Ubo2014Factors& f, bool headerOnly, TexelFactorSink* sink) {
     f.maxComponents = in.u32("maximum component count");
     f.colorModel = in.get<std::int32_t>("colour model");
     FactoredBtf::checkColorModel(in.path(), f.colorModel);
@@ -344,14 +365,18 @@ void readDfmf(Reader& in, Ubo2014Factors& f, bool headerOnly) {
         in.need(((long double)rows + cols + 1) * k * scalarSize, channel + " factors");
         BtfFactor factor;
         factor.S = readVector(in, k, k, scalarSize, channel + " S");
-        factor.U = readMatrix(in, rows, k, k, scalarSize, channel + " U", headerOnly);
-        factor.SxV = readMatrix(in, cols, k, k, scalarSize, channel + " SxV", headerOnly);
+        if (sink) sink->beginFactor(f, c, int(k), scalarSize);
+        // The texel factor (SxV; U in the transposed arrangement) goes to the sink if any.
+        factor.U = readMatrix(in, rows, k, k, scalarSize, channel + " U", headerOnly,
+                              transposed ? sink : nullptr, c);
+        factor.SxV = readMatrix(in, cols, k, k, scalarSize, channel + " SxV", headerOnly,
+                                transposed ? nullptr : sink, c);
         if (transposed) std::swap(factor.U, factor.SxV);
         f.factors.push_back(std::move(factor));
     }
 }
 
-void readFmf(Reader& in, Ubo2014Factors& f, bool headerOnly) {
+void readFmf(Reader& in, Ubo2014Factors& f, bool headerOnly, TexelFactorSink* sink) {
     f.headerVersion = f.extendedHeader ? in.get<std::uint8_t>("FMF header version") : 0;
     if (f.headerVersion >= 3)
         fail(in.path(), "FMF header version " + std::to_string(f.headerVersion) +
@@ -388,7 +413,8 @@ void readFmf(Reader& in, Ubo2014Factors& f, bool headerOnly) {
     BtfFactor factor;
     factor.S = readVector(in, stride, use, scalarSize, "S");
     factor.U = readMatrix(in, rows, stride, use, scalarSize, "U", headerOnly);
-    factor.SxV = readMatrix(in, cols, stride, use, scalarSize, "SxV", headerOnly);
+    if (sink) sink->beginFactor(f, 0, int(use), scalarSize);
+    factor.SxV = readMatrix(in, cols, stride, use, scalarSize, "SxV", headerOnly, sink, 0);
     f.factors.push_back(std::move(factor));
 }
 
@@ -437,10 +463,11 @@ Ubo2014Factors readUbo2014(const std::string& path, const LoadOptions& options) 
     f.hasRotations = signature.rotations;
     readMeta(in, f);
     readDirections(in, f);
+    TexelFactorSink* sink = options.headerOnly ? nullptr : options.texelFactors;
     if (f.model == FactorModel::Dfmf)
-        readDfmf(in, f, options.headerOnly);
+        readDfmf(in, f, options.headerOnly, sink);
     else
-        readFmf(in, f, options.headerOnly);
+        readFmf(in, f, options.headerOnly, sink);
     if (in.remaining() != 0)
         fail(path, std::to_string(in.remaining()) +
                        " unexpected trailing bytes after the last factor matrix");

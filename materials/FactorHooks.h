@@ -6,6 +6,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 
 #include <osg/ref_ptr>
 
@@ -15,6 +16,15 @@
 namespace osgBTF {
 
 class Material;
+
+/** A TexelFactorSink that makes the method's material: a reader hands it the texel factors as it
+ *  reads them (LoadOptions::texelFactors), finish() takes the rest. */
+class FactorReceiver : public TexelFactorSink {
+public:
+    /** The material of `factors`, read with this receiver (their SxV matrices have 0 rows).
+     *  Throws Error as FactoredBtf::validate and the method's own checks. */
+    virtual osg::ref_ptr<Material> finish(FactoredBtf&& factors) = 0;
+};
 
 /** The functions get materials of the method's own class. */
 struct FactorHooks {
@@ -30,6 +40,10 @@ struct FactorHooks {
      *  Throws Error as FactoredBtf::validate. */
     std::function<osg::ref_ptr<Material>(FactoredBtf&& factors, MaterialTexture::PixelKind storage)>
         fromFactors;
+    /** Optional: a receiver for a reader, whose material equals fromFactors' on the factors read
+     *  without it (textures in `storage`, half when the file stores halves), without holding the
+     *  texel factors as floats on the way (scene/OpenMaterial.h opens UBO2014 files with it). */
+    std::function<std::unique_ptr<FactorReceiver>(MaterialTexture::PixelKind storage)> receiver;
 };
 
 }  // namespace osgBTF

@@ -62,6 +62,15 @@ public:
     virtual glm::vec3 evaluate(int x, int y, const glm::vec3& view,
                                const glm::vec3& light) const = 0;
 
+    /** evaluate() for texels (x0 .. x0 + count - 1, y) at one view and light, into out[0 ..
+     *  count - 1]: what an image needs. The default calls evaluate(); a method whose per-query
+     *  work does not depend on the texel (fmf's interpolated U rows) does it once a row. Equal to
+     *  evaluate(), bit for bit. */
+    virtual void evaluateRow(int x0, int y, int count, const glm::vec3& view,
+                             const glm::vec3& light, glm::vec3* out) const {
+        for (int i = 0; i < count; ++i) out[i] = evaluate(x0 + i, y, view, light);
+    }
+
     /** The model at every measured (view, light) pair, in MeasuredBtf::abrdf's layout. The default
      *  calls evaluate() with the measured directions; methods that store per-measured-direction
      *  data override it to skip interpolation. */

@@ -2,12 +2,15 @@
 
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <system_error>
 #include <utility>
 
 #include "loaders/LoadBtf.h"
+#include "loaders/LoadOptions.h"
 #include "loaders/Ubo2014.h"
+#include "materials/FactorHooks.h"
 #include "materials/MaterialFiles.h"
 #include "materials/MethodRegistry.h"
 #include "scene/SharedObjects.h"
@@ -41,10 +44,21 @@ SharedObjects<std::string, Material, std::string>& sharedMaterials() {
 
 osg::ref_ptr<Material> openUbo2014Material(const std::string& path,
                                            MaterialTexture::PixelKind storage) {
-    Ubo2014Factors file = readUbo2014(path);
-    if (file.scalarSize == 2) storage = MaterialTexture::Half;
-    osg::ref_ptr<Material> material =
-        factorMethod().factors->fromFactors(std::move(static_cast<FactoredBtf&>(file)), storage);
+    const FactorHooks& hooks = *factorMethod().factors;
+    osg::ref_ptr<Material> material;
+    if (hooks.receiver) {
+        // The texel factors straight into the material's layout, never as floats (the first
+        // image's time and memory: docs/viewing.md).
+        std::unique_ptr<FactorReceiver> receiver = hooks.receiver(storage);
+        LoadOptions options;
+        options.texelFactors = receiver.get();
+        Ubo2014Factors file = readUbo2014(path, options);
+        material = receiver->finish(std::move(static_cast<FactoredBtf&>(file)));
+    } else {
+        Ubo2014Factors file = readUbo2014(path);
+        if (file.scalarSize == 2) storage = MaterialTexture::Half;
+        material = hooks.fromFactors(std::move(static_cast<FactoredBtf&>(file)), storage);
+    }
     material->sourceFile = path;
     return material;
 }

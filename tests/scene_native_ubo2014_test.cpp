@@ -7,6 +7,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -125,6 +128,75 @@ TEST(NativeUbo2014, FmfWithDrrAndCosineOpensAsStored) {
     EXPECT_EQ(fmf->factors().components(0), 3);
     expectEvaluatesTheFormula(*m, f);
     expectMeasuredEqualsDecode(*m, path);
+}
+
+TEST(NativeUbo2014, OpeningReadsTheTexelFactorsIntoTheMaterialAsFromFactorsConvertsThem) {
+    // openMaterial hands the reader fmf's receiver (FactorHooks::receiver: SxV straight into its
+    // texture, never as floats); fromFactors on the reader's floats is the reference. Same
+    // textures bit for bit, for a float DFMF file (read as half and as float) and a half FMF.
+    TempDir dir;
+    const std::string dfmf = writeFile(dir, test::handWrittenDfmf11(), "dfmf11.btf");
+    const std::string fmf = writeFile(dir, test::handWrittenFmfDrrCosine(), "fmf.btf");
+    for (const auto& [path, storage] :
+         std::vector<std::pair<std::string, MaterialTexture::PixelKind>>{
+             {dfmf, MaterialTexture::Half},
+             {dfmf, MaterialTexture::Float},
+             {fmf, MaterialTexture::Half}}) {
+        SCOPED_TRACE(path + " " + MaterialTexture::kindName(storage));
+        Ubo2014Factors file = readUbo2014(path);
+        EXPECT_EQ(file.factors[0].SxV.rows(), file.width * file.height);
+        const osg::ref_ptr<FmfMaterial> reference =
+            FmfMaterial::fromFactors(std::move(static_cast<FactoredBtf&>(file)),
+                                     file.scalarSize == 2 ? MaterialTexture::Half : storage);
+        const osg::ref_ptr<Material> opened = openUbo2014Material(path, storage);
+        const FittedMaterial want = reference->toFittedMaterial(), got = opened->toFittedMaterial();
+        ASSERT_EQ(got.textures.size(), want.textures.size());
+        for (std::size_t t = 0; t < want.textures.size(); ++t) {
+            SCOPED_TRACE(want.textures[t].name);
+            EXPECT_EQ(got.textures[t].name, want.textures[t].name);
+            EXPECT_EQ(got.textures[t].kind, want.textures[t].kind);
+            EXPECT_EQ(got.textures[t].depth, want.textures[t].depth);
+            EXPECT_EQ(got.textures[t].data, want.textures[t].data);
+            EXPECT_EQ(got.textures[t].halves.size(), want.textures[t].halves.size());
+            for (std::size_t i = 0; i < want.textures[t].halves.size(); ++i)
+                ASSERT_EQ(got.textures[t].halves[i].bits(), want.textures[t].halves[i].bits())
+                    << "value " << i;
+        }
+    }
+}
+
+TEST(NativeUbo2014, AHalfInfinityInTheTexelFactorsIsRefusedAsTheFloatPathRefusesIt) {
+    // The FMF file ends with its SxV: its last half made +infinity.
+    TempDir dir;
+    HandWrittenBtf f = test::handWrittenFmfDrrCosine();
+    f.bytes[f.bytes.size() - 2] = '\x00';
+    f.bytes[f.bytes.size() - 1] = '\x7c';
+    const std::string path = writeFile(dir, f, "inf.btf");
+    EXPECT_EQ(errorOf([&] { openMaterial(path); }),
+              path + ": fmf: SxV value inf exceeds the half range (65504); use storage=float");
+}
+
+TEST(NativeUbo2014, EvaluateRowEqualsEvaluateBitForBit) {
+    // btf eval --cpu and Python's Material.image evaluate rows (Material::evaluateRow; fmf
+    // blends its U rows once a row): the same floats as evaluate, at measured directions and
+    // between them.
+    TempDir dir;
+    const HandWrittenBtf f = test::handWrittenDfmf11();
+    const osg::ref_ptr<Material> m = openMaterial(writeFile(dir, f, "dfmf11.btf"));
+    const std::vector<std::pair<glm::vec3, glm::vec3>> queries = {
+        {direction(f.views[1]), direction(f.lights[2])},
+        {Direction{17.5f, 33}.toVector(), Direction{41, 200}.toVector()}};
+    for (const auto& [view, light] : queries)
+        for (int y = 0; y < m->height(); ++y) {
+            std::vector<glm::vec3> row(std::size_t(m->width()));
+            m->evaluateRow(0, y, m->width(), view, light, row.data());
+            for (int x = 0; x < m->width(); ++x) {
+                const glm::vec3 want = m->evaluate(x, y, view, light);
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_EQ(row[std::size_t(x)][c], want[c])
+                        << "texel " << x << "," << y << " channel " << c;
+            }
+        }
 }
 
 TEST(NativeUbo2014, OpensWhereDecodingIsRefusedByTheMemoryGuard) {

@@ -199,6 +199,8 @@ TEST(BtfToolUbo2014, EvalRendersTheStoredFactors) {
                       shellQuote(image) + mode);
         ASSERT_EQ(r.exitCode, 0) << r.output;
         EXPECT_NE(r.output.find("(fmf, 4x3, "), std::string::npos) << r.output;
+        EXPECT_EQ(r.output.find("GPU"), *mode ? std::string::npos : r.output.find("GPU: "))
+            << r.output;
         const osgBTF::FloatImage got = osgBTF::readFloatImage(image);
         ASSERT_EQ(got.width, 4);
         ASSERT_EQ(got.height, 3);
@@ -213,6 +215,24 @@ TEST(BtfToolUbo2014, EvalRendersTheStoredFactors) {
                         << "x " << x << " row " << row << " channel " << c;
             }
     }
+}
+
+TEST(BtfToolUbo2014, EvalCpuOpensNoOpenGlContext) {
+    // With no EGL vendor library glvnd has no EGL at all: the GPU path fails, --cpu works.
+    TempDir dir;
+    const std::string path = dir.file("dfmf11.btf");
+    writeTextFile(path, handWrittenDfmf11().bytes);
+    const std::string noEgl = "__EGL_VENDOR_LIBRARY_FILENAMES=" + dir.file("none.json") + " ";
+    const std::string eval = "eval " + shellQuote(path) + " --view 40,120 --light 60,150 -o " +
+                             shellQuote(dir.file("eval.exr"));
+    const CommandResult gpu = runCommand("ASAN_OPTIONS=detect_leaks=0 " + noEgl + builtTool("btf") +
+                                         " --no-progress " + eval);
+    EXPECT_EQ(gpu.exitCode, 1) << gpu.output;
+    EXPECT_NE(gpu.output.find("EGL"), std::string::npos) << gpu.output;
+    const CommandResult cpu =
+        runCommand(noEgl + builtTool("btf") + " --no-progress " + eval + " --cpu");
+    EXPECT_EQ(cpu.exitCode, 0) << cpu.output;
+    EXPECT_NE(cpu.output.find("(fmf, 4x3, CPU)"), std::string::npos) << cpu.output;
 }
 
 namespace {

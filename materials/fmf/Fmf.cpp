@@ -2,10 +2,16 @@
 #include "materials/CoordinateMapRendering.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <iomanip>
 #include <limits>
+#include <memory>
 #include <sstream>
+#include <type_traits>
+#include <vector>
 
 #include <Imath/half.h>
 #include <tbb/blocked_range.h>
@@ -195,6 +201,115 @@ void FmfMaterial::setFactors(FactoredBtf factors, MaterialTexture::PixelKind sto
     adopt(std::move(factors), std::move(u), std::move(sxv));
 }
 
+namespace {
+
+/** The SxV texture (sxvShapeOf) filled as a reader reads the file (FactorHooks::receiver): the
+ *  file's halves copied as they are, anything else converted as moveSxvToTexture converts it, so
+ *  the material equals fromFactors' on the same file without the 192 MB of floats between. */
+class SxvReceiver : public FactorReceiver {
+public:
+    explicit SxvReceiver(MaterialTexture::PixelKind storage) : _storage(storage) {}
+
+    void beginFactor(const FactoredBtf& described, int /*factor*/, int components,
+                     int scalarSize) override {
+        if (!_started) {
+            // As fromFactors' callers do: a file of halves is rendered from halves.
+            _started = true;
+            if (scalarSize == 2) _storage = MaterialTexture::Half;
+            _sxv = {"sxv", described.width, described.height, 0, 4, _storage, {}};
+            _source = described.source;
+            // Address space for every factor at this one's rank (pages are touched only when
+            // grown): growing factor by factor would copy the earlier factors' values each time.
+            const std::size_t expected = std::size_t(described.model == FactorModel::Fmf ? 1 : 3) *
+                                         std::size_t(groupsOf(components)) *
+                                         std::size_t(described.width) *
+                                         std::size_t(described.height) * 4;
+            if (_storage == MaterialTexture::Half)
+                _sxv.halves.reserve(expected);
+            else
+                _sxv.data.reserve(expected);
+        }
+        const std::size_t texels = std::size_t(_sxv.width) * std::size_t(_sxv.height);
+        _first = std::size_t(_sxv.depth) * texels * 4;
+        _sxv.depth += groupsOf(components);
+        const std::size_t grown = std::size_t(_sxv.depth) * texels * 4;
+        // Zeros beyond the rank; value-initialised halves are zero bits (a memset, where
+        // resize(n, half(0)) assigns one by one: 13 % of the first image's time).
+        static_assert(std::is_trivially_default_constructible_v<Imath::half>);
+        if (_storage == MaterialTexture::Half)
+            _sxv.halves.resize(grown);
+        else
+            _sxv.data.resize(grown);
+    }
+
+    void texelRows(int /*factor*/, int components, std::uint64_t first, std::uint64_t count,
+                   const unsigned char* bytes, std::uint64_t rowBytes, int scalarSize) override {
+        const std::size_t width = std::size_t(_sxv.width);
+        const std::size_t texels = width * std::size_t(_sxv.height);
+        const bool half = _storage == MaterialTexture::Half;
+        tbb::parallel_for(std::uint64_t(0), count, [&](std::uint64_t r) {
+            // File row first + r is texel (x, y) with y from the bottom (FactoredBtf::factorRow).
+            const std::size_t row = std::size_t(first + r);
+            const std::size_t y = std::size_t(_sxv.height) - 1 - row / width, x = row % width;
+            const std::size_t texel = y * width + x;
+            const unsigned char* src = bytes + r * rowBytes;
+            for (int j = 0; j < components; ++j) {
+                const std::size_t at =
+                    _first + (std::size_t(j / 4) * texels + texel) * 4 + std::size_t(j % 4);
+                if (half && scalarSize == 2) {
+                    std::uint16_t bits;
+                    std::memcpy(&bits, src + 2 * j, 2);
+                    // Infinity is refused as the float path refuses it (checkHalfRange).
+                    if ((bits & 0x7fff) == 0x7c00)
+                        checkHalfRange(imath_half_to_float(bits), _source, "SxV");
+                    _sxv.halves[at].setBits(bits);
+                    continue;
+                }
+                float value;
+                if (scalarSize == 2) {
+                    std::uint16_t bits;
+                    std::memcpy(&bits, src + 2 * j, 2);
+                    value = imath_half_to_float(bits);
+                } else if (scalarSize == 4) {
+                    std::memcpy(&value, src + 4 * j, 4);
+                } else {
+                    double d;
+                    std::memcpy(&d, src + 8 * j, 8);
+                    value = float(d);
+                }
+                if (half) {
+                    checkHalfRange(value, _source, "SxV");
+                    _sxv.halves[at] = Imath::half(value);
+                } else {
+                    _sxv.data[at] = value;
+                }
+            }
+        });
+    }
+
+    osg::ref_ptr<Material> finish(FactoredBtf&& factors) override {
+        osg::ref_ptr<FmfMaterial> m = new FmfMaterial;
+        m->setFactorsAndSxv(std::move(factors), std::move(_sxv));
+        return m;
+    }
+
+private:
+    MaterialTexture::PixelKind _storage;
+    MaterialTexture _sxv;
+    std::string _source;
+    std::size_t _first = 0;  ///< the current factor's first value in _sxv
+    bool _started = false;
+};
+
+}  // namespace
+
+void FmfMaterial::setFactorsAndSxv(FactoredBtf factors, MaterialTexture sxv) {
+    factors.validate(true);
+    checkLayout(factors, sxv.kind);
+    MaterialTexture u = moveUToTexture(factors, sxv.kind);
+    adopt(std::move(factors), std::move(u), std::move(sxv));
+}
+
 void FmfMaterial::adopt(FactoredBtf factors, MaterialTexture u, MaterialTexture sxv) {
     setGeometry(factors.width, factors.height, factors.views, factors.lights);
     _storage = sxv.kind;
@@ -324,6 +439,51 @@ glm::vec3 FmfMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
     float sums[3];
     factorSums(sxvTexel(x, y), images.data(), weights.data(), count, sums);
     return glm::vec3(sums[0], sums[1], sums[2]);
+}
+
+void FmfMaterial::evaluateRow(int x0, int y, int count, const glm::vec3& view,
+                              const glm::vec3& light, glm::vec3* out) const {
+    // factorSums's blended[j] do not depend on the texel: made once here, in its order (per
+    // group, combination by combination), then per texel its `sum += blended[j] * sxv[j]`.
+    std::array<std::size_t, 9> images;
+    std::array<float, 9> weights;
+    const int combinations = directionCombinations(view, light, images, weights);
+    const std::size_t texels = texelCount(), rowValues = uRowValues();
+    std::vector<float> blended[3];
+    for (int c = 0; c < 3; ++c) {
+        const int k = _factors->components(c);
+        blended[c].assign(std::size_t(k), 0.0f);
+        withValues(*_u, [&](const auto* uValues) {
+            for (int g = 0; g < k; g += 4) {
+                const int n = std::min(4, k - g);
+                for (int i = 0; i < combinations; ++i) {
+                    const auto* u =
+                        uValues + (images[i] * 3 + std::size_t(c)) * rowValues + std::size_t(g);
+                    for (int j = 0; j < n; ++j)
+                        blended[c][std::size_t(g + j)] += weights[i] * float(u[j]);
+                }
+            }
+        });
+    }
+    std::vector<glm::vec3> sums(std::size_t(count), glm::vec3(0.0f));
+    withValues(*_sxv, [&](const auto* values) {
+        for (int c = 0; c < 3; ++c) {
+            const int k = _factors->components(c);
+            for (int i = 0; i < count; ++i) {
+                const std::size_t texel = sxvTexel(x0 + i, y);
+                float sum = 0.0f;
+                for (int g = 0; g < k; g += 4) {
+                    const auto* group =
+                        values + (std::size_t(layerOffset(c) + g / 4) * texels + texel) * 4;
+                    const int n = std::min(4, k - g);
+                    for (int j = 0; j < n; ++j)
+                        sum += blended[c][std::size_t(g + j)] * float(group[j]);
+                }
+                sums[std::size_t(i)][c] = sum;
+            }
+        }
+    });
+    for (int i = 0; i < count; ++i) out[i] = finishLinear(sums[std::size_t(i)], view, light);
 }
 
 glm::vec3 FmfMaterial::finishLinear(const glm::vec3& linear, const glm::vec3&,
@@ -710,6 +870,9 @@ const bool fmfRegistered = registerMethodClass<FmfMaterial>([] {
     };
     factors.fromFactors = [](FactoredBtf&& stored, MaterialTexture::PixelKind storage) {
         return osg::ref_ptr<Material>(FmfMaterial::fromFactors(std::move(stored), storage));
+    };
+    factors.receiver = [](MaterialTexture::PixelKind storage) -> std::unique_ptr<FactorReceiver> {
+        return std::make_unique<SxvReceiver>(storage);
     };
     m.factors = std::move(factors);
     m.order = 70;

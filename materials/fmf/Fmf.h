@@ -80,6 +80,9 @@ public:
     static osg::ref_ptr<FmfMaterial> fit(const BtfSource& btf, const FitOptions& options);
     /** Takes the file's "sxv" texture as it is (half textures as halves: kLoadsHalves). */
     static osg::ref_ptr<FmfMaterial> fromFile(FittedMaterial file);
+    /** Sets factors read with their SxV into `sxv` (FactorHooks::receiver: SxV matrices of 0
+     *  rows, `sxv` in sxvShape's layout), checked as fromFactors checks them. */
+    void setFactorsAndSxv(FactoredBtf factors, MaterialTexture sxv);
     static constexpr bool kLoadsHalves = true;
 
     /** The factors as rendered (half storage: the rounded values): their description and S.
@@ -134,6 +137,10 @@ protected:
     friend class StreamedFmfMaterial;
     ~FmfMaterial() override = default;
     /** The three factor sums, before colour decoding (and exp) and the cosine division. */
+    /** One row: the interpolated U rows blended once for the row, then a dot product with each
+     *  texel's SxV (evaluate's operations in its order). */
+    void evaluateRow(int x0, int y, int count, const glm::vec3& view, const glm::vec3& light,
+                     glm::vec3* out) const override;
     glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,
                              const glm::vec3& light) const override;
     glm::vec3 finishLinear(const glm::vec3& linear, const glm::vec3& view,
