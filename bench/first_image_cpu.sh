@@ -6,6 +6,7 @@
 #   btf eval --cpu    open the file as an fmf material (no OpenGL context), evaluate, write EXR
 #   python load       osgbtf.load(FILE).image(view, light): the measured BTF, decoded on demand
 #   python material   osgbtf.open_material(FILE).image(view, light): the fmf material's CPU image
+#   python import     the interpreter, numpy and osgbtf alone: what the two Python rows carry
 #
 #   bench/first_image_cpu.sh BUILD BTF_HH [ROUNDS]
 #
@@ -37,7 +38,9 @@ export OSG_LIBRARY_PATH="$BUILD/lib" PYTHONPATH="$BUILD/python"
 cat >"$WORK/image.py" <<PY
 import sys, numpy as np, osgbtf
 path, mode = sys.argv[1], sys.argv[2]
-if mode == "load":
+if mode == "import":
+    image = np.zeros((1, 3))
+elif mode == "load":
     image = osgbtf.load(path).image($VIEW, $LIGHT)
 else:
     image = osgbtf.open_material(path).image(($view), ($light))
@@ -59,11 +62,12 @@ for round in $(seq "$ROUNDS"); do
         --light "$light" --cpu -o "$WORK/cpu.exr"
     run "python-load" /usr/bin/python3 "$WORK/image.py" "$file" load
     run "python-material" /usr/bin/python3 "$WORK/image.py" "$file" material
+    run "python-import-only" /usr/bin/python3 "$WORK/image.py" "$file" import
 done
 echo
 echo "| path | CPU s (median of $ROUNDS) | wall s | peak RSS MiB |"
 echo "|---|---|---|---|"
-for name in btf.hh btf-eval-cpu python-load python-material; do
+for name in btf.hh btf-eval-cpu python-load python-material python-import-only; do
     awk -v n="$name" '$1 == n {print $2, $3, $4}' "$WORK/times" | sort -n | awk -v n="$name" '
         {cpu[NR] = $1; wall[NR] = $2; peak[NR] = $3}
         END {m = int((NR + 1) / 2); printf "| %s | %.2f | %.2f | %.0f |\n", n, cpu[m], wall[m], peak[m] / 1024}'
