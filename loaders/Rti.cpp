@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "core/Error.h"
+#include "core/MeasuredBtf.h"
 #include "core/SizeGuard.h"
 #include "loaders/ImageSet.h"
 #include "loaders/OutOfCoreImageSet.h"
@@ -275,6 +277,18 @@ std::unique_ptr<BtfSource> openRtiCapture(const std::string& path, const LoadOpt
     const RtiImages found = findRtiImages(path, options);
     const ImageSetHeader first = readImageSetHeader(*found.source, found.entries.front());
     if (!rtiCaptureOnDisk(first.width, first.height, found.lights.size(), options)) {
+        // Kept in memory (told to, or small enough): over the limit, say the way out that needs
+        // no more memory, before a photo is decoded.
+        const std::uint64_t bytes = MeasuredBtf::bytesNeeded(first.width, first.height, 1,
+                                                             found.lights.size(), options.storage);
+        if (bytes > memoryLimit())
+            throw Error(path + ": an RTI capture of " + std::to_string(first.width) + "x" +
+                        std::to_string(first.height) + " pixels x " +
+                        std::to_string(found.lights.size()) + " photos: needs " +
+                        formatBytes(bytes) + " in memory, more than the memory limit of " +
+                        formatBytes(memoryLimit()) +
+                        " (keep it on disk with --storage disk, or raise the limit with "
+                        "--memory-limit or OSGBTF_MEMORY_LIMIT)");
         auto btf = std::make_unique<MeasuredBtf>(decodeImageSet(
             *found.source, found.entries, found.views, found.lights, options, found.curve));
         btf->source = path;

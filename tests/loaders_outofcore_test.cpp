@@ -222,6 +222,13 @@ TEST(OutOfCore, ATinyMemoryLimitKeepsTheCaptureOnDisk) {
         openBtfSource(lp, placed(LoadOptions::Placement::Memory));
     EXPECT_EQ(held->residentBytes(), 91908u);
     EXPECT_EQ(openBtfSource(lp)->residentBytes(), 0u);
+    // Told to keep it in memory over the limit: refused before a photo is decoded, with the way
+    // out that needs no more memory.
+    setMemoryLimit(80000);
+    EXPECT_EQ(errorOf([&] { openBtfSource(lp, placed(LoadOptions::Placement::Memory)); }),
+              lp + ": an RTI capture of 37x23 pixels x 9 photos: needs 89.8 KiB in memory, more "
+                   "than the memory limit of 78.1 KiB (keep it on disk with --storage disk, or "
+                   "raise the limit with --memory-limit or OSGBTF_MEMORY_LIMIT)");
 }
 
 TEST(OutOfCore, TheHeader) {
@@ -308,9 +315,10 @@ TEST(OutOfCore, TheToolDescribesAndFitsACaptureOnDisk) {
                          " --storage float -m hsh -o " + test::shellQuote(dir.file("x.btfmat")) +
                          " 2>&1");
     EXPECT_NE(r.exitCode, 0);
-    EXPECT_NE(r.output.find(dir.path().string() + ": BTF of 37x23 texels x 1 views x 9 lights: "
-                                                  "needs 89.8 KiB, more than the memory limit "
-                                                  "of 50.0 KiB"),
+    EXPECT_NE(r.output.find(dir.file("capture.lp") +
+                            ": an RTI capture of 37x23 pixels x 9 photos: needs 89.8 KiB "
+                            "in memory, more than the memory limit of 50.0 KiB (keep it on "
+                            "disk with --storage disk"),
               std::string::npos)
         << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir.file("x.btfmat")));
