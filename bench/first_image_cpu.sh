@@ -2,7 +2,7 @@
 # The first image of a full-size UBO2014 file on the CPU, like for like (issue 63, section 3):
 # the Free BTF Library's btf.hh (load the file, decode one (light, view) image) against osgBTF's
 # CPU paths for the same image, each a fresh process, interleaved, medians of ROUNDS rounds:
-#   btf.hh            bench/first_image_btfhh.cpp compiled against the btf.hh you name
+#   btf.hh            bench/btfhh/first_image_btfhh.cpp compiled against the btf.hh you name
 #   btf eval --cpu    open the file as an fmf material (no OpenGL context), evaluate, write EXR
 #   python load       osgbtf.load(FILE).image(view, light): the measured BTF, decoded on demand
 #   python material   osgbtf.open_material(FILE).image(view, light): the fmf material's CPU image
@@ -27,7 +27,7 @@ ubo2014_input "$BUILD" 400 100 btf
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 [ -f "$BTF_HH" ] || { echo "no btf.hh at $BTF_HH" >&2; exit 1; }
-g++ -O2 -march=native -std=c++17 -I"$(dirname "$BTF_HH")" "$SRC/bench/first_image_btfhh.cpp" \
+g++ -O2 -march=native -std=c++17 -I"$(dirname "$BTF_HH")" "$SRC/bench/btfhh/first_image_btfhh.cpp" \
     -o "$WORK/first_image_btfhh"
 LIGHT=10 VIEW=20
 line=$("$WORK/first_image_btfhh" "$file" $LIGHT $VIEW)

@@ -1,4 +1,5 @@
-// The reference side of bench/first_image_cpu.sh: the Free BTF Library's btf.hh (Z. Velinov,
+// The reference side of bench/first_image_cpu.sh (in its own folder: not a CMake benchmark, it
+// needs a header osgBTF does not ship): the Free BTF Library's btf.hh (Z. Velinov,
 // MIT, github.com/zeroeffects/btf; never shipped with osgBTF: the script compiles this file
 // against a btf.hh the user names) loads a UBO2014 .btf and decodes one (light, view) image on
 // the CPU, as its own btf-slice example does, then reports CPU seconds and peak resident memory.
