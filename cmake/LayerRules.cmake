@@ -106,6 +106,9 @@ endfunction()
 # method's FIT sources, which libosgBTFFit compiles: they are checked as that library's,
 #   <file> (osgBTFFit): includes "<path>", but osgBTFFit may include only <allowed>/
 # (at configure time also with the library's other sources, osgbtf_library_include_violations).
+# And a method's tests (materials/<m>/test/, osgbtf_method's TESTS and GL_TESTS), which the test
+# programs compile: checked as the tests layer,
+#   <file>: includes "<path>", but a method's test/ (the tests layer) may include only <allowed>/
 # Quoted includes whose first folder is not a layer (same-folder headers such as "Commands.h")
 # are not part of the graph.
 function(osgbtf_layer_violations ROOT OUT_VAR)
@@ -117,9 +120,15 @@ function(osgbtf_layer_violations ROOT OUT_VAR)
     if(fit_sources)
       list(REMOVE_ITEM files ${fit_sources})
     endif()
+    # A method's tests (materials/<m>/test/) are the tests layer's, checked as such below.
+    list(FILTER files EXCLUDE REGEX "^materials/[^/]+/test/")
     osgbtf_forbidden_includes(${ROOT} "${files}" "${OSGBTF_LAYER_ALLOWED_${layer}}" ""
                               ${layer}/ violations)
   endforeach()
+  file(GLOB method_tests RELATIVE ${ROOT} ${ROOT}/materials/*/test/*.h
+       ${ROOT}/materials/*/test/*.cpp)
+  osgbtf_forbidden_includes(${ROOT} "${method_tests}" "${OSGBTF_LAYER_ALLOWED_tests}" ""
+                            "a method's test/ (the tests layer)" violations)
   osgbtf_library_include_violations(${ROOT} osgBTFFit "${fit_sources}" fit_violations)
   list(APPEND violations ${fit_violations})
   set(${OUT_VAR} "${violations}" PARENT_SCOPE)

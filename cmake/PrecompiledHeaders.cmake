@@ -11,8 +11,8 @@
 # into every source, parsed or not: an empty source with it costs ~5 s of CPU, so every source
 # that includes little pays more than it saves. Measured (gcc 12, -O2, each source compiled with
 # and without back to back): 15 library sources 89 CPU-s without against 128 s with (0.70x;
-# core/BtfSource.cpp 1.3 s against 6.7 s), test and tool sources about even (materials_fmf_test
-# 10.6 against 10.1, btf's FitCommand 11.5 against 10.8), and each PCH costs ~25 s to make. clang
+# core/BtfSource.cpp 1.3 s against 6.7 s), test and tool sources about even (fmf's unit tests,
+# materials/fmf/test/fmf_test.cpp, 10.6 against 10.1, btf's FitCommand 11.5 against 10.8), and each PCH costs ~25 s to make. clang
 # reads a PCH lazily (core/Error.cpp 0.50 s with it, 0.54 s without), so it keeps them.
 if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
   set(osgbtf_pch_default ON)

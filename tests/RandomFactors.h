@@ -1,5 +1,6 @@
 // Random DFMF/FMF factors for the fmf tests (CPU and GPU): the same generator on both sides, so a
-// seed names the same material in tests/materials_fmf_test.cpp and tests/gl/material_fmf_test.cpp.
+// seed names the same material in materials/fmf/test/fmf_test.cpp and
+// materials/fmf/test/fmf_gl_test.cpp.
 #pragma once
 
 #include <array>

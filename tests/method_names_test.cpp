@@ -80,8 +80,9 @@ std::vector<Literal> stringLiterals(const std::string& text) {
 }
 
 /** Every "<method name>" literal in the .cpp and .h files under root/<folder> for each folder,
- *  except a method's own name in its folder materials/<name>/: "path:line: "name"" (path relative
- *  to root), sorted. */
+ *  except a method's own name in its folder materials/<name>/ and anything in a method's tests
+ *  (materials/<name>/test/: the tests layer, which names methods freely as tests/ does):
+ *  "path:line: "name"" (path relative to root), sorted. */
 std::vector<std::string> misplacedMethodNames(const fs::path& root,
                                               const std::vector<std::string>& folders,
                                               const std::vector<std::string>& names) {
@@ -95,8 +96,10 @@ std::vector<std::string> misplacedMethodNames(const fs::path& root,
             std::string owner;  // the method whose folder holds the file, if any
             auto part = relative.begin();
             if (part != relative.end() && *part == "materials" && ++part != relative.end() &&
-                std::next(part) != relative.end())
+                std::next(part) != relative.end()) {
                 owner = part->string();
+                if (*std::next(part) == "test") continue;
+            }
             for (const Literal& literal : stringLiterals(readTextFile(entry.path().string())))
                 if (literal.text != owner &&
                     std::find(names.begin(), names.end(), literal.text) != names.end())
@@ -145,6 +148,9 @@ TEST(MethodNames, ScannerFindsPlantedLiteralsInAFakeTree) {
     // The registry (materials/Material.cpp) is not a method folder.
     writeTextFile(dir.file("materials/Material.cpp"), "auto baseline = \"lpca\";\n");
     writeTextFile(dir.file("materials/lpca/notes.txt"), "\"pca\"\n");
+    // A method's tests are the tests layer's.
+    fs::create_directories(dir.path() / "materials" / "pca" / "test");
+    writeTextFile(dir.file("materials/pca/test/pca_test.cpp"), "auto baseline = \"lpca\";\n");
     writeTextFile(dir.file("unscanned/c.cpp"), "auto m = \"pca\";\n");
     EXPECT_EQ(
         misplacedMethodNames(dir.path(), kSourceFolders, names),

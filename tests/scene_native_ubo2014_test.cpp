@@ -2,7 +2,7 @@
 // a material is opened: openMaterial, MaterialNode, the osgDB plugins (osgdb_btf and the
 // .btfmaterial pseudo-loader, hence osgviewer and btfviewer). Inputs are the hand-written files
 // of tests/HandWrittenUbo2014.h, so the expected values come from the format's formulas. No
-// OpenGL here (GPU == CPU: tests/gl/material_fmf_native_test.cpp).
+// OpenGL here (GPU == CPU: materials/fmf/test/fmf_native_gl_test.cpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>

@@ -1,17 +1,14 @@
-// Reads top to bottom: the basis, shape and storage, CPU evaluator, memory, save/load, StateSet
-// builder, registration (the fitter is HshFit.cpp, in libosgBTFFit). The model: Hsh.h.
+// Reads top to bottom: the basis, the order and the coefficients, the CPU field, the order in file
+// and shader, registration (the fitter is HshFit.cpp, in libosgBTFFit). Shape checks, view
+// blending, memory, file, StateSet: materials/LightBasisMaterial.h. The model: Hsh.h.
 #include "materials/hsh/Hsh.h"
 
 #include <algorithm>
 #include <cmath>
 
-#include <glm/common.hpp>
-#include <osg/Uniform>
-
 #include "core/Error.h"
 #include "core/FloatImage.h"
 #include "materials/MaterialMath.h"
-#include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
 #include "materials/RelightFolder.h"
 #include "materials/hsh/RtiFile.h"
@@ -71,50 +68,12 @@ std::array<double, HshMaterial::kMaxTerms> HshMaterial::basisDouble(const glm::v
     return hshBasisIn<double>(light);
 }
 
-// ---- shape and storage -------------------------------------------------------------------------
+// ---- shape and coefficients --------------------------------------------------------------------
+// (setShape, create: LightBasisMaterial's.)
 
-float HshMaterial::toStorage(double value, MaterialTexture::PixelKind kind) {
-    return kind == MaterialTexture::Float ? float(value) : roundHalf(value);
-}
-
-void HshMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
-                           Shape shape, std::size_t frontView, bool allocate) {
-    if (width <= 0 || height <= 0)
-        throw Error("hsh: invalid size " + std::to_string(width) + "x" + std::to_string(height));
+void HshMaterial::checkShape(const Shape& shape) {
     if (shape.order < 2 || shape.order > 4)
         throw Error("hsh: order " + std::to_string(shape.order) + " is not 2, 3 or 4");
-    if (lights.size() == 0) throw Error("hsh: needs at least one measured light");
-    if (views.size() == 0) throw Error("hsh: needs at least one measured view");
-    if (frontView >= views.size())
-        throw Error("hsh: front view " + std::to_string(frontView) + " is not one of the " +
-                    std::to_string(views.size()) + " measured views");
-    if (shape.storage == MaterialTexture::UNorm8)
-        throw Error("hsh: coefficients are stored as half or float, not 8-bit");
-    _shape = shape;
-    _slots = shape.perView ? int(views.size()) : 1;
-    const std::size_t layers = std::size_t(_slots) * std::size_t(terms());
-    if (layers > std::size_t(kMaxArrayLayers))
-        throw Error("hsh: " + std::to_string(_slots) + " views x " + std::to_string(terms()) +
-                    " coefficient layers need " + std::to_string(layers) +
-                    " texture layers, more than the " + std::to_string(kMaxArrayLayers) +
-                    " OpenGL guarantees (use views=front or a lower order)");
-    const std::size_t texels = std::size_t(width) * std::size_t(height);
-    checkMemory(std::uint64_t(double(texels * layers * 3) * bytesPerValue(shape.storage)),
-                "hsh model");
-    _frontView = shape.perView ? 0 : frontView;
-    _viewLookup = shape.perView ? DirectionLookup(views) : DirectionLookup();
-    _lightVectors.clear();
-    for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
-    if (allocate) coefficients = StoredValues(shape.storage, texels * layers * 3);
-    setGeometry(width, height, std::move(views), std::move(lights));
-}
-
-osg::ref_ptr<HshMaterial> HshMaterial::create(int width, int height, DirectionSet views,
-                                              DirectionSet lights, Shape shape,
-                                              std::size_t frontView) {
-    osg::ref_ptr<HshMaterial> m = new HshMaterial;
-    m->setShape(width, height, std::move(views), std::move(lights), shape, frontView);
-    return m;
 }
 
 float HshMaterial::coefficient(std::size_t texel, int slot, int k, int c) const {
@@ -143,127 +102,22 @@ glm::vec3 HshMaterial::field(std::size_t texel, int slot, const Basis& h) const 
     return sum;
 }
 
-glm::vec3 HshMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
-    return finishLinear(evaluateLinear(x, y, view, light), view, light);
-}
+// ---- file and shader (the rest is LightBasisMaterial's) -----------------------------------------
 
-glm::vec3 HshMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
-                                      const glm::vec3& light) const {
-    const std::size_t t = std::size_t(y) * std::size_t(_width) + std::size_t(x);
-    const Basis h = basis(light);
-    if (!_shape.perView) return field(t, 0, h);
-    const InterpolationWeights w = _viewLookup.weights(view);
-    glm::vec3 sum(0.0f);
-    for (int j = 0; j < 3; ++j)
-        if (w.weight[j] > 0.0f) sum += w.weight[j] * field(t, w.index[j], h);
-    return sum;
-}
-
-glm::vec3 HshMaterial::finishLinear(const glm::vec3& linear, const glm::vec3&,
-                                    const glm::vec3&) const {
-    // Measured values are never negative: a dip of the harmonics below 0 is clamped.
-    return glm::max(linear, glm::vec3(0.0f));
-}
-
-void HshMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
-    std::vector<Basis> bases;
-    bases.reserve(_lightVectors.size());
-    for (const glm::vec3& light : _lightVectors) bases.push_back(basis(light));
-    for (std::size_t v = 0; v < _views.size(); ++v) {
-        const int slot = _shape.perView ? int(v) : 0;
-        for (const Basis& h : bases) {
-            const glm::vec3 value = glm::max(field(texel, slot, h), glm::vec3(0.0f));
-            *abrdf++ = value.r;
-            *abrdf++ = value.g;
-            *abrdf++ = value.b;
-        }
-    }
-}
-
-// ---- memory ------------------------------------------------------------------------------------
-
-MemoryFootprint HshMaterial::memory() const {
-    // Per-texel arrays only: the view table (views=all) is derived from the direction set.
-    const double values = double(coefficients.size()), bytes = double(coefficients.bytes());
-    return {values / double(texelCount()), bytes / double(texelCount()), std::uint64_t(bytes)};
-}
-
-// ---- save / load -------------------------------------------------------------------------------
-
-FittedMaterial HshMaterial::toFittedMaterial() const {
-    FittedMaterial file = writeCommon();
-    file.parameters["order"] = std::to_string(_shape.order);
-    file.parameters["views"] = _shape.perView ? "all" : "front";
-    file.parameters["frontView"] = std::to_string(_frontView);
-    file.textures.push_back(
-        coefficients.texture("coefficients", _width, _height, _slots * terms(), 3));
-    return file;
-}
-
-osg::ref_ptr<HshMaterial> HshMaterial::fromFile(FittedMaterial file) {
-    osg::ref_ptr<HshMaterial> m = new HshMaterial;
-    m->readCommon(file);
-    const std::string order = file.parameter("order"), views = file.parameter("views");
+void HshMaterial::readShape(const FittedMaterial& file, Shape& shape) {
+    const std::string order = file.parameter("order");
     if (order != "2" && order != "3" && order != "4")
         fail(file.source, "parameter 'order' must be 2, 3 or 4, got '" + order + "'");
-    if (views != "front" && views != "all")
-        fail(file.source, "parameter 'views' must be front or all, got '" + views + "'");
-    std::size_t frontView = 0;
-    try {
-        frontView = std::size_t(std::stoul(file.parameter("frontView")));
-    } catch (const std::logic_error&) {
-        fail(file.source, "parameter 'frontView' is not an integer");
-    }
-    MaterialTexture& coefficients = file.texture("coefficients");
-    Shape shape;
     shape.order = order[0] - '0';
-    shape.perView = views == "all";
-    shape.storage = coefficients.kind;
-    try {
-        // No arrays: the file's are taken below (sized zeros would double the peak).
-        m->setShape(m->_width, m->_height, m->_views, m->_lights, shape, frontView, false);
-    } catch (const Error& e) {
-        fail(file.source, e.what());
-    }
-    const int layers = m->_slots * m->terms();
-    if (coefficients.width != m->_width || coefficients.height != m->_height ||
-        coefficients.depth != layers || coefficients.channels != 3)
-        fail(file.source, "texture 'coefficients' must be " + std::to_string(m->_width) + "x" +
-                              std::to_string(m->_height) + ", " + std::to_string(layers) +
-                              " layer(s) of RGB");
-    // The file is this function's own: its values are taken.
-    m->coefficients = StoredValues::take(coefficients, shape.storage);
-    if (!m->coefficients.allFinite())
-        fail(file.source, "texture 'coefficients' holds non-finite values");
-    return m;
 }
 
-// ---- StateSet ----------------------------------------------------------------------------------
-
-osg::ref_ptr<osg::StateSet> HshMaterial::createStateSet() const {
-    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, *this);
-    addTexture(*stateSet,
-               createFloatTextureArray(
-                   coefficients.texture("coefficients", _width, _height, _slots * terms(), 3),
-                   filtersParameters())
-                   .get(),
-               "hshCoefficients", 0);
-    // The view table's sampler gets a unit of its own even when unread (GL refuses samplers of
-    // different types on one unit, and an unset sampler is unit 0).
-    if (_shape.perView)
-        _viewLookup.addToStateSet(*stateSet, "hshViewTable", 1);
-    else
-        stateSet->addUniform(new osg::Uniform("hshViewTable", 1));
-    // The order and the view model are the program's (shaderDefines), not uniforms.
-    return stateSet;
+void HshMaterial::writeShape(FittedMaterial& file) const {
+    file.parameters["order"] = std::to_string(_shape.order);
 }
 
-std::vector<std::string> HshMaterial::shaderDefines() const {
-    std::vector<std::string> defines = {"OSGBTF_HSH_TERMS " + std::to_string(terms())};
-    if (_shape.perView) defines.push_back("OSGBTF_HSH_PER_VIEW");
-    if (filtersParameters()) defines.push_back("OSGBTF_HSH_FILTERED");
-    return defines;
+std::vector<std::string> HshMaterial::shapeDefines() const {
+    // The order is the program's, not a uniform: hsh.frag's loops run to a constant.
+    return {"OSGBTF_HSH_TERMS " + std::to_string(terms())};
 }
 
 // ---- registration ------------------------------------------------------------------------------

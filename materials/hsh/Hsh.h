@@ -32,17 +32,17 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <vector>
 
-#include "materials/DirectionLookup.h"
-#include "materials/MethodMaterial.h"
+#include "materials/LightBasisMaterial.h"
 #include "materials/MethodOptions.h"
 #include "materials/StoredValues.h"
 
 namespace osgBTF {
 
-/** HshMaterial's members (materials/MethodMaterial.h). */
-struct HshData {
+/** HshMaterial's members beyond LightBasisData's (materials/LightBasisMaterial.h). */
+struct HshData : LightBasisData {
     /** The shape of a model: what the options choose. */
     struct Shape {
         int order = 3;         ///< 2, 3 or 4: order^2 terms
@@ -50,18 +50,11 @@ struct HshData {
         MaterialTexture::PixelKind storage = MaterialTexture::Half;
     };
 
-    /** [slot * terms() + k][y][x][3], rows bottom-up (the texture's layout), half or float. */
-    StoredValues coefficients;
-
 protected:
     Shape _shape;
-    int _slots = 0;
-    std::size_t _frontView = 0;
-    DirectionLookup _viewLookup;           ///< views=all only
-    std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
 };
 
-class HshMaterial : public MethodMaterial<HshMaterial, HshData> {
+class HshMaterial : public LightBasisMaterial<HshMaterial, HshData> {
 public:
     static constexpr const char* kMethod = "hsh";
     /** fromFile takes the file's half textures as they are stored. */
@@ -72,36 +65,19 @@ public:
 
     HshMaterial() = default;
     HshMaterial(const HshMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
-        : MethodMaterial(other, copyop) {}
+        : LightBasisMaterial(other, copyop) {}
     META_Object(osgBTF, HshMaterial)
 
         /** Fits the model (see the file comment). Options: order, views, storage. Throws Error for
          *  bad options, an empty BTF, or more array layers than OpenGL guarantees. Fills fitInfo:
          *  seconds, order, views, storage, front-view, rank and condition of the design matrix. */
         static osg::ref_ptr<HshMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<HshMaterial> fromFile(FittedMaterial file);
-    /** A zero model of the given shape (tests, files of other tools); `frontView` is the measured
-     *  view a front model was fitted on. Throws Error for shapes fit() refuses. */
-    static osg::ref_ptr<HshMaterial> create(int width, int height, DirectionSet views,
-                                            DirectionSet lights, Shape shape,
-                                            std::size_t frontView = 0);
+    // create, fromFile, evaluate, memory, file, StateSet, shape(), slots(), frontView(),
+    // viewLookup(), toStorage: LightBasisMaterial's. Shader defines: "OSGBTF_HSH_TERMS n", then
+    // OSGBTF_HSH_PER_VIEW and OSGBTF_HSH_FILTERED: hsh.frag's loops run to a constant
+    // (README.md, "Pass cost").
 
-    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
-    void evaluateMeasured(std::size_t texel, float* abrdf) const override;
-    MemoryFootprint memory() const override;
-    FittedMaterial toFittedMaterial() const override;
-    osg::ref_ptr<osg::StateSet> createStateSet() const override;
-    /** "OSGBTF_HSH_TERMS n", OSGBTF_HSH_PER_VIEW and OSGBTF_HSH_FILTERED (TexelFilter::
-     *  Parameters) as the material has them: hsh.frag's loops run to a constant and hold only
-     *  the variant's code (README.md, "Pass cost"). */
-    std::vector<std::string> shaderDefines() const override;
-
-    const Shape& shape() const { return _shape; }
     int terms() const { return _shape.order * _shape.order; }
-    /** View slots stored: 1 (front) or the measured views (all). */
-    int slots() const { return _slots; }
-    std::size_t frontView() const { return _frontView; }
-    const DirectionLookup& viewLookup() const { return _viewLookup; }
 
     /** The basis h_0 .. h_15 at a light direction, in hsh.frag's float operations (all 16; a
      *  model of order n uses the first n^2). */
@@ -113,22 +89,19 @@ public:
     glm::vec3 field(std::size_t texel, int slot, const Basis& h) const;
     float coefficient(std::size_t texel, int slot, int k, int c) const;
     void setCoefficient(std::size_t texel, int slot, int k, int c, float value);
-    /** A value at the storage precision (half or float), as the fitter stores it. */
-    static float toStorage(double value, MaterialTexture::PixelKind kind);
+
+    // What LightBasisMaterial asks of the method.
+    int layersPerSlot() const { return terms(); }
+    static Basis lightTerms(const glm::vec3& light) { return basis(light); }
+    /** Throws Error for an order other than 2, 3 or 4. */
+    static void checkShape(const Shape& shape);
+    static constexpr const char* kTooManyLayersHint = " (use views=front or a lower order)";
+    static void readShape(const FittedMaterial& file, Shape& shape);
+    void writeShape(FittedMaterial& file) const;
+    std::vector<std::string> shapeDefines() const;
 
 protected:
     ~HshMaterial() override = default;
-    /** The view-blended field before the clamp at 0. */
-    glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,
-                             const glm::vec3& light) const override;
-    glm::vec3 finishLinear(const glm::vec3& linear, const glm::vec3& view,
-                           const glm::vec3& light) const override;
-
-private:
-    /** Checks the shape, builds the view interpolation and, unless `allocate` is false (a file
-     *  brings the arrays), sizes the arrays. */
-    void setShape(int width, int height, DirectionSet views, DirectionSet lights, Shape shape,
-                  std::size_t frontView, bool allocate = true);
 };
 
 }  // namespace osgBTF

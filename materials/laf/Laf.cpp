@@ -1,23 +1,9 @@
 #include "materials/laf/Laf.h"
 
-#include "core/Error.h"
-#include "materials/MaterialMath.h"
-#include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
 #include "materials/laf/Lobes.h"
 
 namespace osgBTF {
-
-// ---- model -----------------------------------------------------------------------------------
-
-osg::ref_ptr<LafMaterial> LafMaterial::create(int width, int height, int lobeCount,
-                                              const DirectionSet& views,
-                                              const DirectionSet& lights) {
-    osg::ref_ptr<LafMaterial> m = new LafMaterial;
-    m->setGeometry(width, height, views, lights);
-    m->initLobes(lobeCount);
-    return m;
-}
 
 // ---- CPU evaluator ---------------------------------------------------------------------------
 
@@ -25,35 +11,7 @@ glm::vec3 LafMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::
     return bracket(std::size_t(y) * _width + x, view, light);
 }
 
-// ---- memory, save / load ---------------------------------------------------------------------
-
-MemoryFootprint LafMaterial::memory() const {
-    // Counted from the textures as stored, so the numbers follow their declared storage kinds.
-    return footprintOf(toFittedMaterial(), texelCount());
-}
-
-FittedMaterial LafMaterial::toFittedMaterial() const {
-    FittedMaterial file = writeCommon();
-    writeLobes(file);
-    return file;
-}
-
-osg::ref_ptr<LafMaterial> LafMaterial::fromFile(FittedMaterial file) {
-    osg::ref_ptr<LafMaterial> m = new LafMaterial;
-    m->readCommon(file);
-    m->readLobeParameters(file);
-    m->readLobeTextures(file);
-    return m;
-}
-
-// ---- StateSet --------------------------------------------------------------------------------
-
-osg::ref_ptr<osg::StateSet> LafMaterial::createStateSet() const {
-    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, *this);
-    addLobeState(*stateSet, kMethod);
-    return stateSet;
-}
+// ---- registration (create, memory, file and StateSet: LobeMethod's) ---------------------------
 
 namespace {
 const bool lafRegistered = registerMethodClass<LafMaterial>([] {

@@ -21,7 +21,6 @@
 // bytes). The fitter rounds the model to exactly these precisions, so CPU, file and GPU agree.
 #pragma once
 
-#include "materials/MethodMaterial.h"
 #include "materials/MethodOptions.h"
 #include "materials/laf/LobeMaterial.h"
 
@@ -30,32 +29,22 @@ namespace osgBTF {
 /** LAF stores nothing beyond LobeMaterial's data. */
 struct LafData {};
 
-class LafMaterial : public MethodMaterial<LafMaterial, LafData, LobeMaterial> {
+class LafMaterial : public LobeMethod<LafMaterial, LafData> {
 public:
     static constexpr const char* kMethod = "laf";
-    /** fromFile takes the file's 8-bit and half textures as they are stored. */
-    static constexpr bool kLoadsBytes = true;
-    static constexpr bool kLoadsHalves = true;
 
     LafMaterial() = default;
     LafMaterial(const LafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
-        : MethodMaterial(other, copyop) {}
+        : LobeMethod(other, copyop) {}
     META_Object(osgBTF, LafMaterial)
 
         /** Options: lobes (1..8, default 2), iterations (LM iterations per texel, 1..500, default
          *  50), cosine (0 or 1, default 1). Throws Error "laf: ..." for invalid or unknown options
          * and an empty BTF. */
         static osg::ref_ptr<LafMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<LafMaterial> fromFile(FittedMaterial file);
-    /** An unfitted model of the given shape (zero colours, zero lobes): memory accounting and
-     *  tests build models without fitting. */
-    static osg::ref_ptr<LafMaterial> create(int width, int height, int lobes,
-                                            const DirectionSet& views, const DirectionSet& lights);
+    // create, fromFile, memory, toFittedMaterial, createStateSet: LobeMethod's.
 
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
-    MemoryFootprint memory() const override;
-    FittedMaterial toFittedMaterial() const override;
-    osg::ref_ptr<osg::StateSet> createStateSet() const override;
 
 protected:
     ~LafMaterial() override = default;

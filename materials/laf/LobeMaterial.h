@@ -8,6 +8,8 @@
 // bracket, writes, reads and binds those textures, and fits them: the per-texel luminance fit of
 // Lobes.h, the colours in closed form, SLAF's alternation with T, the storage rounding and the
 // divergence guard. The lobe functions and the luminance fit itself are in Lobes.h.
+// LobeMethod<Self, Data> is what the two material classes share beyond the model: creation,
+// memory, file and StateSet, with hooks for what SLAF adds (its view table T).
 #pragma once
 
 #include <string>
@@ -15,7 +17,12 @@
 
 #include <glm/vec3.hpp>
 
+#include <osg/StateSet>
+
 #include "materials/Material.h"
+#include "materials/MaterialMath.h"
+#include "materials/MaterialState.h"
+#include "materials/MethodMaterial.h"
 #include "materials/StoredValues.h"
 
 namespace osgBTF {
@@ -79,6 +86,72 @@ protected:
      *  the lobes, and stored there as [view][y][x][rgb] (SLAF). Sets the fit info seconds,
      *  iterations, fallbacks and lobes. */
     void fitLobes(const BtfSource& btf, int iterations, int rounds, StoredValues* scale);
+};
+
+/** The base of LafMaterial and SlafMaterial (CRTP, materials/MethodMaterial.h): create, fromFile,
+ *  memory, toFittedMaterial and createStateSet, written once. Self may shadow the hooks, which do
+ *  nothing here: initExtra() (create, after the lobes), checkFile(file) (fromFile, before the
+ *  textures), readExtra(file) (fromFile, after the lobe textures), writeExtra(file) and
+ *  addExtraState(stateSet) (after the lobes' units 0..2). */
+template <class Self, class Data>
+class LobeMethod : public MethodMaterial<Self, Data, LobeMaterial> {
+public:
+    /** fromFile takes the file's 8-bit and half textures as they are stored. */
+    static constexpr bool kLoadsBytes = true;
+    static constexpr bool kLoadsHalves = true;
+
+    /** An unfitted model of the given shape (zero colours, zero lobes; SLAF: T = 1): memory
+     *  accounting and tests build models without fitting. */
+    static osg::ref_ptr<Self> create(int width, int height, int lobeCount,
+                                     const DirectionSet& views, const DirectionSet& lights) {
+        osg::ref_ptr<Self> m = new Self;
+        m->setGeometry(width, height, views, lights);
+        m->initLobes(lobeCount);
+        m->initExtra();
+        return m;
+    }
+    static osg::ref_ptr<Self> fromFile(FittedMaterial file) {
+        osg::ref_ptr<Self> m = new Self;
+        m->readCommon(file);
+        m->readLobeParameters(file);
+        m->checkFile(file);
+        m->readLobeTextures(file);
+        m->readExtra(file);
+        return m;
+    }
+
+    MemoryFootprint memory() const override {
+        // Counted from the textures as stored, so the numbers follow their declared storage kinds.
+        return footprintOf(toFittedMaterial(), this->texelCount());
+    }
+    FittedMaterial toFittedMaterial() const override {
+        FittedMaterial file = this->writeCommon();
+        this->writeLobes(file);
+        self().writeExtra(file);
+        return file;
+    }
+    osg::ref_ptr<osg::StateSet> createStateSet() const override {
+        osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
+        addCommonState(*stateSet, *this);
+        this->addLobeState(*stateSet, Self::kMethod);
+        self().addExtraState(*stateSet);
+        return stateSet;
+    }
+
+protected:
+    LobeMethod() = default;
+    LobeMethod(const LobeMethod& other, const osg::CopyOp& copyop)
+        : MethodMaterial<Self, Data, LobeMaterial>(other, copyop) {}
+    ~LobeMethod() override = default;
+
+    void initExtra() {}
+    void checkFile(const FittedMaterial&) const {}
+    void readExtra(FittedMaterial&) {}
+    void writeExtra(FittedMaterial&) const {}
+    void addExtraState(osg::StateSet&) const {}
+
+private:
+    const Self& self() const { return static_cast<const Self&>(*this); }
 };
 
 }  // namespace osgBTF

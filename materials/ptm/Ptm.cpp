@@ -1,18 +1,11 @@
-// Reads top to bottom: shape and storage, options, CPU evaluator, memory, save/load, StateSet
-// builder, registration (the fitter is PtmFit.cpp, in libosgBTFFit). The model and its equation:
-// Ptm.h.
+// Reads top to bottom: coefficients, the CPU field, the colour model in file and shader,
+// registration (the fitter is PtmFit.cpp, in libosgBTFFit). Shape checks, view blending, memory,
+// file, StateSet: materials/LightBasisMaterial.h. The model and its equation: Ptm.h.
 #include "materials/ptm/Ptm.h"
-
-#include <algorithm>
-#include <cmath>
-
-#include <glm/common.hpp>
-#include <osg/Uniform>
 
 #include "core/Error.h"
 #include "core/FloatImage.h"
 #include "materials/MaterialMath.h"
-#include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
 #include "materials/RelightFolder.h"
 #include "materials/RelightLayoutWriter.h"
@@ -20,54 +13,7 @@
 
 namespace osgBTF {
 
-// ---- shape and storage -------------------------------------------------------------------------
-
-float PtmMaterial::toStorage(double value, MaterialTexture::PixelKind kind) {
-    return kind == MaterialTexture::Float ? float(value) : roundHalf(value);
-}
-
-void PtmMaterial::setShape(int width, int height, DirectionSet views, DirectionSet lights,
-                           Shape shape, std::size_t frontView, bool allocate) {
-    if (width <= 0 || height <= 0)
-        throw Error("ptm: invalid size " + std::to_string(width) + "x" + std::to_string(height));
-    if (lights.size() == 0) throw Error("ptm: needs at least one measured light");
-    if (views.size() == 0) throw Error("ptm: needs at least one measured view");
-    if (frontView >= views.size())
-        throw Error("ptm: front view " + std::to_string(frontView) + " is not one of the " +
-                    std::to_string(views.size()) + " measured views");
-    if (shape.storage == MaterialTexture::UNorm8)
-        throw Error("ptm: coefficients are stored as half or float, not 8-bit");
-    _shape = shape;
-    _slots = shape.perView ? int(views.size()) : 1;
-    const std::size_t layers = std::size_t(_slots) * std::size_t(layersPerSlot());
-    if (layers > std::size_t(kMaxArrayLayers))
-        throw Error("ptm: " + std::to_string(_slots) + " views x " +
-                    std::to_string(layersPerSlot()) + " coefficient layers need " +
-                    std::to_string(layers) + " texture layers, more than the " +
-                    std::to_string(kMaxArrayLayers) + " OpenGL guarantees");
-    const std::size_t texels = std::size_t(width) * std::size_t(height);
-    const std::size_t colourValues = shape.luminance ? texels * std::size_t(_slots) * 3 : 0;
-    checkMemory(
-        std::uint64_t(double(texels * layers * 3 + colourValues) * bytesPerValue(shape.storage)),
-        "ptm model");
-    _frontView = shape.perView ? 0 : frontView;
-    _viewLookup = shape.perView ? DirectionLookup(views) : DirectionLookup();
-    _lightVectors.clear();
-    for (std::size_t l = 0; l < lights.size(); ++l) _lightVectors.push_back(lights.vector(l));
-    if (allocate) {
-        coefficients = StoredValues(shape.storage, texels * layers * 3);
-        colour = StoredValues(shape.storage, colourValues);
-    }
-    setGeometry(width, height, std::move(views), std::move(lights));
-}
-
-osg::ref_ptr<PtmMaterial> PtmMaterial::create(int width, int height, DirectionSet views,
-                                              DirectionSet lights, Shape shape,
-                                              std::size_t frontView) {
-    osg::ref_ptr<PtmMaterial> m = new PtmMaterial;
-    m->setShape(width, height, std::move(views), std::move(lights), shape, frontView);
-    return m;
-}
+// ---- coefficients ------------------------------------------------------------------------------
 
 std::array<double, PtmMaterial::kTerms> PtmMaterial::monomials(const glm::vec3& light) {
     const double x = light.x, y = light.y;
@@ -121,138 +67,23 @@ glm::vec3 PtmMaterial::field(std::size_t texel, int slot, float lx, float ly) co
     return sum;
 }
 
-glm::vec3 PtmMaterial::evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const {
-    return finishLinear(evaluateLinear(x, y, view, light), view, light);
-}
+// ---- file and shader (the rest is LightBasisMaterial's) -----------------------------------------
 
-glm::vec3 PtmMaterial::evaluateLinear(int x, int y, const glm::vec3& view,
-                                      const glm::vec3& light) const {
-    const std::size_t t = std::size_t(y) * std::size_t(_width) + std::size_t(x);
-    if (!_shape.perView) return field(t, 0, light.x, light.y);
-    const InterpolationWeights w = _viewLookup.weights(view);
-    glm::vec3 sum(0.0f);
-    for (int j = 0; j < 3; ++j)
-        if (w.weight[j] > 0.0f) sum += w.weight[j] * field(t, w.index[j], light.x, light.y);
-    return sum;
-}
-
-glm::vec3 PtmMaterial::finishLinear(const glm::vec3& linear, const glm::vec3&,
-                                    const glm::vec3&) const {
-    // Measured values are never negative: a polynomial's dip below 0 is clamped.
-    return glm::max(linear, glm::vec3(0.0f));
-}
-
-void PtmMaterial::evaluateMeasured(std::size_t texel, float* abrdf) const {
-    for (std::size_t v = 0; v < _views.size(); ++v) {
-        const int slot = _shape.perView ? int(v) : 0;
-        for (const glm::vec3& light : _lightVectors) {
-            const glm::vec3 value = glm::max(field(texel, slot, light.x, light.y), glm::vec3(0.0f));
-            *abrdf++ = value.r;
-            *abrdf++ = value.g;
-            *abrdf++ = value.b;
-        }
-    }
-}
-
-// ---- memory ------------------------------------------------------------------------------------
-
-MemoryFootprint PtmMaterial::memory() const {
-    // Per-texel arrays only; the view table (views=all) is derived from the direction set, not
-    // fitted data, and Boßerhoff and Nicoll 2003 Table 2 has nothing shared to count.
-    const double values = double(coefficients.size() + colour.size());
-    const double bytes = double(coefficients.bytes() + colour.bytes());
-    return {values / double(texelCount()), bytes / double(texelCount()), std::uint64_t(bytes)};
-}
-
-// ---- save / load -------------------------------------------------------------------------------
-
-FittedMaterial PtmMaterial::toFittedMaterial() const {
-    FittedMaterial file = writeCommon();
-    file.parameters["colour"] = _shape.luminance ? "luminance" : "rgb";
-    file.parameters["views"] = _shape.perView ? "all" : "front";
-    file.parameters["frontView"] = std::to_string(_frontView);
-    file.textures.push_back(
-        coefficients.texture("coefficients", _width, _height, _slots * layersPerSlot(), 3));
-    if (_shape.luminance)
-        file.textures.push_back(colour.texture("colour", _width, _height, _slots, 3));
-    return file;
-}
-
-osg::ref_ptr<PtmMaterial> PtmMaterial::fromFile(FittedMaterial file) {
-    osg::ref_ptr<PtmMaterial> m = new PtmMaterial;
-    m->readCommon(file);
-    const std::string colourModel = file.parameter("colour"), views = file.parameter("views");
+void PtmMaterial::readShape(const FittedMaterial& file, Shape& shape) {
+    const std::string colourModel = file.parameter("colour");
     if (colourModel != "rgb" && colourModel != "luminance")
         fail(file.source, "parameter 'colour' must be rgb or luminance, got '" + colourModel + "'");
-    if (views != "front" && views != "all")
-        fail(file.source, "parameter 'views' must be front or all, got '" + views + "'");
-    std::size_t frontView = 0;
-    try {
-        frontView = std::size_t(std::stoul(file.parameter("frontView")));
-    } catch (const std::logic_error&) {
-        fail(file.source, "parameter 'frontView' is not an integer");
-    }
-    MaterialTexture& coefficients = file.texture("coefficients");
-    Shape shape;
     shape.luminance = colourModel == "luminance";
-    shape.perView = views == "all";
-    shape.storage = coefficients.kind;
-    try {
-        // No arrays: the file's are taken below (sized zeros would double the peak).
-        m->setShape(m->_width, m->_height, m->_views, m->_lights, shape, frontView, false);
-    } catch (const Error& e) {
-        fail(file.source, e.what());
-    }
-    // The file is this function's own: its values are taken.
-    const auto take = [&](MaterialTexture& t, int depth, StoredValues& into) {
-        if (t.width != m->_width || t.height != m->_height || t.depth != depth || t.channels != 3 ||
-            t.kind != shape.storage)
-            fail(file.source, "texture '" + t.name + "' must be " + std::to_string(m->_width) +
-                                  "x" + std::to_string(m->_height) + ", " + std::to_string(depth) +
-                                  " layer(s) of RGB " + MaterialTexture::kindName(shape.storage));
-        into = StoredValues::take(t, shape.storage);
-        if (!into.allFinite())
-            fail(file.source, "texture '" + t.name + "' holds non-finite values");
-    };
-    take(coefficients, m->_slots * m->layersPerSlot(), m->coefficients);
-    if (shape.luminance) take(file.texture("colour"), m->_slots, m->colour);
-    return m;
 }
 
-// ---- StateSet ----------------------------------------------------------------------------------
-
-osg::ref_ptr<osg::StateSet> PtmMaterial::createStateSet() const {
-    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, *this);
-    addTexture(*stateSet,
-               createFloatTextureArray(coefficients.texture("coefficients", _width, _height,
-                                                            _slots * layersPerSlot(), 3),
-                                       filtersParameters())
-                   .get(),
-               "ptmCoefficients", 0);
-    // Samplers the variant never reads still get units of their own: GL refuses to draw when
-    // samplers of different types share a unit, and an unset sampler is unit 0.
-    if (_shape.luminance)
-        addTexture(
-            *stateSet,
-            createFloatTextureArray(colour.texture("colour", _width, _height, _slots, 3)).get(),
-            "ptmColour", 1);
-    else
-        stateSet->addUniform(new osg::Uniform("ptmColour", 1));
-    if (_shape.perView)
-        _viewLookup.addToStateSet(*stateSet, "ptmViewTable", 2);
-    else
-        stateSet->addUniform(new osg::Uniform("ptmViewTable", 2));
-    // The colour and view models are the program's (shaderDefines), not uniforms.
-    return stateSet;
+void PtmMaterial::writeShape(FittedMaterial& file) const {
+    file.parameters["colour"] = _shape.luminance ? "luminance" : "rgb";
 }
 
-std::vector<std::string> PtmMaterial::shaderDefines() const {
-    std::vector<std::string> defines;
-    if (_shape.luminance) defines.push_back("OSGBTF_PTM_LUMINANCE");
-    if (_shape.perView) defines.push_back("OSGBTF_PTM_PER_VIEW");
-    if (filtersParameters()) defines.push_back("OSGBTF_PTM_FILTERED");
-    return defines;
+std::vector<std::string> PtmMaterial::shapeDefines() const {
+    // The colour model is the program's, not a uniform: ptm.frag holds only the variant's code.
+    if (_shape.luminance) return {"OSGBTF_PTM_LUMINANCE"};
+    return {};
 }
 
 // ---- registration ------------------------------------------------------------------------------

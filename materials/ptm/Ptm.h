@@ -39,17 +39,19 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <vector>
 
-#include "materials/DirectionLookup.h"
-#include "materials/MethodMaterial.h"
+#include <glm/vec2.hpp>
+
+#include "materials/LightBasisMaterial.h"
 #include "materials/MethodOptions.h"
 #include "materials/StoredValues.h"
 
 namespace osgBTF {
 
-/** PtmMaterial's members (materials/MethodMaterial.h). */
-struct PtmData {
+/** PtmMaterial's members beyond LightBasisData's (materials/LightBasisMaterial.h). */
+struct PtmData : LightBasisData {
     /** The shape of a model: what the options choose. */
     struct Shape {
         bool luminance = false;  ///< colour=luminance (else rgb)
@@ -57,21 +59,16 @@ struct PtmData {
         MaterialTexture::PixelKind storage = MaterialTexture::Half;
     };
 
-    // Held as the file stores them, half or float (Shape::storage; materials/StoredValues.h).
-    /** [slot * layersPerSlot() + layer][y][x][3], rows bottom-up (the texture's layout). */
-    StoredValues coefficients;
-    /** Luminance only: [slot][y][x][rgb]; empty for rgb. */
+    // coefficients (LightBasisData): rgb: layer 6 s + k holds a_k of (R, G, B) for view slot s;
+    // luminance: layer 2 s = (a0, a1, a2), layer 2 s + 1 = (a3, a4, a5).
+    /** Luminance only: [slot][y][x][rgb], half or float as stored; empty for rgb. */
     StoredValues colour;
 
 protected:
     Shape _shape;
-    int _slots = 0;
-    std::size_t _frontView = 0;
-    DirectionLookup _viewLookup;           ///< views=all only
-    std::vector<glm::vec3> _lightVectors;  ///< measured lights, for evaluateMeasured
 };
 
-class PtmMaterial : public MethodMaterial<PtmMaterial, PtmData> {
+class PtmMaterial : public LightBasisMaterial<PtmMaterial, PtmData> {
 public:
     static constexpr const char* kMethod = "ptm";
     /** fromFile takes the file's half textures as they are stored. */
@@ -84,7 +81,7 @@ public:
 
     PtmMaterial() = default;
     PtmMaterial(const PtmMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
-        : MethodMaterial(other, copyop) {}
+        : LightBasisMaterial(other, copyop) {}
     META_Object(osgBTF, PtmMaterial)
 
         /** Fits the model (see the file comment). Options: colour, views, storage. Throws Error
@@ -92,31 +89,12 @@ public:
          *  array layers than OpenGL guarantees. Fills fitInfo: seconds, colour, views, storage,
          *  front-view, rank and condition of the design matrix. */
         static osg::ref_ptr<PtmMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<PtmMaterial> fromFile(FittedMaterial file);
-    /** A zero model of the given shape (tests, synthetic data); `frontView` is the measured view
-     *  a front model was fitted on. Throws Error for shapes fit() refuses. */
-    static osg::ref_ptr<PtmMaterial> create(int width, int height, DirectionSet views,
-                                            DirectionSet lights, Shape shape,
-                                            std::size_t frontView = 0);
+    // create, fromFile, evaluate, memory, file, StateSet, shape(), slots(), frontView(),
+    // viewLookup(), toStorage: LightBasisMaterial's. Shader defines: OSGBTF_PTM_LUMINANCE, then
+    // OSGBTF_PTM_PER_VIEW and OSGBTF_PTM_FILTERED (README.md, "Pass cost").
 
-    glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
-    void evaluateMeasured(std::size_t texel, float* abrdf) const override;
-    MemoryFootprint memory() const override;
-    FittedMaterial toFittedMaterial() const override;
-    osg::ref_ptr<osg::StateSet> createStateSet() const override;
-    /** OSGBTF_PTM_LUMINANCE, OSGBTF_PTM_PER_VIEW and OSGBTF_PTM_FILTERED (the parameters
-     *  filtered: TexelFilter::Parameters) as the material has them: ptm.frag holds only the
-     *  variant's code (README.md, "Pass cost"). */
-    std::vector<std::string> shaderDefines() const override;
-
-    const Shape& shape() const { return _shape; }
-    /** View slots stored: 1 (front) or the measured views (all). */
-    int slots() const { return _slots; }
     /** Coefficient layers per slot: 6 (rgb) or 2 (luminance). */
     int layersPerSlot() const { return _shape.luminance ? 2 : kTerms; }
-    /** The measured view a front model was fitted on (every view when perView). */
-    std::size_t frontView() const { return _frontView; }
-    const DirectionLookup& viewLookup() const { return _viewLookup; }
 
     /** The polynomial(s) of view slot `slot` at a texel, unclamped, in the shader's float
      *  operations: (P_R, P_G, P_B) for rgb, colour * P_Y for luminance. */
@@ -127,24 +105,24 @@ public:
     void setCoefficient(std::size_t texel, int slot, int k, int c, float value);
     /** The monomials (lx^2, ly^2, lx ly, lx, ly, 1) of a light direction: a design matrix row. */
     static std::array<double, kTerms> monomials(const glm::vec3& light);
-    /** A value at the storage precision (half or float), as the fitter stores it. */
-    static float toStorage(double value, MaterialTexture::PixelKind kind);
+
+    // What LightBasisMaterial asks of the method.
+    static glm::vec2 lightTerms(const glm::vec3& light) { return {light.x, light.y}; }
+    glm::vec3 field(std::size_t texel, int slot, const glm::vec2& l) const {
+        return field(texel, slot, l.x, l.y);
+    }
+    static constexpr const char* kSecondArray = "colour";
+    static bool storesSecondArray(const Shape& shape) { return shape.luminance; }
+    StoredValues& secondArray() { return colour; }
+    const StoredValues& secondArray() const { return colour; }
+    static void readShape(const FittedMaterial& file, Shape& shape);
+    void writeShape(FittedMaterial& file) const;
+    std::vector<std::string> shapeDefines() const;
 
 protected:
     ~PtmMaterial() override = default;
     /** Luminance materials multiply two per-texel parameters (colour and luminance). */
     bool linearInParameters() const override { return !_shape.luminance; }
-    /** The view-blended field before the clamp at 0. */
-    glm::vec3 evaluateLinear(int x, int y, const glm::vec3& view,
-                             const glm::vec3& light) const override;
-    glm::vec3 finishLinear(const glm::vec3& linear, const glm::vec3& view,
-                           const glm::vec3& light) const override;
-
-private:
-    /** Checks the shape, builds the view interpolation and, unless `allocate` is false (a file
-     *  brings the arrays), sizes the arrays. */
-    void setShape(int width, int height, DirectionSet views, DirectionSet lights, Shape shape,
-                  std::size_t frontView, bool allocate = true);
 };
 
 }  // namespace osgBTF

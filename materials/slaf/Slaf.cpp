@@ -1,28 +1,41 @@
 #include "materials/slaf/Slaf.h"
 
 #include "core/Error.h"
-#include "materials/MaterialMath.h"
 #include "materials/MaterialState.h"
 #include "materials/MethodRegistry.h"
 #include "materials/laf/Lobes.h"
 
 namespace osgBTF {
 
-// ---- model -----------------------------------------------------------------------------------
+// ---- T (LobeMethod's hooks) ------------------------------------------------------------------
 
-osg::ref_ptr<SlafMaterial> SlafMaterial::create(int width, int height, int lobeCount,
-                                                const DirectionSet& views,
-                                                const DirectionSet& lights) {
-    osg::ref_ptr<SlafMaterial> m = new SlafMaterial;
-    m->setGeometry(width, height, views, lights);
-    m->initLobes(lobeCount);
-    m->scale = StoredValues(MaterialTexture::Half, m->texelCount() * views.size() * 3, 1.0f);
-    m->prepare();
-    return m;
+void SlafMaterial::initExtra() {
+    scale = StoredValues(MaterialTexture::Half, texelCount() * _views.size() * 3, 1.0f);
+    _viewLookup = DirectionLookup(_views);
 }
 
-void SlafMaterial::prepare() {
+void SlafMaterial::checkFile(const FittedMaterial& file) const {
+    if (_views.size() == 0) fail(file.source, "slaf needs at least one view direction");
+}
+
+void SlafMaterial::readExtra(FittedMaterial& file) {
+    scale = readTexture(file, "scale", int(_views.size()), 3, MaterialTexture::Half);
     _viewLookup = DirectionLookup(_views);
+}
+
+void SlafMaterial::writeExtra(FittedMaterial& file) const {
+    file.textures.push_back(scale.texture("scale", _width, _height, int(_views.size()), 3));
+}
+
+void SlafMaterial::addExtraState(osg::StateSet& stateSet) const {
+    // T as a 2D array, one layer per measured view (81 or 151 layers, well below GL's 2048; an
+    // array with one view too, as the shader samples it).
+    addTexture(
+        stateSet,
+        createFloatTextureArray(scale.texture("scale", _width, _height, int(_views.size()), 3))
+            .get(),
+        "slafScale", 3);
+    _viewLookup.addToStateSet(stateSet, "slafViewTable", 4);
 }
 
 // ---- CPU evaluator ---------------------------------------------------------------------------
@@ -55,48 +68,7 @@ void SlafMaterial::evaluateMeasured(std::size_t t, float* abrdf) const {
     }
 }
 
-// ---- memory, save / load ---------------------------------------------------------------------
-
-MemoryFootprint SlafMaterial::memory() const {
-    // Counted from the textures as stored (the view table is shared and not counted, as in
-    // Meseth et al. 2003: it is 65 x 65 x 6 floats for any material size).
-    return footprintOf(toFittedMaterial(), texelCount());
-}
-
-FittedMaterial SlafMaterial::toFittedMaterial() const {
-    FittedMaterial file = writeCommon();
-    writeLobes(file);
-    file.textures.push_back(scale.texture("scale", _width, _height, int(_views.size()), 3));
-    return file;
-}
-
-osg::ref_ptr<SlafMaterial> SlafMaterial::fromFile(FittedMaterial file) {
-    osg::ref_ptr<SlafMaterial> m = new SlafMaterial;
-    m->readCommon(file);
-    m->readLobeParameters(file);
-    if (m->_views.size() == 0) fail(file.source, "slaf needs at least one view direction");
-    m->readLobeTextures(file);
-    m->scale = m->readTexture(file, "scale", int(m->_views.size()), 3, MaterialTexture::Half);
-    m->prepare();
-    return m;
-}
-
-// ---- StateSet --------------------------------------------------------------------------------
-
-osg::ref_ptr<osg::StateSet> SlafMaterial::createStateSet() const {
-    osg::ref_ptr<osg::StateSet> stateSet = new osg::StateSet;
-    addCommonState(*stateSet, *this);
-    addLobeState(*stateSet, kMethod);
-    // T as a 2D array, one layer per measured view (81 or 151 layers, well below GL's 2048; an
-    // array with one view too, as the shader samples it).
-    addTexture(
-        *stateSet,
-        createFloatTextureArray(scale.texture("scale", _width, _height, int(_views.size()), 3))
-            .get(),
-        "slafScale", 3);
-    _viewLookup.addToStateSet(*stateSet, "slafViewTable", 4);
-    return stateSet;
-}
+// ---- registration ------------------------------------------------------------------------------
 
 namespace {
 const bool slafRegistered = registerMethodClass<SlafMaterial>([] {

@@ -22,7 +22,6 @@
 #include <vector>
 
 #include "materials/DirectionLookup.h"
-#include "materials/MethodMaterial.h"
 #include "materials/MethodOptions.h"
 #include "materials/laf/LobeMaterial.h"
 
@@ -37,16 +36,13 @@ protected:
     DirectionLookup _viewLookup;
 };
 
-class SlafMaterial : public MethodMaterial<SlafMaterial, SlafData, LobeMaterial> {
+class SlafMaterial : public LobeMethod<SlafMaterial, SlafData> {
 public:
     static constexpr const char* kMethod = "slaf";
-    /** fromFile takes the file's 8-bit and half textures as they are stored. */
-    static constexpr bool kLoadsBytes = true;
-    static constexpr bool kLoadsHalves = true;
 
     SlafMaterial() = default;
     SlafMaterial(const SlafMaterial& other, const osg::CopyOp& copyop = osg::CopyOp::SHALLOW_COPY)
-        : MethodMaterial(other, copyop) {}
+        : LobeMethod(other, copyop) {}
     META_Object(osgBTF, SlafMaterial)
 
         /** Options: lobes (1..8, default 2), iterations (LM iterations per texel and round, 1..500,
@@ -54,24 +50,23 @@ public:
          * or 1, default 1). Throws Error "slaf: ..." for invalid or unknown options and an empty
          * BTF. */
         static osg::ref_ptr<SlafMaterial> fit(const BtfSource& btf, const FitOptions& options);
-    static osg::ref_ptr<SlafMaterial> fromFile(FittedMaterial file);
-    /** An unfitted model of the given shape (T = 1, zero colours and lobes). */
-    static osg::ref_ptr<SlafMaterial> create(int width, int height, int lobes,
-                                             const DirectionSet& views, const DirectionSet& lights);
+    // create (T = 1), fromFile, memory (the view table is shared and not counted, as in Meseth
+    // et al. 2003: it is 65 x 65 x 6 floats for any material size), toFittedMaterial,
+    // createStateSet: LobeMethod's, with T through the hooks below.
 
     const DirectionLookup& viewLookup() const { return _viewLookup; }
     glm::vec3 evaluate(int x, int y, const glm::vec3& view, const glm::vec3& light) const override;
     void evaluateMeasured(std::size_t texel, float* abrdf) const override;
-    MemoryFootprint memory() const override;
-    FittedMaterial toFittedMaterial() const override;
-    osg::ref_ptr<osg::StateSet> createStateSet() const override;
+
+    // LobeMethod's hooks: T, its file texture "scale" and its units 3 (T) and 4 (view table).
+    void initExtra();
+    void checkFile(const FittedMaterial& file) const;
+    void readExtra(FittedMaterial& file);
+    void writeExtra(FittedMaterial& file) const;
+    void addExtraState(osg::StateSet& stateSet) const;
 
 protected:
     ~SlafMaterial() override = default;
-
-private:
-    /** Builds the view interpolation; called once the views are known. */
-    void prepare();
 };
 
 }  // namespace osgBTF

@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 #include <osg/Geode>
 #include <osg/MatrixTransform>
+#include <osg/Program>
 #include <osg/Uniform>
 
 #include "core/ShaderSource.h"
@@ -324,6 +325,16 @@ double hshGpuTolerance(const HshMaterial& m) {
                 largest = std::max(largest, 2 * sum);
             }
     return 64 * std::ldexp(1.0, -24) * largest;
+}
+
+std::string fragmentSourceOf(const Material& material) {
+    const auto* program = dynamic_cast<const osg::Program*>(
+        material.sharedStateSet()->getAttribute(osg::StateAttribute::PROGRAM));
+    if (!program) return "";
+    for (unsigned i = 0; i < program->getNumShaders(); ++i)
+        if (program->getShader(i)->getType() == osg::Shader::FRAGMENT)
+            return program->getShader(i)->getShaderSource();
+    return "";
 }
 
 void expectGpuEqualsCpuAtPairs(const Material& material, double bound,

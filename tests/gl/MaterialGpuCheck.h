@@ -115,6 +115,9 @@ double ptmGpuTolerance(const PtmMaterial& material);
  *  times the largest sum of |c_k| times the largest harmonic (about 1.1; 2 is used). */
 double hshGpuTolerance(const HshMaterial& material);
 
+/** The fragment source of the program in `material`'s own state set ("" without one). */
+std::string fragmentSourceOf(const Material& material);
+
 /** Expects GPU == CPU within `bound` for `material` rendered from each (view, light) pair (and a
  *  render that covers more than 48 texels); prints the largest difference under `label`. */
 void expectGpuEqualsCpuAtPairs(const Material& material, double bound,

@@ -36,8 +36,8 @@ MeasuredBtf sample() {
     return makeSampleBtf(options);
 }
 
-/** The largest value of the material's image for (view, light): material_fmf_test compares
- *  relative to it. */
+/** The largest value of the material's image for (view, light): materials/fmf/test/fmf_gl_test.cpp
+ * compares relative to it. */
 double largestValue(const Material& m, const glm::vec3& view, const glm::vec3& light) {
     double scale = 1;
     for (int y = 0; y < m.height(); ++y)
@@ -96,7 +96,7 @@ void expectFilteredGpuEqualsCpu(const Material& m, const std::string& name,
 
 TEST(BilinearFilterGpu, LambertMatchesCpu) {
     osg::ref_ptr<LambertMaterial> m = LambertMaterial::fit(sample(), {});
-    // material_lambert_test's tolerance.
+    // lambert's GPU case's tolerance (materials/lambert/test/lambert_gl_test.cpp).
     expectFilteredGpuEqualsCpu(*m, "lambert", [](const glm::vec3&) { return 1e-5; });
 }
 
@@ -154,7 +154,7 @@ TEST(BilinearFilterGpu, FmfMatchesCpuWithDecodingAfterTheBlend) {
         {"fmf drr cosine float", FmfMaterial::fromFactors(drr, MaterialTexture::Float)},
         {"dfmf exp-yuv", FmfMaterial::fromFactors(yuv)}};
     for (const auto& [name, m] : materials)
-        // material_fmf_test's tolerance: relative to the image's largest value.
+        // fmf_gl_test.cpp's tolerance: relative to the image's largest value.
         expectFilteredGpuEqualsCpu(*m, name, [&, &m = m](const glm::vec3& light) {
             return 1e-3 * largestValue(*m, glm::vec3(0, 0, 1), light);
         });

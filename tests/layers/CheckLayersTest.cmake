@@ -31,6 +31,7 @@ write_tree(${WORK}/good
   materials/pca/CMakeLists.txt "osgbtf_method(RENDER M.cpp\n              FIT MFit.cpp\n              OWN MOwn.cpp)"
   materials/pca/MFit.cpp "#include \"fit/LightBasisFit.h\"\n#include \"materials/pca/M.h\""
   materials/pca/MOwn.cpp "#include \"materials/pca/M.h\""
+  materials/pca/test/m_test.cpp "#include \"harness/H.h\"\n#include \"tests/TestUtil.h\""
   synthesis/K.cpp "#include \"core/A.h\""
   scene/S.cpp "#include \"materials/pca/M.h\"\n#include \"loaders/L.h\"\n#include \"synthesis/K.h\""
   harness/headless/H.cpp "#include \"scene/S.h\""
@@ -43,7 +44,7 @@ expect(${WORK}/good)
 # Upward includes: each one reported once, with the file, the include and the rule. Sources are
 # checked by their folder too (loaders/L.cpp may not include materials/ although libosgBTF holds
 # both; an OWN source, which no library compiles, likewise), a method's FIT source as
-# libosgBTFFit's, which may include fit/ but not harness/.
+# libosgBTFFit's, which may include fit/ but not harness/, and a method's test as the tests layer's.
 write_tree(${WORK}/bad
   core/A.h "#pragma once\n#include \"loaders/L.h\""
   loaders/L.h "#include \"materials/Material.h\""
@@ -53,6 +54,7 @@ write_tree(${WORK}/bad
   materials/n/N.cpp "#include \"scene/MaterialNode.h\""
   materials/n/NFit.cpp "#include \"fit/FitCache.h\"\n#include \"harness/Compare.h\""
   materials/n/NOwn.cpp "#include \"fit/FitCache.h\""
+  materials/n/test/n_test.cpp "#include \"harness/H.h\"\n#include \"tools/btf/Commands.h\""
   synthesis/K.h "#include \"materials/Material.h\""
   scene/S.h "#include \"harness/MaterialImage.h\""
   scene/F.h "#include \"fit/FitCache.h\""
@@ -70,6 +72,7 @@ expect(${WORK}/bad
   "scene/S.h: includes \"harness/MaterialImage.h\", but scene/ may include only core/, loaders/, materials/, synthesis/, scene/"
   "plugins/btf/P.cpp: includes \"harness/Compare.h\", but plugins/ may include only core/, loaders/, materials/, synthesis/, scene/, fit/, streaming/, environment/, plugins/"
   "fuzz/F.cpp: includes \"tools/btf/Commands.h\", but fuzz/ may include only core/, loaders/, materials/, synthesis/, scene/, fit/, streaming/, environment/, harness/, plugins/, fuzz/"
+  "materials/n/test/n_test.cpp: includes \"tools/btf/Commands.h\", but a method's test/ (the tests layer) may include only core/, loaders/, materials/, synthesis/, scene/, fit/, streaming/, environment/, harness/, plugins/, fuzz/, tests/"
   "materials/n/NFit.cpp (osgBTFFit): includes \"harness/Compare.h\", but osgBTFFit may include only core/, loaders/, materials/, synthesis/, scene/, fit/")
 
 # Per library: a method's fit source (libosgBTFFit's) may include fit/, its render source

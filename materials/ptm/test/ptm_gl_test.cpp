@@ -1,12 +1,12 @@
-// Method "ptm": the fragment shader (materials/ptm/ptm.frag) equals PtmMaterial::evaluate for both
-// colour variants and both view models, at measured (view, light) pairs and between them.
+// Method "ptm" on the GPU: the fragment shader (materials/ptm/ptm.frag) equals
+// PtmMaterial::evaluate for both colour variants and both view models, at measured (view, light)
+// pairs and between them (its cases of EveryMethod/MethodGpu, tests/gl/method_gpu_test.cpp), for
+// materials read from .ptm files; and each shape has its own program.
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cmath>
 #include <iostream>
 
-#include <osg/Program>
 #include "harness/sample/SampleBtf.h"
 
 #include "materials/MethodOptions.h"
@@ -15,35 +15,36 @@
 #include "materials/ptm/PtmFile.h"
 #include "tests/TestUtil.h"
 #include "tests/gl/MaterialGpuCheck.h"
+#include "tests/gl/MethodGpuCases.h"
 
 namespace OSGBTF_TEST_FILE {
 
 using namespace osgBTF;
 
-namespace {
-
-void expectGpuEqualsCpu(const std::string& options,
-                        const std::vector<std::pair<Direction, Direction>>& pairs) {
-    SampleOptions sample;
-    sample.width = 8;
-    sample.height = 6;  // not square: catches swapped axes
-    const osg::ref_ptr<PtmMaterial> m =
-        PtmMaterial::fit(makeSampleBtf(sample), FitOptions::parse(options));
-    test::expectGpuEqualsCpuAtPairs(*m, test::ptmGpuTolerance(*m), pairs, "ptm [" + options + "]");
+test::Bound ptmBound() {
+    return test::materialBound([](const Material& m) {
+        return test::ptmGpuTolerance(static_cast<const PtmMaterial&>(m));
+    });
 }
 
-/** The fragment source of the program in `material`'s own state set. */
-std::string fragmentSourceOf(const Material& material) {
-    const auto* program = dynamic_cast<const osg::Program*>(
-        material.sharedStateSet()->getAttribute(osg::StateAttribute::PROGRAM));
-    if (!program) return "";
-    for (unsigned i = 0; i < program->getNumShaders(); ++i)
-        if (program->getShader(i)->getType() == osg::Shader::FRAGMENT)
-            return program->getShader(i)->getShaderSource();
-    return "";
-}
-
-}  // namespace
+// The front rgb model ignores the view: a few views, lights on every ring and between them. The
+// luminance per-view model at measured and unmeasured pairs; the per-view rgb branch, two pairs.
+const bool kCases = test::registerGpuCases(
+    PtmMaterial::kMethod,
+    {{"", test::GpuCase::sampleOfSize(8, 6),
+      test::vectorPairs({{{0, 0}, {0, 0}},
+                         {{30, 90}, {45, 20}},
+                         {{52.5f, 171}, {75, 300}},
+                         {{10, 33}, {68, 300}},
+                         {{44, 333}, {82, 45}}}),
+      ptmBound()},
+     {"colour=luminance views=all", test::GpuCase::sampleOfSize(8, 6),
+      test::innerViewPairs(6, {{{31.7f, 77}, {52, 200}},
+                               {{80, 10}, {20, 100}},  // beyond the outermost ring of views
+                               {{66, 250}, {44, 135}}}),
+      ptmBound()},
+     {"views=all", test::GpuCase::sampleOfSize(8, 6),
+      test::vectorPairs({{{31.7f, 77}, {52, 200}}, {{15, 60}, {45, 20}}}), ptmBound()}});
 
 // The colour and view models are compiled into the material's program (shaderDefines), not
 // uniform branches that a software rasterizer runs both sides of (README.md, "Pass cost"): each
@@ -65,7 +66,8 @@ TEST(PtmGpu, EachShapeHasItsOwnProgramWithItsDefines) {
     EXPECT_NE(methodProgram(*rgb).get(), methodProgram("ptm").get());
     EXPECT_NE(coordinateMapProgram(*rgb).get(), coordinateMapProgram(*lumAll).get());
     EXPECT_NE(shadowMapProgram(*rgb, false).get(), shadowMapProgram(*lumAll, false).get());
-    const std::string plain = fragmentSourceOf(*rgb), luminance = fragmentSourceOf(*lumAll);
+    const std::string plain = test::fragmentSourceOf(*rgb),
+                      luminance = test::fragmentSourceOf(*lumAll);
     EXPECT_NE(plain.find("#define OSGBTF_PTM_FILTERED 1\n"), std::string::npos);
     EXPECT_EQ(plain.find("#define OSGBTF_PTM_LUMINANCE"), std::string::npos);
     EXPECT_EQ(plain.find("#define OSGBTF_PTM_PER_VIEW"), std::string::npos);
@@ -75,28 +77,6 @@ TEST(PtmGpu, EachShapeHasItsOwnProgramWithItsDefines) {
     // No uniform selects the model any more.
     EXPECT_EQ(plain.find("ptmPerView"), std::string::npos);
     EXPECT_EQ(plain.find("ptmLuminance"), std::string::npos);
-}
-
-TEST(PtmGpu, RgbFrontViewMatchesCpu) {
-    // The front model ignores the view: a few views, lights on every ring and between them.
-    expectGpuEqualsCpu("", {{{0, 0}, {0, 0}},
-                            {{30, 90}, {45, 20}},
-                            {{52.5f, 171}, {75, 300}},
-                            {{10, 33}, {68, 300}},
-                            {{44, 333}, {82, 45}}});
-}
-
-TEST(PtmGpu, LuminancePerViewMatchesCpuAtMeasuredAndUnmeasuredDirections) {
-    const DirectionSet bonn = DirectionSet::bonn81();
-    std::vector<std::pair<Direction, Direction>> pairs;
-    for (std::size_t i = 0; i < 6; ++i)
-        pairs.push_back({bonn[(i * 9 + 1) % 57], bonn[(i * 23 + 5) % 81]});
-    pairs.push_back({{31.7f, 77}, {52, 200}});
-    pairs.push_back({{80, 10}, {20, 100}});  // beyond the outermost ring of views
-    pairs.push_back({{66, 250}, {44, 135}});
-    expectGpuEqualsCpu("colour=luminance views=all", pairs);
-    // The per-view rgb branch, two pairs.
-    expectGpuEqualsCpu("views=all", {{{31.7f, 77}, {52, 200}}, {{15, 60}, {45, 20}}});
 }
 
 // A .ptm file renders from its own coefficients (no refit): GPU == CPU for the material read

@@ -1,7 +1,8 @@
 // Method "fmf": the shader's blend of 9 U rows, factor sums, colour / exp decode and cosine
 // division equal the CPU reference (FmfMaterial::evaluate on the same stored values) at measured
 // and unmeasured directions, for FMF plain and with DRR + cosine, and DFMF colour models 0, 3 and
-// 11 with different per-channel ranks, in half and float storage, and for a fitted material.
+// 11 with different per-channel ranks, in half and float storage, and for a fitted material (its
+// case of EveryMethod/MethodGpu).
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -9,11 +10,10 @@
 
 #include <gtest/gtest.h>
 
-#include "harness/sample/SampleBtf.h"
-#include "materials/MethodOptions.h"
 #include "materials/fmf/Fmf.h"
 #include "tests/RandomFactors.h"
 #include "tests/gl/MaterialGpuCheck.h"
+#include "tests/gl/MethodGpuCases.h"
 
 namespace OSGBTF_TEST_FILE {
 
@@ -91,14 +91,11 @@ TEST(FmfGpu, DfmfColourModelsWithPerChannelRanksMatchCpu) {
     std::cout << "fmf GPU vs CPU: largest relative difference " << worstRelative << "\n";
 }
 
-TEST(FmfGpu, FittedMaterialMatchesCpu) {
-    SampleOptions sample;
-    sample.width = kWidth;
-    sample.height = kHeight;
-    osg::ref_ptr<FmfMaterial> m =
-        FmfMaterial::fit(makeSampleBtf(sample), FitOptions::parse("components=7"));
-    expectGpuEqualsCpu(*m, {30, 90}, {45, 20}, "fitted");
-    expectGpuEqualsCpu(*m, {31.7f, 77}, {52, 200}, "fitted");
-}
+// A fitted material, the case of EveryMethod/MethodGpu (tests/gl/method_gpu_test.cpp), with the
+// bound relative to the image's largest value (test::methodGpuBound, as above).
+const bool kCases = test::registerGpuCases(
+    FmfMaterial::kMethod,
+    {{"components=7", test::GpuCase::sampleOfSize(kWidth, kHeight),
+      test::vectorPairs({{{30, 90}, {45, 20}}, {{31.7f, 77}, {52, 200}}}), test::methodGpuBound}});
 
 }  // namespace OSGBTF_TEST_FILE

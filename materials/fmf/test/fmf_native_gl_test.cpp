@@ -1,7 +1,7 @@
 // UBO2014 files opened as stored (scene/OpenMaterial.h): the fmf shader equals the CPU evaluator
 // on the hand-written DFMF (colour model 11, ranks 2/3/1) and FMF (dynamic-range reduction, cosine
 // flag) files of tests/HandWrittenUbo2014.h, at measured and unmeasured directions. The fmf
-// method's own GPU test (material_fmf_test.cpp) uses fitted materials; these inputs are files
+// method's own GPU test (fmf_gl_test.cpp) uses fitted materials; these inputs are files
 // another implementation of the format could have written.
 #include <unistd.h>
 

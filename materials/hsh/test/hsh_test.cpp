@@ -283,7 +283,7 @@ TEST(HshFile, SaveLoadRoundTripIsExactAndBadParametersAreNamed) {
               "x.btfmat: parameter 'order' must be 2, 3 or 4, got '5'");
     file.parameters["order"] = "4";  // 16 layers expected, the file has 9
     EXPECT_EQ(errorOf([&] { materialFromFile(file); }),
-              "x.btfmat: texture 'coefficients' must be 3x2, 16 layer(s) of RGB");
+              "x.btfmat: texture 'coefficients' must be 3x2, 16 layer(s) of RGB half");
 }
 
 }  // namespace OSGBTF_TEST_FILE

@@ -1,7 +1,7 @@
-// Method "rbf": the fragment shader (materials/rbf/rbf.frag) equals RbfMaterial::evaluate for a
-// fitted material (Gaussian weights over the measured lights, at measured lights and between
-// them) and for relight's two PCA types read from the fixtures (rbf and bilinear, mrgb; rbf,
-// mycc).
+// Method "rbf" on the GPU: the fragment shader (materials/rbf/rbf.frag) equals
+// RbfMaterial::evaluate for a fitted material (Gaussian weights over the measured lights, at
+// measured lights and between them) and for relight's two PCA types read from the fixtures (rbf and
+// bilinear, mrgb; rbf, mycc).
 #include <gtest/gtest.h>
 
 #include "harness/sample/SampleBtf.h"
@@ -10,6 +10,7 @@
 #include "materials/rbf/Rbf.h"
 #include "tests/TestUtil.h"
 #include "tests/gl/MaterialGpuCheck.h"
+#include "tests/gl/MethodGpuCases.h"
 
 namespace OSGBTF_TEST_FILE {
 
@@ -27,17 +28,18 @@ const std::vector<std::pair<Direction, Direction>> kPairs = {
 
 }  // namespace
 
-TEST(RbfGpu, FittedMaterialMatchesCpu) {
-    SampleOptions sample;
-    sample.width = 8;
-    sample.height = 6;  // not square: catches swapped axes
+// Fitted materials, the cases of EveryMethod/MethodGpu (tests/gl/method_gpu_test.cpp): a front
+// view only, as a capture has.
+std::vector<test::GpuCase> cases() {
+    SampleOptions sample = test::GpuCase::sampleOfSize(8, 6);  // not square: catches swapped axes
     sample.views = DirectionSet("front", {{0, 0}});
-    for (const char* options : {"planes=5", "planes=4 sigma=0.3 storage=float"}) {
-        const osg::ref_ptr<RbfMaterial> m =
-            RbfMaterial::fit(makeSampleBtf(sample), FitOptions::parse(options));
-        test::expectGpuEqualsCpuAtPairs(*m, 2e-3, kPairs, std::string("rbf [") + options + "]");
-    }
+    std::vector<test::GpuCase> all;
+    for (const char* options : {"planes=5", "planes=4 sigma=0.3 storage=float"})
+        all.push_back({options, sample, test::vectorPairs(kPairs), test::fixedBound(2e-3)});
+    return all;
 }
+
+const bool kCases = test::registerGpuCases(RbfMaterial::kMethod, cases());
 
 TEST(RbfGpu, RelightRbfAndBilinearMatchCpu) {
     for (const char* folder : {"relight-rbf-mrgb", "relight-bilinear-mrgb", "relight-rbf-mycc"}) {

@@ -67,9 +67,9 @@ TEST(Slaf, RecoversAKnownModelFromNoisyData) {
     std::cout << "SLAF recovery: error vs truth avg " << vsTruth.average << " max "
               << vsTruth.maximum << "\n";
     RecordProperty("error_vs_truth_avg", std::to_string(vsTruth.average));
-    // Known gap: LAF recovers its own model to 0.0004 (materials_laf_test), SLAF only to about
-    // 0.01 with the default 2 alternation rounds (the lobes start from a LAF fit biased by the
-    // view table and the alternation converges slowly); bounded here so regressions show.
+    // Known gap: LAF recovers its own model to 0.0004 (materials/laf/test/laf_test.cpp), SLAF only
+    // to about 0.01 with the default 2 alternation rounds (the lobes start from a LAF fit biased by
+    // the view table and the alternation converges slowly); bounded here so regressions show.
     EXPECT_LT(vsTruth.maximum, 0.015);
     EXPECT_LT(test::modelError(data, *fitted).average, 0.02);
     // A LAF fit cannot express T: SLAF must do clearly better on these data.
