@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
+#include <Imath/half.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -13,6 +15,24 @@
 #include "core/Progress.h"
 
 namespace osgBTF {
+
+void scalarsToFloats(const unsigned char* src, std::uint64_t count, int scalarSize, float* out) {
+    if (scalarSize == 2) {
+        for (std::uint64_t k = 0; k < count; ++k) {
+            std::uint16_t bits;
+            std::memcpy(&bits, src + 2 * k, 2);
+            out[k] = imath_half_to_float(bits);
+        }
+    } else if (scalarSize == 4) {
+        std::memcpy(out, src, count * 4);
+    } else {
+        for (std::uint64_t k = 0; k < count; ++k) {
+            double d;
+            std::memcpy(&d, src + 8 * k, 8);
+            out[k] = float(d);
+        }
+    }
+}
 
 int FactoredBtf::components(int channel) const {
     if (factors.empty()) return 0;

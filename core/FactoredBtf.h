@@ -135,6 +135,11 @@ private:
     const FactoredBtf& _factors;
 };
 
+/** `count` scalars of `scalarSize` bytes (2 half, 4 float, 8 double; little-endian, as UBO2014
+ *  files store them) at `src` as floats in `out`: the switch outside the loop, a full-size file
+ *  has 56 million of them. */
+void scalarsToFloats(const unsigned char* src, std::uint64_t count, int scalarSize, float* out);
+
 /** Takes a factorisation's texel factors (SxV) from a reader as it reads them, chunk by chunk and
  *  in the file's own bytes, so that a material keeping them in a layout of its own (fmf's texture
  *  of halves) never holds the reader's float matrices beside it: a full-size UBO2014 file's SxV

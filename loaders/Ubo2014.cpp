@@ -82,44 +82,9 @@ private:
     std::uint64_t _size = 0, _pos = 0;
 };
 
-float toFloat(const unsigned char* p, int scalarSize) {
-    if (scalarSize == 2) {
-        Imath::half h;
-        std::uint16_t bits;
-        std::memcpy(&bits, p, 2);
-        h.setBits(bits);
-        return float(h);
-    }
-    if (scalarSize == 4) {
-        float f;
-        std::memcpy(&f, p, 4);
-        return f;
-    }
-    double d;
-    std::memcpy(&d, p, 8);
-    return float(d);
-}
-
 /** Reads rows x stride scalars, keeping the first `use` of each row. With `skip` (a header-only
- *  read) it only moves past them and gives an empty matrix of `use` columns. */
-/** count scalars of scalarSize bytes at src as floats (the switch outside the loop: a full-size
- *  UBO2014 file has 56 million of them). */
-void toFloats(const unsigned char* src, std::uint64_t count, int scalarSize, float* out) {
-    if (scalarSize == 2) {
-        for (std::uint64_t k = 0; k < count; ++k) {
-            std::uint16_t bits;
-            std::memcpy(&bits, src + 2 * k, 2);
-            out[k] = imath_half_to_float(bits);
-        }
-    } else if (scalarSize == 4) {
-        std::memcpy(out, src, count * 4);
-    } else {
-        for (std::uint64_t k = 0; k < count; ++k) out[k] = toFloat(src + 8 * k, 8);
-    }
-}
-
-/** Reads rows x stride scalars, keeping the first `use` of each row. With `sink`, the rows go to
- *  it chunk by chunk as the file stores them (factor `factor` of the file) and the matrix
+ *  read) it only moves past them and gives an empty matrix of `use` columns. With `sink`, the rows
+ * go to it chunk by chunk as the file stores them (factor `factor` of the file) and the matrix
  *  returned has 0 rows. */
 FactorMatrix readMatrix(Reader& in, std::uint64_t rows, std::uint64_t stride, std::uint64_t use,
                         int scalarSize, const std::string& field, bool skip = false,
@@ -146,8 +111,8 @@ FactorMatrix readMatrix(Reader& in, std::uint64_t rows, std::uint64_t stride, st
             continue;
         }
         for (std::uint64_t r = 0; r < n; ++r)
-            toFloats(chunk.data() + r * rowBytes, use, scalarSize,
-                     m.data() + (r0 + r) * use);  // row-major
+            scalarsToFloats(chunk.data() + r * rowBytes, use, scalarSize,
+                            m.data() + (r0 + r) * use);  // row-major
     }
     return m;
 }

@@ -247,41 +247,36 @@ public:
         const std::size_t width = std::size_t(_sxv.width);
         const std::size_t texels = width * std::size_t(_sxv.height);
         const bool half = _storage == MaterialTexture::Half;
+        const bool copyHalves = half && scalarSize == 2;
         tbb::parallel_for(std::uint64_t(0), count, [&](std::uint64_t r) {
             // File row first + r is texel (x, y) with y from the bottom (FactoredBtf::factorRow).
             const std::size_t row = std::size_t(first + r);
             const std::size_t y = std::size_t(_sxv.height) - 1 - row / width, x = row % width;
             const std::size_t texel = y * width + x;
             const unsigned char* src = bytes + r * rowBytes;
-            for (int j = 0; j < components; ++j) {
-                const std::size_t at =
-                    _first + (std::size_t(j / 4) * texels + texel) * 4 + std::size_t(j % 4);
-                if (half && scalarSize == 2) {
+            const auto at = [&](int j) {
+                return _first + (std::size_t(j / 4) * texels + texel) * 4 + std::size_t(j % 4);
+            };
+            if (copyHalves) {
+                // The file's halves as they are; infinity is refused as the float path refuses
+                // it (checkHalfRange).
+                for (int j = 0; j < components; ++j) {
                     std::uint16_t bits;
                     std::memcpy(&bits, src + 2 * j, 2);
-                    // Infinity is refused as the float path refuses it (checkHalfRange).
                     if ((bits & 0x7fff) == 0x7c00)
                         checkHalfRange(imath_half_to_float(bits), _source, "SxV");
-                    _sxv.halves[at].setBits(bits);
-                    continue;
+                    _sxv.halves[at(j)].setBits(bits);
                 }
-                float value;
-                if (scalarSize == 2) {
-                    std::uint16_t bits;
-                    std::memcpy(&bits, src + 2 * j, 2);
-                    value = imath_half_to_float(bits);
-                } else if (scalarSize == 4) {
-                    std::memcpy(&value, src + 4 * j, 4);
-                } else {
-                    double d;
-                    std::memcpy(&d, src + 8 * j, 8);
-                    value = float(d);
-                }
+                return;
+            }
+            std::vector<float> values(static_cast<std::size_t>(components));
+            scalarsToFloats(src, std::uint64_t(components), scalarSize, values.data());
+            for (int j = 0; j < components; ++j) {
                 if (half) {
-                    checkHalfRange(value, _source, "SxV");
-                    _sxv.halves[at] = Imath::half(value);
+                    checkHalfRange(values[std::size_t(j)], _source, "SxV");
+                    _sxv.halves[at(j)] = Imath::half(values[std::size_t(j)]);
                 } else {
-                    _sxv.data[at] = value;
+                    _sxv.data[at(j)] = values[std::size_t(j)];
                 }
             }
         });

@@ -233,9 +233,10 @@ osg::ref_ptr<osg::StateSet> NeuralMaterial::createStateSet() const {
     if (usesUniformWeights()) {
         // Read once per draw, not fetched per fragment (shaderDefines).
         const std::vector<float> weights = gpuWeights();
+        const int vectors = int(weights.size() / 4);
         osg::ref_ptr<osg::Uniform> uniform =
-            new osg::Uniform(osg::Uniform::FLOAT_VEC4, "neuralWeights", gpuWeightVectors());
-        for (int i = 0; i < gpuWeightVectors(); ++i)
+            new osg::Uniform(osg::Uniform::FLOAT_VEC4, "neuralWeights", vectors);
+        for (int i = 0; i < vectors; ++i)
             uniform->setElement(i, osg::Vec4f(weights[4 * i], weights[4 * i + 1],
                                               weights[4 * i + 2], weights[4 * i + 3]));
         stateSet->addUniform(uniform.get());
